@@ -1,0 +1,21 @@
+"""pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed."""
+
+from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
+from .model.params import ElasticParams, RigidParams
+from .model.simulate import METHODS, SimulationError, simulate
+from .model.trajectory import Trajectory
+
+__all__ = [
+    "ACTUATIONS",
+    "METHODS",
+    "ElasticParams",
+    "Model",
+    "RigidParams",
+    "SimulationError",
+    "Trajectory",
+    "elastic",
+    "make_model",
+    "rigid",
+    "simulate",
+]
+__version__ = "0.1.0"

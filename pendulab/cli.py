@@ -1,0 +1,53 @@
+"""The ``pendulab`` command: a thin dispatcher over ``pendulab.commands.*``.
+
+Each command lives in its own module exposing ``register(subparsers)``, which
+adds a sub-parser whose ``func(args) -> int`` does the work. Library errors
+become a one-line message on stderr and a non-zero exit status.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+__all__ = ["main", "COMMAND_MODULES", "CLIError"]
+
+#: Modules under ``pendulab.commands`` that each register one top-level command.
+COMMAND_MODULES: tuple[str, ...] = ()
+
+
+class CLIError(ValueError):
+    """Bad command-line input (reported as one line, exit status 2)."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="pendulab",
+        description="Rigid and elastic double pendulum: simulation, modes, FMU export, co-simulation, control.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"pendulab.commands.{name}").register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("pendulab: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError) as exc:
+        message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        print(f"pendulab {args.command}: error: {message}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""One module per ``pendulab`` command; each exposes ``register(subparsers)``."""

@@ -1,0 +1,1 @@
+"""Physics: parameters, the Lagrange builder, the rigid and elastic models, simulation."""

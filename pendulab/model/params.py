@@ -1,0 +1,180 @@
+"""Physical parameters of the double pendulum as validated, frozen dataclasses.
+
+Every field carries its unit, a description and its admissible range as
+metadata; that table (``param_table``) is the single source for CasADi parameter
+vectors, FMU variables, CSV headers and plot labels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "ParamInfo",
+    "RigidParams",
+    "ElasticParams",
+    "param_table",
+]
+
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """Description of one physical parameter.
+
+    Attributes
+    ----------
+    name : str
+        Identifier, as used in ``--set name=value``, FMU variables and CSV.
+    unit : str
+        SI unit.
+    description : str
+        One-line meaning.
+    positive : bool
+        True when the value must be strictly positive, False when it must be
+        non-negative.
+    optional : bool
+        True when ``None`` is accepted (meaning "derived from another value").
+    """
+
+    name: str
+    unit: str
+    description: str
+    positive: bool
+    optional: bool = False
+
+
+def _p(default: Any, unit: str, description: str, *, positive: bool) -> Any:
+    return field(
+        default=default,
+        metadata={"unit": unit, "description": description, "positive": positive},
+    )
+
+
+def param_table(params_or_cls: Any) -> tuple[ParamInfo, ...]:
+    """Return the name/unit/description table of a parameter class or instance."""
+    out = []
+    for f in dataclasses.fields(params_or_cls):
+        out.append(
+            ParamInfo(
+                name=f.name,
+                unit=f.metadata["unit"],
+                description=f.metadata["description"],
+                positive=f.metadata["positive"],
+                optional=f.default is None,
+            )
+        )
+    return tuple(out)
+
+
+class _ParamsBase:
+    """Validation and vector conversion shared by the parameter classes."""
+
+    def __post_init__(self) -> None:
+        for info in param_table(self):
+            value = getattr(self, info.name)
+            if value is None and info.optional:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+                raise TypeError(
+                    f"parameter {info.name!r} must be a real number [{info.unit}], "
+                    f"got {value!r} of type {type(value).__name__}"
+                )
+            value = float(value)
+            if not math.isfinite(value):
+                raise ValueError(f"parameter {info.name!r} must be finite, got {value!r}")
+            if info.positive and value <= 0.0:
+                raise ValueError(
+                    f"parameter {info.name!r} must be > 0 [{info.unit}] ({info.description}), got {value!r}"
+                )
+            if not info.positive and value < 0.0:
+                raise ValueError(
+                    f"parameter {info.name!r} must be >= 0 [{info.unit}] ({info.description}), got {value!r}"
+                )
+            object.__setattr__(self, info.name, value)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """Parameter names in vector order."""
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+    def resolved(self) -> dict[str, float]:
+        """Values with optional (``None``) entries replaced by their derived value."""
+        return {name: getattr(self, name) for name in self.names()}
+
+    def as_vector(self) -> np.ndarray:
+        """Parameter values in ``names()`` order, shape (np,), SI units."""
+        values = self.resolved()
+        return np.array([values[n] for n in self.names()], dtype=float)
+
+    @classmethod
+    def from_vector(cls, p: np.ndarray) -> _ParamsBase:
+        """Build parameters from a vector in ``names()`` order."""
+        p = np.asarray(p, dtype=float).ravel()
+        names = cls.names()
+        if p.shape != (len(names),):
+            raise ValueError(f"parameter vector must have shape ({len(names)},), got {p.shape}")
+        return cls(**dict(zip(names, p.tolist(), strict=True)))
+
+    def replace(self, **changes: float) -> _ParamsBase:
+        """Return a copy with some values changed (validated); unknown names raise."""
+        unknown = sorted(set(changes) - set(self.names()))
+        if unknown:
+            raise ValueError(
+                f"unknown parameter name(s) {unknown} for {type(self).__name__}; "
+                f"expected one of {list(self.names())}"
+            )
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class RigidParams(_ParamsBase):
+    """Parameters of the rigid double pendulum (SI units).
+
+    Point masses at the link ends by default. Published acrobot/pendubot
+    parameter sets use distributed mass: set the pivot-to-centre-of-mass
+    distances ``lc1, lc2`` and the inertias ``I1, I2`` about the centres of mass.
+    ``lc1 = None`` means ``lc1 = L1`` (likewise for ``lc2``).
+    """
+
+    m1: float = _p(1.0, "kg", "mass of link 1", positive=True)
+    m2: float = _p(1.0, "kg", "mass of link 2", positive=True)
+    L1: float = _p(1.0, "m", "length of link 1", positive=True)
+    L2: float = _p(1.0, "m", "length of link 2", positive=True)
+    g: float = _p(9.81, "m/s2", "gravitational acceleration", positive=False)
+    b1: float = _p(0.0, "N.m.s/rad", "viscous damping of joint 1 (ground-link 1)", positive=False)
+    b2: float = _p(0.0, "N.m.s/rad", "viscous damping of joint 2 (link 1-link 2)", positive=False)
+    lc1: float | None = _p(None, "m", "pivot to centre of mass of link 1 (None: L1)", positive=False)
+    lc2: float | None = _p(None, "m", "joint to centre of mass of link 2 (None: L2)", positive=False)
+    I1: float = _p(0.0, "kg.m2", "inertia of link 1 about its centre of mass", positive=False)
+    I2: float = _p(0.0, "kg.m2", "inertia of link 2 about its centre of mass", positive=False)
+
+    def resolved(self) -> dict[str, float]:
+        values = super().resolved()
+        values["lc1"] = self.L1 if self.lc1 is None else self.lc1
+        values["lc2"] = self.L2 if self.lc2 is None else self.lc2
+        return values
+
+
+@dataclass(frozen=True)
+class ElasticParams(_ParamsBase):
+    """Parameters of the elastic double pendulum (SI units).
+
+    Point masses on massless Hooke springs whose rest lengths are ``L1, L2``.
+    """
+
+    m1: float = _p(1.0, "kg", "mass of bob 1", positive=True)
+    m2: float = _p(1.0, "kg", "mass of bob 2", positive=True)
+    L1: float = _p(1.0, "m", "rest length of spring 1", positive=True)
+    L2: float = _p(1.0, "m", "rest length of spring 2", positive=True)
+    g: float = _p(9.81, "m/s2", "gravitational acceleration", positive=False)
+    b1: float = _p(0.0, "N.m.s/rad", "viscous damping of joint 1 (ground-spring 1)", positive=False)
+    b2: float = _p(0.0, "N.m.s/rad", "viscous damping of joint 2 (spring 1-spring 2)", positive=False)
+    k1: float = _p(500.0, "N/m", "stiffness of spring 1", positive=True)
+    k2: float = _p(500.0, "N/m", "stiffness of spring 2", positive=True)
+    c1: float = _p(0.0, "N.s/m", "damping of spring 1 along its axis", positive=False)
+    c2: float = _p(0.0, "N.s/m", "damping of spring 2 along its axis", positive=False)

@@ -1,0 +1,98 @@
+"""``Trajectory``: the result of a simulation (native or FMU), with named columns."""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Trajectory"]
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Time series of states, inputs and outputs on an output grid.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Output times [s].
+    x : ndarray, shape (N, nx)
+        States in ``state_names`` order.
+    u : ndarray, shape (N, nu)
+        Inputs applied from ``t[k]`` to ``t[k+1]`` (last row repeats).
+    y : ndarray, shape (N, ny)
+        Outputs in ``output_names`` order.
+    state_names, input_names, output_names : tuple of str
+    method : str
+        Integration method (or ``"fmu:..."``).
+    success : bool
+        True when the run reached ``t[-1]`` as requested.
+    message : str
+        Solver message.
+    stats : dict
+        Solver statistics: ``wall_time`` [s], ``n_rhs`` (right-hand-side
+        evaluations, where the solver reports them), ``n_steps``, ...
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    method: str
+    success: bool = True
+    message: str = ""
+    stats: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """All column names: states, inputs, outputs."""
+        return self.state_names + self.input_names + self.output_names
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Column by name, e.g. ``traj["theta1"]``, shape (N,)."""
+        for names, data in ((self.state_names, self.x), (self.input_names, self.u), (self.output_names, self.y)):
+            if name in names:
+                return data[:, names.index(name)]
+        raise KeyError(f"unknown column {name!r}; available: {list(self.names)}")
+
+    def table(self) -> np.ndarray:
+        """All columns side by side: t, states, inputs, outputs; shape (N, 1 + nx + nu + ny)."""
+        return np.column_stack([self.t, self.x, self.u, self.y])
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write a CSV with header ``t, <states>, <inputs>, <outputs>`` (SI units)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(("t",) + self.names)
+            for row in self.table():
+                writer.writerow([repr(float(v)) for v in row])
+        return path
+
+    def to_npz(self, path: str | Path) -> Path:
+        """Write all arrays, names and statistics to a NumPy ``.npz`` archive."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(
+            path,
+            t=self.t,
+            x=self.x,
+            u=self.u,
+            y=self.y,
+            state_names=np.array(self.state_names),
+            input_names=np.array(self.input_names),
+            output_names=np.array(self.output_names),
+            method=np.array(self.method),
+            success=np.array(self.success),
+            message=np.array(self.message),
+        )
+        return path
