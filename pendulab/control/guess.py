@@ -1,0 +1,138 @@
+"""Initial guesses for swing-up NLPs that need no hand-tuning.
+
+* :func:`linear_guess` - straight line in state space from start to goal, zero torque;
+* :func:`energy_guess` - a simulated energy-pumping feedback (the actuated
+  joint pushes with its rate while the total energy is below the goal's,
+  saturated at the torque limit), a physically consistent trajectory that
+  already swings;
+* :func:`rigid_counterpart` / :func:`lift_to_elastic` - solve the elastic task
+  first on the rigid point-mass pendulum with the same masses and lengths, then
+  lift it with quasi-static spring lengths.
+
+The homotopies (full -> under-actuated, loose -> real torque limit) re-solve
+the same compiled NLP with changed bounds and live in :mod:`.swingup`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.model import Model, rigid
+from ..model.simulate import simulate
+from .problem import SwingUpProblem
+
+__all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic"]
+
+
+@dataclass(frozen=True)
+class Guess:
+    """A trajectory used as an initial guess.
+
+    Attributes
+    ----------
+    t : ndarray, shape (K,)
+        Times [s], increasing, starting at 0.
+    x : ndarray, shape (K, nx)
+        States.
+    u : ndarray, shape (K, 2) or (K-1, 2)
+        Torques (tau1, tau2) held from t[k] to t[k+1] [N.m].
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+
+    @property
+    def horizon(self) -> float:
+        return float(self.t[-1])
+
+    def states_at(self, ts: np.ndarray, horizon: float) -> np.ndarray:
+        """States at times ``ts`` of a horizon ``horizon`` (time rescaled), shape (len(ts), nx)."""
+        s = np.asarray(ts) * (self.horizon / horizon)
+        return np.column_stack([np.interp(s, self.t, self.x[:, i]) for i in range(self.x.shape[1])])
+
+    def inputs_at(self, ts: np.ndarray, horizon: float) -> np.ndarray:
+        """Held torques at times ``ts`` (time rescaled), shape (len(ts), 2)."""
+        s = np.asarray(ts) * (self.horizon / horizon)
+        k = np.clip(np.searchsorted(self.t, s, side="right") - 1, 0, len(self.u) - 1)
+        return self.u[k]
+
+
+def linear_guess(problem: SwingUpProblem) -> Guess:
+    """Straight line from start to goal over the horizon, zero torque."""
+    t = np.linspace(0.0, problem.horizon, 2)
+    x = np.vstack([problem.start, problem.target])
+    return Guess(t, x, np.zeros((2, 2)))
+
+
+def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
+    """Simulate saturated energy pumping over the horizon.
+
+    The actuated joint applies ``tau = sat(k (E_goal - E) * joint_rate)`` with
+    a gain ``k`` that saturates the torque once the joint moves at 0.1 rad/s
+    with 10 % of the energy still missing: effectively bang-bang pumping, no
+    tuning per task. The trajectory does not end at the goal; it gives the
+    NLP a swing with the right timing and energy scale.
+    """
+    model = problem.model
+    e_goal = float(model.energy(problem.target))
+    e_gap = max(abs(e_goal - float(model.energy(problem.start))), 1e-6)
+    k = problem.torque_limit / (0.1 * e_gap * 0.1)
+    act = problem.actuated
+    nq = model.nq
+
+    def pump(t: float, x: np.ndarray) -> np.ndarray:
+        w1, w2 = x[nq], x[nq + 1]
+        joint_rate = np.array([w1, w2 - w1])
+        deficit = e_goal - float(model.energy(x))
+        u = np.zeros(2)
+        for i in act:
+            u[i] = np.clip(k * deficit * joint_rate[i], -problem.torque_limit, problem.torque_limit)
+        if not np.any(u) and deficit > 0:
+            # At rest every rate is zero: kick to start the swing.
+            u[act[0]] = problem.torque_limit
+        return u
+
+    traj = simulate(model, problem.start, problem.horizon, dt=dt, method="cvodes", rtol=1e-6, atol=1e-6, u=pump)
+    return Guess(traj.t, traj.x, traj.u)
+
+
+def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
+    """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths."""
+    if problem.model.kind != "elastic":
+        raise ValueError(f"rigid_counterpart needs an elastic problem, got model kind {problem.model.kind!r}")
+    pr = problem.model.params
+    model: Model = rigid(m1=pr.m1, m2=pr.m2, L1=pr.L1, L2=pr.L2, g=pr.g, b1=pr.b1, b2=pr.b2)
+    x0, goal = problem.start, problem.target
+    return SwingUpProblem(
+        model=model,
+        actuation=problem.actuation,
+        torque_limit=problem.torque_limit,
+        velocity_limit=problem.velocity_limit,
+        x0=(x0[0], x0[1], x0[4], x0[5]),
+        goal=(goal[0], goal[1], goal[4], goal[5]),
+        horizon=problem.horizon,
+        free_horizon=problem.free_horizon,
+        horizon_bounds=problem.horizon_bounds,
+        objective=problem.objective,
+        time_weight=problem.time_weight,
+        name=problem.name + "-rigid",
+    )
+
+
+def lift_to_elastic(problem: SwingUpProblem, t: np.ndarray, x_rigid: np.ndarray, u: np.ndarray) -> Guess:
+    """Lift a rigid trajectory to the elastic state with quasi-static springs.
+
+    Spring lengths carry the gravity load along each link,
+    r1 = L1 + (m1 + m2) g cos(theta1) / k1 and r2 = L2 + m2 g cos(theta2) / k2,
+    exact at the hanging and the inverted equilibrium; v = dr/dt.
+    """
+    pr = problem.model.params
+    th1, th2, w1, w2 = x_rigid.T
+    a1 = (pr.m1 + pr.m2) * pr.g / pr.k1
+    a2 = pr.m2 * pr.g / pr.k2
+    r1, r2 = pr.L1 + a1 * np.cos(th1), pr.L2 + a2 * np.cos(th2)
+    v1, v2 = -a1 * np.sin(th1) * w1, -a2 * np.sin(th2) * w2
+    return Guess(np.asarray(t), np.column_stack([th1, th2, r1, r2, w1, w2, v1, v2]), np.asarray(u))

@@ -1,0 +1,198 @@
+"""The swing-up problem statement, independent of how it is transcribed.
+
+A :class:`SwingUpProblem` says *what* is asked (model, actuation, limits, start,
+goal, horizon, objective); :mod:`pendulab.control.transcription` says *how* it
+becomes a nonlinear program (collocation or multiple shooting), in the spirit
+of rockit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..model.model import ACTUATIONS, Model
+
+__all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
+
+#: Objectives: ``effort`` = integral of tau^2; ``time`` = horizon T (free horizon);
+#: ``mix`` = time_weight * T + integral of tau^2.
+OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
+
+
+def upright_state(model: Model) -> np.ndarray:
+    """Up-up equilibrium (theta = pi, pi) at rest, shape (nx,).
+
+    For the elastic model the springs carry the static load of the inverted
+    chain: spring 1 is compressed by (m1 + m2) g / k1, spring 2 by m2 g / k2.
+    """
+    x = np.zeros(model.nx)
+    x[0] = x[1] = math.pi
+    if model.kind == "elastic":
+        pr = model.params
+        x[2] = pr.L1 - (pr.m1 + pr.m2) * pr.g / pr.k1
+        x[3] = pr.L2 - pr.m2 * pr.g / pr.k2
+    return x
+
+
+def _positive(name: str, value: Any) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
+    if not math.isfinite(v) or v <= 0.0:
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class SwingUpProblem:
+    """Swing the double pendulum from ``x0`` to ``goal`` under torque limits.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum (its parameters are used as given).
+    actuation : {"pendubot", "acrobot", "full"}
+        Which joint torques are available: pendubot = tau1 (shoulder) only,
+        acrobot = tau2 (elbow) only, full = both. Passive torques are zero.
+    torque_limit : float
+        Bound |tau| <= torque_limit on each actuated joint [N.m].
+    velocity_limit : float or None
+        Optional bound |omega_i| <= velocity_limit on both link rates [rad/s].
+    stretch_limits : (float, float) or None
+        Elastic model only: bounds (min, max) on the spring stretch r - L [m]
+        (min < 0 < max). None: the springs are unbounded.
+    x0 : array_like, shape (nx,), or None
+        Start state; None = hanging at rest (:meth:`Model.rest_state`).
+    goal : array_like, shape (nx,), or None
+        Goal state reached exactly at the end of the horizon; None = up-up at
+        rest (:func:`upright_state`).
+    horizon : float
+        Fixed horizon T [s]; with ``free_horizon`` the initial guess of T.
+    free_horizon : bool
+        Let the solver choose T within ``horizon_bounds``.
+    horizon_bounds : (float, float)
+        Bounds on a free horizon [s].
+    objective : {"effort", "time", "mix"}
+        ``effort``: minimise the integral of |tau|^2 [N^2.m^2.s];
+        ``time``: minimise T (needs a free horizon; a 1e-3 effort term keeps
+        the bang-bang optimum regular); ``mix``: time_weight * T + effort.
+    time_weight : float
+        Weight on T in the ``mix`` objective [N^2.m^2].
+
+    Raises
+    ------
+    ValueError
+        On a negative or zero limit, unknown actuation or objective, a start
+        or goal of the wrong size, spring bounds on a rigid model, etc.
+    """
+
+    model: Model
+    actuation: str = "pendubot"
+    torque_limit: float = 6.0
+    velocity_limit: float | None = None
+    stretch_limits: tuple[float, float] | None = None
+    x0: tuple[float, ...] | None = None
+    goal: tuple[float, ...] | None = None
+    horizon: float = 4.0
+    free_horizon: bool = False
+    horizon_bounds: tuple[float, float] = (0.5, 10.0)
+    objective: str = "effort"
+    time_weight: float = 1.0
+    name: str = field(default="swingup", compare=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, Model):
+            raise ValueError(f"model must be a pendulab Model, got {type(self.model).__name__}")
+        if self.actuation not in ACTUATIONS:
+            raise ValueError(f"actuation must be one of {sorted(ACTUATIONS)}, got {self.actuation!r}")
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {list(OBJECTIVES)}, got {self.objective!r}")
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalisation
+        set_("torque_limit", _positive("torque_limit", self.torque_limit))
+        if self.velocity_limit is not None:
+            set_("velocity_limit", _positive("velocity_limit", self.velocity_limit))
+        set_("horizon", _positive("horizon", self.horizon))
+        set_("time_weight", _positive("time_weight", self.time_weight))
+        lo, hi = (_positive("horizon_bounds[0]", self.horizon_bounds[0]), _positive("horizon_bounds[1]", self.horizon_bounds[1]))
+        if lo >= hi:
+            raise ValueError(f"horizon_bounds must satisfy min < max, got {self.horizon_bounds!r}")
+        set_("horizon_bounds", (lo, hi))
+        if self.free_horizon and not lo <= self.horizon <= hi:
+            raise ValueError(f"horizon (initial guess of a free horizon) must lie in horizon_bounds {self.horizon_bounds}, got {self.horizon}")
+        if self.objective in ("time", "mix") and not self.free_horizon:
+            raise ValueError(f"objective {self.objective!r} needs free_horizon=True (a fixed horizon cannot be minimised)")
+        if self.stretch_limits is not None:
+            if self.model.kind != "elastic":
+                raise ValueError(f"stretch_limits apply to the elastic model only, got model kind {self.model.kind!r}")
+            smin, smax = (float(v) for v in self.stretch_limits)
+            if not (smin < 0.0 < smax):
+                raise ValueError(f"stretch_limits must be (min, max) with min < 0 < max [m], got {self.stretch_limits!r}")
+            set_("stretch_limits", (smin, smax))
+        x0 = self.model.rest_state() if self.x0 is None else self.model.check_state(self.x0, "x0")
+        goal = upright_state(self.model) if self.goal is None else self.model.check_state(self.goal, "goal")
+        for label, vec in (("x0", x0), ("goal", goal)):
+            if vec.ndim != 1:
+                raise ValueError(f"{label} must be a single state of shape ({self.model.nx},), got shape {vec.shape}")
+            self._check_within_bounds(label, vec)
+        set_("x0", tuple(float(v) for v in x0))
+        set_("goal", tuple(float(v) for v in goal))
+
+    def _check_within_bounds(self, label: str, x: np.ndarray) -> None:
+        lb, ub = self.state_bounds()
+        bad = np.flatnonzero((x < lb - 1e-12) | (x > ub + 1e-12))
+        if bad.size:
+            i = int(bad[0])
+            name = self.model.state_names[i]
+            raise ValueError(f"{label} violates the state bounds: {name} = {x[i]:.6g} not in [{lb[i]:.6g}, {ub[i]:.6g}]")
+
+    # -- derived quantities ------------------------------------------------------
+    @property
+    def actuated(self) -> tuple[int, ...]:
+        """Indices into (tau1, tau2) of the actuated joints."""
+        return ACTUATIONS[self.actuation]
+
+    @property
+    def start(self) -> np.ndarray:
+        """Start state as an array, shape (nx,)."""
+        return np.array(self.x0)
+
+    @property
+    def target(self) -> np.ndarray:
+        """Goal state as an array, shape (nx,)."""
+        return np.array(self.goal)
+
+    def torque_bounds(self, passive_fraction: float = 0.0, limit_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """Lower/upper torque bounds, shape (2,) each [N.m].
+
+        ``passive_fraction`` lets the passive joints carry a fraction of the
+        limit and ``limit_scale`` loosens the limit (used by homotopies only).
+        """
+        ub = np.full(2, passive_fraction * self.torque_limit * limit_scale)
+        ub[list(self.actuated)] = self.torque_limit * limit_scale
+        return -ub, ub
+
+    def state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower/upper bounds on the state, shape (nx,) each (inf where unbounded)."""
+        nx, nq = self.model.nx, self.model.nq
+        lb, ub = np.full(nx, -np.inf), np.full(nx, np.inf)
+        if self.velocity_limit is not None:
+            lb[nq : nq + 2], ub[nq : nq + 2] = -self.velocity_limit, self.velocity_limit
+        if self.model.kind == "elastic":
+            pr = self.model.params
+            rest = np.array([pr.L1, pr.L2])
+            smin, smax = self.stretch_limits if self.stretch_limits is not None else (-np.inf, np.inf)
+            # A spring length must stay positive whatever the stretch limits say.
+            lb[2:4] = np.maximum(rest + smin, 1e-3 * rest)
+            ub[2:4] = rest + smax
+        return lb, ub
+
+    def replace(self, **changes: Any) -> SwingUpProblem:
+        """A validated copy with some fields changed."""
+        from dataclasses import replace
+
+        return replace(self, **changes)

@@ -1,0 +1,265 @@
+"""Transcriptions of a :class:`SwingUpProblem` into an IPOPT nonlinear program.
+
+Two interchangeable families, one interface (:class:`Transcription`):
+
+* direct collocation (``"radau"``, ``"legendre"``; polynomial degree ``d``),
+  one polynomial per interval, defects at the ``d`` collocation points;
+* multiple shooting with a CasADi integrator (``"shooting"``; ``cvodes`` by
+  default, or ``rk``) from each grid state over one interval.
+
+Controls are piecewise constant on the ``N`` intervals (the same zero-order
+hold the controller and the co-simulation master use), so both families
+discretise the same continuous problem and agree as their accuracy improves.
+
+The NLP is built once per structure (model kind, method, N, degree, free or
+fixed horizon, integrator) and cached: model parameters, the fixed horizon
+and the time weight are NLP parameters; start, goal, torque and state limits
+are variable bounds. Homotopies and randomized starts therefore re-solve the
+same compiled NLP with different bounds and warm starts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..model.model import Model, _functions
+from .problem import SwingUpProblem
+
+__all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING"]
+
+COLLOCATION: tuple[str, ...] = ("radau", "legendre")
+SHOOTING: tuple[str, ...] = ("shooting",)
+TRANSCRIPTIONS: tuple[str, ...] = COLLOCATION + SHOOTING
+_INTEGRATORS = ("cvodes", "rk")
+#: Weight of the effort regulariser in the "time" objective [1/(N^2.m^2)].
+_TIME_REGULARISER = 1e-3
+
+
+@dataclass(frozen=True)
+class Transcription:
+    """A compiled NLP of one problem structure.
+
+    Attributes
+    ----------
+    method, N, degree, integrator, free_horizon, objective, kind
+        The structure this NLP was built for.
+    solver : casadi.Function
+        IPOPT ``nlpsol``.
+    nx, nw : int
+        State size and number of decision variables.
+    n_states : int
+        Number of state columns in the decision vector: N + 1 grid states,
+        plus ``N * degree`` collocation states for collocation.
+    build_time : float
+        Wall time spent building the NLP [s].
+    """
+
+    method: str
+    N: int
+    degree: int
+    integrator: str
+    free_horizon: bool
+    objective: str
+    kind: str
+    solver: ca.Function
+    nx: int
+    nw: int
+    build_time: float
+
+    @property
+    def n_coll(self) -> int:
+        return self.N * self.degree if self.method in COLLOCATION else 0
+
+    # -- decision vector layout: [X (nx, N+1) | Xc (nx, N*d) | U (2, N) | T] ----------
+    def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+        """Split a decision vector into X (N+1, nx), Xc (N*d, nx), U (N, 2), T."""
+        nx, N = self.nx, self.N
+        w = np.asarray(w, dtype=float).ravel()
+        i = nx * (N + 1)
+        X = w[:i].reshape(N + 1, nx)
+        j = i + nx * self.n_coll
+        Xc = w[i:j].reshape(self.n_coll, nx)
+        k = j + 2 * N
+        U = w[j:k].reshape(N, 2)
+        T = float(w[k]) if self.free_horizon else None
+        return X, Xc, U, T
+
+    def join(self, X: np.ndarray, Xc: np.ndarray, U: np.ndarray, T: float | None) -> np.ndarray:
+        parts = [np.ravel(X), np.ravel(Xc), np.ravel(U)]
+        if self.free_horizon:
+            parts.append([float(T)])
+        return np.concatenate(parts)
+
+    def collocation_times(self) -> np.ndarray:
+        """Collocation points within the unit interval, shape (degree,)."""
+        return np.array(ca.collocation_points(self.degree, self.method))
+
+    def bounds(
+        self, problem: SwingUpProblem, torque_lb: np.ndarray, torque_ub: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Variable and constraint bounds (lbx, ubx, lbg, ubg) for one problem."""
+        nx, N = self.nx, self.N
+        slb, sub = problem.state_bounds()
+        XL = np.tile(slb, (N + 1, 1))
+        XU = np.tile(sub, (N + 1, 1))
+        XL[0] = XU[0] = problem.start
+        XL[-1] = XU[-1] = problem.target
+        lbx = self.join(XL, np.tile(slb, (self.n_coll, 1)), np.tile(torque_lb, (N, 1)), problem.horizon_bounds[0])
+        ubx = self.join(XU, np.tile(sub, (self.n_coll, 1)), np.tile(torque_ub, (N, 1)), problem.horizon_bounds[1])
+        ng = nx * N * (self.degree + 1) if self.method in COLLOCATION else nx * N
+        return lbx, ubx, np.zeros(ng), np.zeros(ng)
+
+    def parameters(self, problem: SwingUpProblem) -> np.ndarray:
+        """NLP parameter vector: model parameters, fixed horizon [s], time weight."""
+        return np.concatenate([problem.model.p, [problem.horizon, problem.time_weight]])
+
+    def solve(self, problem: SwingUpProblem, w0: np.ndarray, torque_lb: np.ndarray, torque_ub: np.ndarray) -> dict[str, Any]:
+        """Run IPOPT from ``w0``; returns the ``nlpsol`` output plus its ``stats()``."""
+        lbx, ubx, lbg, ubg = self.bounds(problem, torque_lb, torque_ub)
+        # IPOPT needs a start within the bounds it treats as hard (fixed start and goal).
+        w0 = np.clip(w0, lbx, ubx)
+        out = self.solver(x0=w0, p=self.parameters(problem), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        return {"w": np.asarray(out["x"]).ravel(), "f": float(out["f"]), "g": np.asarray(out["g"]).ravel(), "stats": self.solver.stats()}
+
+
+def _check_structure(method: str, N: int, degree: int, integrator: str) -> None:
+    if method not in TRANSCRIPTIONS:
+        raise ValueError(f"method must be one of {list(TRANSCRIPTIONS)}, got {method!r}")
+    if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 2:
+        raise ValueError(f"N (number of intervals) must be an integer >= 2, got {N!r}")
+    if method in COLLOCATION and not (isinstance(degree, (int, np.integer)) and 1 <= degree <= 9):
+        raise ValueError(f"degree must be an integer in 1..9 for collocation, got {degree!r}")
+    if method in SHOOTING and integrator not in _INTEGRATORS:
+        raise ValueError(f"integrator must be one of {list(_INTEGRATORS)} for multiple shooting, got {integrator!r}")
+
+
+def get_transcription(
+    problem: SwingUpProblem,
+    method: str = "radau",
+    N: int = 100,
+    degree: int = 3,
+    integrator: str = "cvodes",
+    ipopt_options: dict[str, Any] | None = None,
+) -> Transcription:
+    """The (cached) compiled NLP for a problem's structure.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+    method : {"radau", "legendre", "shooting"}
+    N : int
+        Number of control intervals.
+    degree : int
+        Collocation polynomial degree (ignored for shooting).
+    integrator : {"cvodes", "rk"}
+        Integrator of multiple shooting (ignored for collocation).
+    ipopt_options : dict or None
+        Extra IPOPT options (e.g. ``{"max_iter": 500}``).
+    """
+    _check_structure(method, N, degree, integrator)
+    extra = tuple(sorted((ipopt_options or {}).items()))
+    return _build(problem.model.kind, method, int(N), int(degree) if method in COLLOCATION else 0, integrator, problem.free_horizon, problem.objective, extra)
+
+
+@lru_cache(maxsize=64)
+def _build(kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple) -> Transcription:
+    import time
+
+    t_start = time.perf_counter()
+    f = _functions(kind)["rhs"]
+    nx = f.size1_in(0)
+    npar = f.size1_in(2)
+    SX = ca.SX if method in COLLOCATION or integrator == "rk" else ca.MX
+    X = SX.sym("X", nx, N + 1)
+    U = SX.sym("U", 2, N)
+    P = SX.sym("P", npar + 2)
+    pm, T_fixed, w_time = P[:npar], P[npar], P[npar + 1]
+    T = SX.sym("T") if free else T_fixed
+    h = T / N
+    if method in COLLOCATION:
+        Xc = SX.sym("Xc", nx, N * degree)
+        defects, x_end = _collocation_maps(kind, method, degree, N)(X[:, :N], ca.reshape(Xc, nx * degree, N), U, h, pm)
+        g = ca.vertcat(ca.vec(defects), ca.vec(X[:, 1:] - x_end))
+        w_parts = [ca.vec(X), ca.vec(Xc), ca.vec(U)]
+    else:
+        Fmap = _shooting_map(kind, integrator, N)
+        x_end = Fmap(X[:, :N], U, h, pm)
+        g = ca.vec(X[:, 1:] - x_end)
+        w_parts = [ca.vec(X), ca.vec(U)]
+    if free:
+        w_parts.append(T)
+    effort = h * ca.sumsqr(U)
+    J = {"effort": effort, "time": T + _TIME_REGULARISER * effort, "mix": w_time * T + effort}[objective]
+    nlp = {"x": ca.vertcat(*w_parts), "f": J, "g": g, "p": P}
+    ipopt = {"print_level": 0, "sb": "yes", "max_iter": 1000, "tol": 1e-8, "acceptable_tol": 1e-6, "mu_strategy": "adaptive"}
+    ipopt.update(dict(extra))
+    opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False, "error_on_fail": False}
+    if SX is ca.SX:
+        opts["expand"] = True
+    else:
+        # CVODES cannot give exact second derivatives cheaply: quasi-Newton Hessian.
+        ipopt.setdefault("hessian_approximation", "limited-memory")
+    solver = ca.nlpsol(f"swingup_{method}_{kind}_{N}", "ipopt", nlp, opts)
+    nw = nlp["x"].numel()
+    return Transcription(method, N, degree, integrator, free, objective, kind, solver, nx, nw, time.perf_counter() - t_start)
+
+
+def _collocation_maps(kind: str, scheme: str, d: int, N: int) -> ca.Function:
+    """One collocation interval as a Function, mapped over the N intervals.
+
+    Inputs: x_k (nx,), Xc (nx*d,) collocation states, u_k (2,), h [s], p.
+    Outputs: defects (nx*d,) = h f(Xc_j) - dp/dtau(tau_j), end state (nx,).
+    """
+    f = _functions(kind)["rhs"]
+    nx = f.size1_in(0)
+    tau = np.append(0.0, ca.collocation_points(d, scheme))
+    C = np.zeros((d + 1, d + 1))  # C[r, j]: derivative of Lagrange basis r at tau_j
+    D = np.zeros(d + 1)  # D[r]: Lagrange basis r at tau = 1
+    for r in range(d + 1):
+        coeffs = np.array([1.0])
+        for s in range(d + 1):
+            if s != r:
+                coeffs = np.convolve(coeffs, [1.0, -tau[s]]) / (tau[r] - tau[s])
+        D[r] = np.polyval(coeffs, 1.0)
+        dcoeffs = np.polyder(coeffs)
+        C[r] = np.polyval(dcoeffs, tau)
+    xk = ca.SX.sym("xk", nx)
+    xc = ca.SX.sym("xc", nx, d)
+    u = ca.SX.sym("u", 2)
+    h = ca.SX.sym("h")
+    p = ca.SX.sym("p", f.size1_in(2))
+    pts = ca.horzcat(xk, xc)
+    dx = ca.mtimes(pts, C[:, 1:])  # (nx, d): dp/dtau at the collocation points
+    fx = f.map(d)(xc, ca.repmat(u, 1, d), p)
+    defects = h * fx - dx
+    x_end = ca.mtimes(pts, D)
+    one = ca.Function("coll_interval", [xk, ca.vec(xc), u, h, p], [ca.vec(defects), x_end])
+    return one.map(N)
+
+
+def _shooting_map(kind: str, plugin: str, N: int) -> ca.Function:
+    """Integrator over one interval (time scaled to [0, 1]), mapped over N intervals."""
+    from ..model.builders import build_elastic, build_rigid
+
+    sym = build_rigid() if kind == "rigid" else build_elastic()
+    h = ca.SX.sym("h")
+    pp = ca.vertcat(sym.u, h, sym.p)
+    dae = {"x": sym.x, "p": pp, "ode": h * sym.xdot}
+    if plugin == "cvodes":
+        opts = {"abstol": 1e-10, "reltol": 1e-10, "max_num_steps": 100000}
+    else:
+        opts = {"number_of_finite_elements": 8, "simplify": True}
+    F = ca.integrator("ms_step", plugin, dae, 0.0, 1.0, opts)
+    Sym = ca.MX if plugin == "cvodes" else ca.SX
+    xk = Sym.sym("xk", sym.x.numel())
+    uk = Sym.sym("uk", 2)
+    hk = Sym.sym("hk")
+    pk = Sym.sym("pk", sym.p.numel())
+    xf = F(x0=xk, p=ca.vertcat(uk, hk, pk))["xf"]
+    one = ca.Function("ms_interval", [xk, uk, hk, pk], [xf])
+    return one.map(N)
