@@ -1,0 +1,126 @@
+"""Checks of a swing-up against the real dynamics and the task's success criterion.
+
+* :func:`replay` integrates the optimal torques with the native high-accuracy
+  integrator (``pendulab.simulate``, CVODES) - per interval from each grid
+  state (the local defect of the transcription, free of chaotic
+  amplification) and open loop over the whole horizon (what happens without
+  feedback).
+* :func:`height_success` applies the benchmark criterion: the end effector
+  rises above ``fraction * (L1 + L2)`` and stays there to the end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.simulate import simulate
+from ..model.trajectory import Trajectory
+from .swingup import SwingUpResult
+
+__all__ = ["ReplayReport", "replay", "height_success", "HeightCheck"]
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """Optimal trajectory vs the native integrator.
+
+    Attributes
+    ----------
+    interval_defect : float
+        Max over intervals and states of |x_sim(t_k+1; x_k, u_k) - x_k+1| [state units].
+    interval_defects : ndarray, shape (N,)
+        Per-interval max defect.
+    open_loop : Trajectory
+        The optimal torques replayed open loop from the start (output grid = NLP grid).
+    max_deviation : float
+        Max over the horizon of the open-loop state deviation from the optimum (inf-norm).
+    final_deviation : float
+        Open-loop deviation at T (inf-norm).
+    method : str
+        Integrator used.
+    """
+
+    interval_defect: float
+    interval_defects: np.ndarray
+    open_loop: Trajectory
+    max_deviation: float
+    final_deviation: float
+    method: str
+
+
+def replay(result: SwingUpResult, method: str = "cvodes", rtol: float = 1e-10, atol: float = 1e-10) -> ReplayReport:
+    """Replay the optimal torques through ``pendulab.simulate``.
+
+    Parameters
+    ----------
+    result : SwingUpResult
+    method : str
+        Any ``pendulab.METHODS`` entry; the default CVODES at 1e-10 is the reference.
+    rtol, atol : float
+        Integrator tolerances.
+    """
+    model = result.problem.model
+    h = result.t[1] - result.t[0]
+    defects = np.empty(result.N)
+    x_ol = np.empty_like(result.x)
+    x_ol[0] = result.x[0]
+    # One integrator restart per interval (the torque jumps there), for the defect
+    # from the optimal grid state and for the open-loop chain from the replayed state.
+    # (A single simulate call over the sampled torques trips CVODES at tight tolerances
+    # on the first jump in pendulab 0.1; restarting is also the more accurate reference.)
+    for k in range(result.N):
+        seg = simulate(model, result.x[k], h, dt=h, method=method, rtol=rtol, atol=atol, u=result.u[k])
+        defects[k] = float(np.max(np.abs(seg.x[-1] - result.x[k + 1])))
+        seg = simulate(model, x_ol[k], h, dt=h, method=method, rtol=rtol, atol=atol, u=result.u[k])
+        x_ol[k + 1] = seg.x[-1]
+    u_rows = np.vstack([result.u, result.u[-1:]])
+    y = model.outputs(x_ol, u_rows)
+    ol = Trajectory(result.t.copy(), x_ol, u_rows, y, model.state_names, model.input_names, model.output_names, method)
+    dev = np.max(np.abs(x_ol - result.x), axis=1)
+    return ReplayReport(float(defects.max()), defects, ol, float(dev.max()), float(dev[-1]), method)
+
+
+@dataclass(frozen=True)
+class HeightCheck:
+    """Outcome of the height criterion on one episode.
+
+    Attributes
+    ----------
+    success : bool
+        End effector above the threshold from ``t_up`` to the end.
+    t_up : float
+        Swing-up time: start of the final stretch above the threshold [s] (nan if never).
+    threshold : float
+        Height threshold [m] (y up, pivot at 0).
+    height : ndarray, shape (K,)
+        End-effector height y2 over the episode [m].
+    """
+
+    success: bool
+    t_up: float
+    threshold: float
+    height: np.ndarray
+
+
+def height_success(traj: Trajectory, rest_lengths: tuple[float, float], fraction: float = 0.9) -> HeightCheck:
+    """Benchmark criterion: y2 > fraction * (L1 + L2) from some time on until the end.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        Episode (needs output ``y2``).
+    rest_lengths : (float, float)
+        L1, L2 [m] (rest lengths for the elastic model).
+    fraction : float
+        Fraction of the full reach (0.9 in the acrobot/pendubot benchmarks).
+    """
+    y2 = traj["y2"]
+    thr = fraction * (rest_lengths[0] + rest_lengths[1])
+    above = y2 > thr
+    if not above[-1]:
+        return HeightCheck(False, float("nan"), thr, y2)
+    below = np.flatnonzero(~above)
+    k = 0 if below.size == 0 else int(below[-1]) + 1
+    return HeightCheck(True, float(traj.t[k]), thr, y2)

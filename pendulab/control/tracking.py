@@ -1,0 +1,170 @@
+"""Stabilise a swing-up: time-varying LQR along the optimum, LQR balancing at the top.
+
+The controller is sampled-data (zero-order hold at ``dt``), as in
+``pendulab.simulate`` with a callable input and in a co-simulation master, so
+it is designed in discrete time: at each sample the exact CasADi Jacobians
+``model.functions["jac_rhs"]`` at the nominal state and torque are discretised
+exactly for the hold (matrix exponential), and the Riccati recursion runs
+backward from the balancing LQR's cost-to-go at the top. After the horizon
+the balancing LQR (discrete algebraic Riccati equation on the same
+linearisation at the goal) takes over. Torques saturate at the limit; passive
+joints get zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.linalg import expm, solve_discrete_are
+
+from ..model.model import Model
+from .swingup import SwingUpResult
+
+__all__ = ["TrackingController", "tvlqr", "default_weights"]
+
+
+def default_weights(model: Model, torque_limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """State and input weights (Q (nx, nx), R scalar-per-actuator) used when none are given.
+
+    Angles 10 /rad^2, link rates 1 /(rad/s)^2; spring lengths 100 /m^2 and
+    rates 0.1 /(m/s)^2 (springs are stiff and need little control); R makes
+    a torque at the limit cost as much as a 1/sqrt(10) rad angle error.
+    """
+    if model.kind == "rigid":
+        q = [10.0, 10.0, 1.0, 1.0]
+    else:
+        q = [10.0, 10.0, 100.0, 100.0, 1.0, 1.0, 0.1, 0.1]
+    return np.diag(q), np.array(1.0 / torque_limit**2)
+
+
+def _wrap(dx: np.ndarray) -> np.ndarray:
+    """Angle differences (first two entries) wrapped to (-pi, pi]."""
+    out = np.array(dx, dtype=float)
+    out[..., :2] = (out[..., :2] + math.pi) % (2 * math.pi) - math.pi
+    return out
+
+
+def _discretise(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    nx, nu = B.shape
+    M = np.zeros((nx + nu, nx + nu))
+    M[:nx, :nx], M[:nx, nx:] = A, B
+    E = expm(M * dt)
+    return E[:nx, :nx], E[:nx, nx:]
+
+
+@dataclass(frozen=True)
+class TrackingController:
+    """Sampled-data feedback ``u(t, x)`` -> (tau1, tau2) [N.m]; call it like a function.
+
+    Attributes
+    ----------
+    dt : float
+        Sample time [s]; ``pendulab.simulate(..., dt=dt, u=controller)`` holds it.
+    t_nom : ndarray, shape (M,)
+        Sample times along the nominal trajectory [s].
+    x_nom : ndarray, shape (M, nx)
+    u_nom : ndarray, shape (M, 2)
+    K : ndarray, shape (M, n_act, nx)
+        Time-varying gains on the actuated torques.
+    K_top : ndarray, shape (n_act, nx)
+        Balancing gain at the goal.
+    goal : ndarray, shape (nx,)
+    actuated : tuple of int
+    torque_limit : float
+    """
+
+    dt: float
+    t_nom: np.ndarray
+    x_nom: np.ndarray
+    u_nom: np.ndarray
+    K: np.ndarray
+    K_top: np.ndarray
+    goal: np.ndarray
+    actuated: tuple[int, ...]
+    torque_limit: float
+    u_goal: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    @property
+    def horizon(self) -> float:
+        return float(self.t_nom[-1] + self.dt) if len(self.t_nom) else 0.0
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        act = list(self.actuated)
+        k = int(math.floor(t / self.dt + 1e-6))
+        u = np.zeros(2)
+        if k < len(self.t_nom):
+            u[act] = self.u_nom[k, act] - self.K[k] @ _wrap(x - self.x_nom[k])
+        else:
+            u[act] = self.u_goal[act] - self.K_top @ _wrap(x - self.goal)
+        return np.clip(u, -self.torque_limit, self.torque_limit)
+
+
+def tvlqr(
+    result: SwingUpResult,
+    dt: float = 0.01,
+    Q: np.ndarray | None = None,
+    R: np.ndarray | float | None = None,
+) -> TrackingController:
+    """Time-varying LQR along ``result`` handing over to balancing LQR at the goal.
+
+    Parameters
+    ----------
+    result : SwingUpResult
+        A successful swing-up (its goal must be an equilibrium with zero torque).
+    dt : float
+        Controller sample time [s]; the NLP interval should be a multiple of it.
+    Q : ndarray, shape (nx, nx), or None
+        State weight (default :func:`default_weights`).
+    R : float or ndarray, shape (n_act, n_act), or None
+        Input weight on the actuated torques.
+
+    Raises
+    ------
+    ValueError
+        If the result failed, dt is not positive, or the goal is not
+        stabilisable with the actuated torques.
+    """
+    if not result.success:
+        raise ValueError(f"result must be a successful swing-up to track, got status {result.status!r}")
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive sample time [s], got {dt!r}")
+    pb = result.problem
+    model = pb.model
+    act = list(pb.actuated)
+    Qd, Rd = default_weights(model, pb.torque_limit)
+    Q = Qd if Q is None else np.asarray(Q, dtype=float)
+    R = Rd if R is None else R
+    R = np.atleast_2d(np.asarray(R, dtype=float)) * (np.eye(len(act)) if np.ndim(R) == 0 else 1.0)
+    if Q.shape != (model.nx, model.nx):
+        raise ValueError(f"Q must have shape ({model.nx}, {model.nx}), got {Q.shape}")
+    if R.shape != (len(act), len(act)):
+        raise ValueError(f"R must have shape ({len(act)}, {len(act)}) for actuation {pb.actuation!r}, got {R.shape}")
+    jac = model.functions["jac_rhs"]
+    goal = pb.target
+    A, B = (np.asarray(m) for m in jac(goal, np.zeros(2), model.p))
+    Ad, Bd = _discretise(A, B[:, act], dt)
+    try:
+        P = solve_discrete_are(Ad, Bd, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"the goal is not stabilisable with actuation {pb.actuation!r}: {exc}") from exc
+    K_top = np.linalg.solve(R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
+
+    M = max(1, int(round(result.horizon / dt)))
+    t_nom = np.arange(M) * dt
+    x_nom = result.x_at(t_nom)
+    # The nominal torque of a sample is the one held at its middle (robust to grid round-off).
+    u_nom = result.u_at(t_nom + 0.5 * dt)
+    x_mid = result.x_at(t_nom + 0.5 * dt)
+    As, Bs = jac.map(M)(x_mid.T, u_nom.T, model.p)
+    As, Bs = np.asarray(As), np.asarray(Bs)
+    nx = model.nx
+    K = np.empty((M, len(act), nx))
+    for k in range(M - 1, -1, -1):
+        Ak, Bk = _discretise(As[:, k * nx : (k + 1) * nx], Bs[:, 2 * k : 2 * k + 2][:, act], dt)
+        BtP = Bk.T @ P
+        K[k] = np.linalg.solve(R + BtP @ Bk, BtP @ Ak)
+        P = Q + Ak.T @ P @ (Ak - Bk @ K[k])
+        P = 0.5 * (P + P.T)
+    return TrackingController(dt, t_nom, x_nom, u_nom, K, K_top, goal, tuple(act), pb.torque_limit)
