@@ -1,0 +1,156 @@
+"""Figures and animation of a swing-up episode (matplotlib, Agg backend)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+
+from ..control.episode import Episode  # noqa: E402
+
+__all__ = ["plot_episode", "animate_episode"]
+
+
+def _unwrap_deg(theta: np.ndarray) -> np.ndarray:
+    return np.degrees(theta)
+
+
+def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
+    """Write PNG figures of one episode; returns their paths.
+
+    Figures: angles, rates, torques with limits, phase portraits, spring stretch
+    (elastic models), and the end-effector height against the success threshold.
+    Optimal (open-loop plan) and closed-loop curves are overlaid.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    res, cl, task = ep.result, ep.closed_loop, ep.task
+    model = task.model
+    nq = model.nq
+    paths: list[Path] = []
+    T = res.horizon
+
+    def finish(fig: plt.Figure, name: str) -> None:
+        fig.tight_layout()
+        p = out / name
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
+
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
+    for i, name in enumerate(("theta1", "theta2")):
+        if cl is not None:
+            axes[0].plot(cl.t, _unwrap_deg(cl[name]), color=f"C{i}", lw=1.0, label=f"{name} closed loop")
+        axes[0].plot(res.t, _unwrap_deg(res.x[:, i]), "--", color="k" if i == 0 else "grey", lw=1.0, label=f"{name} optimal")
+    axes[0].axhline(180.0, color="k", lw=0.5)
+    axes[0].set_ylabel("angle from hanging [deg]")
+    axes[0].legend(fontsize=8, ncol=2)
+    for i, name in enumerate(("omega1", "omega2")):
+        if cl is not None:
+            axes[1].plot(cl.t, cl[name], color=f"C{i}", lw=1.0, label=f"{name} closed loop")
+        axes[1].plot(res.t, res.x[:, nq + i], "--", color="k" if i == 0 else "grey", lw=1.0, label=f"{name} optimal")
+    axes[1].set_ylabel("angular rate [rad/s]")
+    axes[1].legend(fontsize=8, ncol=2)
+    lim = task.problem.torque_limit
+    for i in task.problem.actuated:
+        name = model.input_names[i]
+        if cl is not None:
+            axes[2].step(cl.t, cl.u[:, i], where="post", color="C0", lw=1.0, label=f"{name} closed loop")
+        axes[2].step(res.t[:-1], res.u[:, i], where="post", ls="--", color="k", lw=1.0, label=f"{name} optimal")
+    axes[2].axhline(lim, color="r", lw=0.8, ls=":", label="torque limit")
+    axes[2].axhline(-lim, color="r", lw=0.8, ls=":")
+    axes[2].set_ylabel("torque [N.m]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].legend(fontsize=8, ncol=3)
+    for ax in axes:
+        ax.axvline(T, color="grey", lw=0.8, ls="-.")
+        ax.grid(alpha=0.3)
+    axes[0].set_title(f"{task.name}: swing-up ({res.method}, N={res.N}); TVLQR to T = {T:g} s, then LQR")
+    finish(fig, "states_torques.png")
+
+    fig, axes = plt.subplots(1, 2, figsize=(9, 4))
+    for i, ax in enumerate(axes):
+        ax.plot(res.x[:, i], res.x[:, nq + i], "--", lw=1.2, label="optimal")
+        if cl is not None:
+            ax.plot(cl.x[:, i], cl.x[:, nq + i], lw=0.8, label="closed loop")
+        ax.plot(np.pi, 0.0, "k*", ms=10, label="goal")
+        ax.set_xlabel(f"theta{i + 1} [rad]")
+        ax.set_ylabel(f"omega{i + 1} [rad/s]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{task.name}: phase portraits")
+    finish(fig, "phase.png")
+
+    if cl is not None and ep.height is not None:
+        fig, ax = plt.subplots(figsize=(8, 3.2))
+        ax.plot(cl.t, ep.height.height, label="end-effector height y2")
+        ax.axhline(ep.height.threshold, color="r", ls=":", label=f"{task.success_fraction:g} (L1 + L2)")
+        if np.isfinite(ep.height.t_up):
+            ax.axvline(ep.height.t_up, color="g", ls="--", label=f"up at {ep.height.t_up:.2f} s")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("height [m]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        finish(fig, "height.png")
+
+    if model.kind == "elastic":
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        L = np.array(task.rest_lengths)
+        for i in range(2):
+            ax.plot(res.t, 1e3 * (res.x[:, 2 + i] - L[i]), "--", lw=1.2, label=f"stretch{i + 1} optimal")
+            if cl is not None:
+                ax.plot(cl.t, 1e3 * cl[f"stretch{i + 1}"], lw=0.8, label=f"stretch{i + 1} closed loop")
+        if task.problem.stretch_limits is not None:
+            for s in task.problem.stretch_limits:
+                ax.axhline(1e3 * s, color="r", ls=":", lw=0.8)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("spring stretch r - L [mm]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=2)
+        finish(fig, "stretch.png")
+    return paths
+
+
+def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: float | None = None) -> Path:
+    """Animated GIF of the closed-loop episode (swing-up and hold), real time at ``fps``."""
+    cl = ep.closed_loop
+    if cl is None:
+        raise ValueError("episode has no closed-loop trajectory to animate (the solve failed)")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    t_end = cl.t[-1] if max_seconds is None else min(cl.t[-1], max_seconds)
+    frames = np.arange(0.0, t_end + 1e-9, 1.0 / fps)
+    pos = np.column_stack([np.interp(frames, cl.t, cl[n]) for n in ("x1", "y1", "x2", "y2")])
+    reach = sum(ep.task.rest_lengths) * 1.15
+    fig, ax = plt.subplots(figsize=(4, 4))
+    ax.set_xlim(-reach, reach)
+    ax.set_ylim(-reach, reach)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    if ep.height is not None:
+        ax.axhline(ep.height.threshold, color="r", ls=":", lw=0.8)
+    (trace,) = ax.plot([], [], "-", color="tab:orange", lw=0.6, alpha=0.6)
+    (links,) = ax.plot([], [], "o-", color="tab:blue", lw=3, ms=6)
+    label = ax.text(0.02, 0.02, "", transform=ax.transAxes, va="bottom", fontsize=8)
+    T = ep.result.horizon
+
+    def draw(i: int):
+        x1, y1, x2, y2 = pos[i]
+        links.set_data([0.0, x1, x2], [0.0, y1, y2])
+        lo = max(0, i - 2 * fps)
+        trace.set_data(pos[lo : i + 1, 2], pos[lo : i + 1, 3])
+        phase = "TVLQR swing-up" if frames[i] < T else "LQR hold"
+        label.set_text(f"{ep.task.name}  t = {frames[i]:4.2f} s  {phase}")
+        return links, trace, label
+
+    fig.tight_layout()
+    anim = FuncAnimation(fig, draw, frames=len(frames), blit=True)
+    anim.save(path, writer=PillowWriter(fps=fps))
+    plt.close(fig)
+    return path
