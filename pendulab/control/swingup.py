@@ -133,7 +133,7 @@ def swing_up(
     N: int = 100,
     *,
     degree: int = 3,
-    integrator: str = "cvodes",
+    integrator: str = "rk",
     guess: str | Guess | SwingUpResult = "auto",
     ipopt_options: dict[str, Any] | None = None,
 ) -> SwingUpResult:
@@ -148,8 +148,8 @@ def swing_up(
         Number of control intervals (torques are held on each).
     degree : int
         Collocation polynomial degree.
-    integrator : {"cvodes", "rk"}
-        Integrator of multiple shooting.
+    integrator : {"rk", "cvodes"}
+        Integrator of multiple shooting (see :func:`get_transcription`).
     guess : {"auto", "linear", "energy", "homotopy"}, Guess or SwingUpResult
         Initial guess: ``auto`` = linear, falling back to the homotopy (and,
         for elastic models, starting from the rigid counterpart's solution);

@@ -4,8 +4,8 @@ Two interchangeable families, one interface (:class:`Transcription`):
 
 * direct collocation (``"radau"``, ``"legendre"``; polynomial degree ``d``),
   one polynomial per interval, defects at the ``d`` collocation points;
-* multiple shooting with a CasADi integrator (``"shooting"``; ``cvodes`` by
-  default, or ``rk``) from each grid state over one interval.
+* multiple shooting with a CasADi integrator (``"shooting"``; ``rk`` by
+  default, or ``cvodes``) from each grid state over one interval.
 
 Controls are piecewise constant on the ``N`` intervals (the same zero-order
 hold the controller and the co-simulation master use), so both families
@@ -143,7 +143,7 @@ def get_transcription(
     method: str = "radau",
     N: int = 100,
     degree: int = 3,
-    integrator: str = "cvodes",
+    integrator: str = "rk",
     ipopt_options: dict[str, Any] | None = None,
 ) -> Transcription:
     """The (cached) compiled NLP for a problem's structure.
@@ -156,8 +156,11 @@ def get_transcription(
         Number of control intervals.
     degree : int
         Collocation polynomial degree (ignored for shooting).
-    integrator : {"cvodes", "rk"}
-        Integrator of multiple shooting (ignored for collocation).
+    integrator : {"rk", "cvodes"}
+        Integrator of multiple shooting (ignored for collocation): ``rk`` =
+        CasADi's fixed-step RK4, 4 steps per interval, exact Hessian (fast);
+        ``cvodes`` = adaptive BDF at 1e-10 with a quasi-Newton Hessian (slow,
+        minutes for N = 40).
     ipopt_options : dict or None
         Extra IPOPT options (e.g. ``{"max_iter": 500}``).
     """
@@ -174,7 +177,8 @@ def _build(kind: str, method: str, N: int, degree: int, integrator: str, free: b
     f = _functions(kind)["rhs"]
     nx = f.size1_in(0)
     npar = f.size1_in(2)
-    SX = ca.SX if method in COLLOCATION or integrator == "rk" else ca.MX
+    # Collocation: everything SX, expanded. Shooting: MX variables around a mapped interval Function.
+    SX = ca.SX if method in COLLOCATION else ca.MX
     X = SX.sym("X", nx, N + 1)
     U = SX.sym("U", 2, N)
     P = SX.sym("P", npar + 2)
@@ -201,7 +205,7 @@ def _build(kind: str, method: str, N: int, degree: int, integrator: str, free: b
     opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False, "error_on_fail": False}
     if SX is ca.SX:
         opts["expand"] = True
-    else:
+    elif integrator == "cvodes":
         # CVODES cannot give exact second derivatives cheaply: quasi-Newton Hessian.
         ipopt.setdefault("hessian_approximation", "limited-memory")
     solver = ca.nlpsol(f"swingup_{method}_{kind}_{N}", "ipopt", nlp, opts)
@@ -253,8 +257,10 @@ def _shooting_map(kind: str, plugin: str, N: int) -> ca.Function:
     if plugin == "cvodes":
         opts = {"abstol": 1e-10, "reltol": 1e-10, "max_num_steps": 100000}
     else:
-        opts = {"number_of_finite_elements": 8, "simplify": True}
+        opts = {"number_of_finite_elements": 4, "simplify": True}
     F = ca.integrator("ms_step", plugin, dae, 0.0, 1.0, opts)
+    # rk: one interval expands to SX (exact Hessian, one small Function mapped N times);
+    # cvodes stays MX (its sensitivities come from CVODES itself).
     Sym = ca.MX if plugin == "cvodes" else ca.SX
     xk = Sym.sym("xk", sym.x.numel())
     uk = Sym.sym("uk", 2)
