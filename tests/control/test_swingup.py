@@ -91,3 +91,16 @@ def test_free_horizon_mix_beats_fixed_horizon(pendubot):
     # no more than it (effort + 1 N^2.m^2 * 3 s), and with a price on time T leaves its upper bound.
     assert r.cost <= fixed.cost + 3.0
     assert r.horizon < 3.0 - 1e-3
+
+
+def test_elastic_solve_starts_from_rigid_counterpart():
+    pb = load_task("pendubot_elastic_soft").problem
+    r = swing_up(pb, "radau", 30)
+    assert r.success, r.message
+    assert r.stages[0]["label"].startswith("rigid:")  # auto guess: rigid point-mass solve, lifted
+    smin, smax = pb.stretch_limits
+    stretch = r.x[:, 2:4] - np.array([pb.model.params.L1, pb.model.params.L2])
+    # Stretch bounds are hard variable bounds (bound_relax_factor 1e-8 m).
+    assert stretch.min() >= smin - 1e-7 and stretch.max() <= smax + 1e-7
+    # Springs visibly matter: dynamic stretch well beyond the static compression at the goal.
+    assert np.ptp(stretch[:, 0]) > 0.01

@@ -1,0 +1,25 @@
+"""Swing up the RealAIGym pendubot (or any shipped task), check it against CVODES, hold it with TVLQR + LQR.
+
+Run:  PYTHONPATH=$PWD python examples/solve_swingup.py
+"""
+
+from __future__ import annotations
+
+from pendulab.control.episode import run_episode
+from pendulab.control.tasks import load_task
+
+
+def run(*, task: str = "pendubot", N: int = 100, method: str = "radau") -> dict:
+    """Solve, replay and track one task; return its summary (SI units)."""
+    episode = run_episode(load_task(task), method=method, N=N)
+    return episode.summary()
+
+
+def main() -> None:
+    summary = run()
+    for key, value in summary.items():
+        print(f"{key:32s} {value}")
+
+
+if __name__ == "__main__":
+    main()
