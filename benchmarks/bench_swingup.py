@@ -35,7 +35,10 @@ def log(msg: str) -> None:
 
 
 def timing(quick: bool) -> list[str]:
-    rows = ["| task | method | N | build [s] | solve median [s] | iterations median | runs | all succeeded |", "|---|---|---|---|---|---|---|---|"]
+    rows = [
+        "| task | method | N | build [s] | solve median [s] | iterations median | runs | all succeeded |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for name in task_names():
         task = load_task(name)
         elastic = task.model.kind == "elastic"
@@ -51,8 +54,9 @@ def timing(quick: bool) -> list[str]:
                 times = [r.wall_time for r in runs] if reps == 1 else [r.wall_time for r in runs[1:]] + [first.wall_time]
                 its = [r.iterations for r in runs]
                 ok = all(r.success for r in runs)
-                rows.append(f"| {name} | {method} | {N} | {build:.2f} | {statistics.median(times):.3f} | {statistics.median(its):.0f} | {reps} | {ok} |")
-                log(f"[timing] {name} {method} N={N}: median {statistics.median(times):.3f} s, {statistics.median(its):.0f} it ({time.perf_counter() - t0:.1f} s)")
+                med_t, med_it = statistics.median(times), statistics.median(its)
+                rows.append(f"| {name} | {method} | {N} | {build:.2f} | {med_t:.3f} | {med_it:.0f} | {reps} | {ok} |")
+                log(f"[timing] {name} {method} N={N}: median {med_t:.3f} s, {med_it:.0f} it ({time.perf_counter() - t0:.1f} s)")
     return rows
 
 
@@ -79,8 +83,12 @@ def success_rates(n_starts: int, quick: bool) -> list[str]:
                 solved += ep.result.success
                 ok += ep.success
                 times.append(ep.result.wall_time)
-                log(f"[success] {name} guess={guess} start {i + 1}/{len(starts)}: solved={ep.result.success} episode={ep.success} ({ep.result.status})")
-            rows.append(f"| {name} | {guess} | {N} | {len(starts)} | {solved}/{len(starts)} | {ok}/{len(starts)} | {statistics.median(times):.2f} |")
+                log(
+                    f"[success] {name} guess={guess} start {i + 1}/{len(starts)}: "
+                    f"solved={ep.result.success} episode={ep.success} ({ep.result.status})"
+                )
+            n_s, med = len(starts), statistics.median(times)
+            rows.append(f"| {name} | {guess} | {N} | {n_s} | {solved}/{n_s} | {ok}/{n_s} | {med:.2f} |")
     return rows
 
 
@@ -103,10 +111,23 @@ def main() -> None:
     ]
     t_rows = timing(args.quick)
     s_rows = success_rates(n, args.quick)
-    text = "\n".join(head + t_rows + ["", f"## Success rate over {n} randomized starts", "",
-                                       "Starts: hanging at rest + uniform(+-0.3 rad) on both angles and uniform(+-0.5 rad/s) on both rates (seed 2026).",
-                                       "Solved = IPOPT success with dynamics/bounds verified; closed-loop success = TVLQR + LQR, native CVODES, height criterion over 10 s.",
-                                       ""] + s_rows) + "\n"
+    text = (
+        "\n".join(
+            head
+            + t_rows
+            + [
+                "",
+                f"## Success rate over {n} randomized starts",
+                "",
+                "Starts: hanging at rest + uniform(+-0.3 rad) on both angles and uniform(+-0.5 rad/s) on both rates",
+                "(seed 2026). Solved = IPOPT success with dynamics/bounds verified; closed-loop success = TVLQR + LQR,",
+                "native CVODES, height criterion over the 10 s episode.",
+                "",
+            ]
+            + s_rows
+        )
+        + "\n"
+    )
     if args.quick:
         print(text)
     else:

@@ -67,10 +67,12 @@ def run(args: argparse.Namespace) -> int:
         figs.append(animate_episode(ep, out / "swingup.gif"))
     s = summary
     print(f"task {s['task']}: {'SUCCESS' if s['success'] else 'FAILED'} (end effector above {s['height_threshold_m']:.3f} m)")
-    print(f"  solve: {s['ipopt_status']}, {s['iterations']} iterations, {s['solve_time_s']:.2f} s (+ build {s['build_time_s']:.2f} s)")
-    print(f"  replay: max interval defect {s['replay_interval_defect']:.2e}, open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
-    print(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m (limit {s['torque_limit_Nm']:g}), "
-          f"control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
+    print(f"  solve: {s['ipopt_status']}, {s['iterations']} iterations, {s['solve_time_s']:.2f} s", end="")
+    print(f" (+ build {s['build_time_s']:.2f} s)")
+    print(f"  replay: max interval defect {s['replay_interval_defect']:.2e}", end="")
+    print(f", open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
+    print(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m", end="")
+    print(f" (limit {s['torque_limit_Nm']:g}), control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
     for f in [out / "summary.json", out / "closed_loop.csv", out / "optimal.csv", *figs]:
         print(f"  wrote {f}")
     return 0 if s["success"] else 1

@@ -123,7 +123,9 @@ class SwingUpProblem:
             raise ValueError(f"horizon_bounds must satisfy min < max, got {self.horizon_bounds!r}")
         set_("horizon_bounds", (lo, hi))
         if self.free_horizon and not lo <= self.horizon <= hi:
-            raise ValueError(f"horizon (initial guess of a free horizon) must lie in horizon_bounds {self.horizon_bounds}, got {self.horizon}")
+            raise ValueError(
+                f"horizon (initial guess of a free horizon) must lie in horizon_bounds {self.horizon_bounds}, got {self.horizon}"
+            )
         if self.objective in ("time", "mix") and not self.free_horizon:
             raise ValueError(f"objective {self.objective!r} needs free_horizon=True (a fixed horizon cannot be minimised)")
         if self.stretch_limits is not None:

@@ -255,9 +255,7 @@ def _ok(out: dict | None, tr: Transcription) -> bool:
     return status in _IPOPT_OK and np.max(np.abs(out["g"]), initial=0.0) <= _FEASIBILITY_TOL
 
 
-def _result(
-    tr: Transcription, problem: SwingUpProblem, out: dict, stages: list, wall: float, build: float
-) -> SwingUpResult:
+def _result(tr: Transcription, problem: SwingUpProblem, out: dict, stages: list, wall: float, build: float) -> SwingUpResult:
     X, Xc, U, T = tr.split(out["w"])
     T = problem.horizon if T is None else T
     status = stages[-1]["status"]

@@ -146,7 +146,9 @@ def _task_from_dict(data: dict[str, Any], path: Path) -> Task:
         if name not in model.state_names:
             raise ValueError(f"unknown state {name!r} in [task.goal]; expected one of {list(model.state_names)}")
         goal[model.state_names.index(name)] = float(value)
-    kw = {k: task[k] for k in ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight") if k in task}
+    kw = {
+        k: task[k] for k in ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight") if k in task
+    }
     for k in ("stretch_limits", "horizon_bounds"):
         if k in task:
             kw[k] = tuple(task[k])

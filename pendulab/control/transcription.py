@@ -27,7 +27,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..model.model import Model, _functions
+from ..model.model import _functions
 from .problem import SwingUpProblem
 
 __all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING"]
@@ -124,7 +124,12 @@ class Transcription:
         # IPOPT needs a start within the bounds it treats as hard (fixed start and goal).
         w0 = np.clip(w0, lbx, ubx)
         out = self.solver(x0=w0, p=self.parameters(problem), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-        return {"w": np.asarray(out["x"]).ravel(), "f": float(out["f"]), "g": np.asarray(out["g"]).ravel(), "stats": self.solver.stats()}
+        return {
+            "w": np.asarray(out["x"]).ravel(),
+            "f": float(out["f"]),
+            "g": np.asarray(out["g"]).ravel(),
+            "stats": self.solver.stats(),
+        }
 
 
 def _check_structure(method: str, N: int, degree: int, integrator: str) -> None:
@@ -166,11 +171,22 @@ def get_transcription(
     """
     _check_structure(method, N, degree, integrator)
     extra = tuple(sorted((ipopt_options or {}).items()))
-    return _build(problem.model.kind, method, int(N), int(degree) if method in COLLOCATION else 0, integrator, problem.free_horizon, problem.objective, extra)
+    return _build(
+        problem.model.kind,
+        method,
+        int(N),
+        int(degree) if method in COLLOCATION else 0,
+        integrator,
+        problem.free_horizon,
+        problem.objective,
+        extra,
+    )
 
 
 @lru_cache(maxsize=64)
-def _build(kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple) -> Transcription:
+def _build(
+    kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple
+) -> Transcription:
     import time
 
     t_start = time.perf_counter()

@@ -16,10 +16,6 @@ from ..control.episode import Episode  # noqa: E402
 __all__ = ["plot_episode", "animate_episode"]
 
 
-def _unwrap_deg(theta: np.ndarray) -> np.ndarray:
-    return np.degrees(theta)
-
-
 def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
     """Write PNG figures of one episode; returns their paths.
 
@@ -45,8 +41,8 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
     fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
     for i, name in enumerate(("theta1", "theta2")):
         if cl is not None:
-            axes[0].plot(cl.t, _unwrap_deg(cl[name]), color=f"C{i}", lw=1.0, label=f"{name} closed loop")
-        axes[0].plot(res.t, _unwrap_deg(res.x[:, i]), "--", color="k" if i == 0 else "grey", lw=1.0, label=f"{name} optimal")
+            axes[0].plot(cl.t, np.degrees(cl[name]), color=f"C{i}", lw=1.0, label=f"{name} closed loop")
+        axes[0].plot(res.t, np.degrees(res.x[:, i]), "--", color="k" if i == 0 else "grey", lw=1.0, label=f"{name} optimal")
     axes[0].axhline(180.0, color="k", lw=0.5)
     axes[0].set_ylabel("angle from hanging [deg]")
     axes[0].legend(fontsize=8, ncol=2)
@@ -75,9 +71,9 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
 
     fig, axes = plt.subplots(1, 2, figsize=(9, 4))
     for i, ax in enumerate(axes):
-        ax.plot(res.x[:, i], res.x[:, nq + i], "--", lw=1.2, label="optimal")
         if cl is not None:
-            ax.plot(cl.x[:, i], cl.x[:, nq + i], lw=0.8, label="closed loop")
+            ax.plot(cl.x[:, i], cl.x[:, nq + i], color=f"C{i}", lw=1.0, label="closed loop")
+        ax.plot(res.x[:, i], res.x[:, nq + i], "--", color="k", lw=1.0, label="optimal")
         ax.plot(np.pi, 0.0, "k*", ms=10, label="goal")
         ax.set_xlabel(f"theta{i + 1} [rad]")
         ax.set_ylabel(f"omega{i + 1} [rad/s]")
@@ -102,12 +98,19 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
         fig, ax = plt.subplots(figsize=(8, 3.5))
         L = np.array(task.rest_lengths)
         for i in range(2):
-            ax.plot(res.t, 1e3 * (res.x[:, 2 + i] - L[i]), "--", lw=1.2, label=f"stretch{i + 1} optimal")
             if cl is not None:
-                ax.plot(cl.t, 1e3 * cl[f"stretch{i + 1}"], lw=0.8, label=f"stretch{i + 1} closed loop")
+                ax.plot(cl.t, 1e3 * cl[f"stretch{i + 1}"], color=f"C{i}", lw=1.0, label=f"stretch{i + 1} closed loop")
+            ax.plot(
+                res.t,
+                1e3 * (res.x[:, 2 + i] - L[i]),
+                "--",
+                color="k" if i == 0 else "grey",
+                lw=1.0,
+                label=f"stretch{i + 1} optimal",
+            )
         if task.problem.stretch_limits is not None:
-            for s in task.problem.stretch_limits:
-                ax.axhline(1e3 * s, color="r", ls=":", lw=0.8)
+            for k, lim_s in enumerate(task.problem.stretch_limits):
+                ax.axhline(1e3 * lim_s, color="r", ls=":", lw=0.8, label="stretch limits" if k == 0 else None)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("spring stretch r - L [mm]")
         ax.grid(alpha=0.3)
@@ -137,7 +140,7 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
         ax.axhline(ep.height.threshold, color="r", ls=":", lw=0.8)
     (trace,) = ax.plot([], [], "-", color="tab:orange", lw=0.6, alpha=0.6)
     (links,) = ax.plot([], [], "o-", color="tab:blue", lw=3, ms=6)
-    label = ax.text(0.02, 0.02, "", transform=ax.transAxes, va="bottom", fontsize=8)
+    title = ax.set_title("", fontsize=8)
     T = ep.result.horizon
 
     def draw(i: int):
@@ -146,11 +149,11 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
         lo = max(0, i - 2 * fps)
         trace.set_data(pos[lo : i + 1, 2], pos[lo : i + 1, 3])
         phase = "TVLQR swing-up" if frames[i] < T else "LQR hold"
-        label.set_text(f"{ep.task.name}  t = {frames[i]:4.2f} s  {phase}")
-        return links, trace, label
+        title.set_text(f"{ep.task.name}\nt = {frames[i]:4.2f} s  {phase}")
+        return links, trace, title
 
     fig.tight_layout()
-    anim = FuncAnimation(fig, draw, frames=len(frames), blit=True)
+    anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     anim.save(path, writer=PillowWriter(fps=fps))
     plt.close(fig)
     return path
