@@ -1,5 +1,7 @@
 """pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed."""
 
+from .model.equilibria import Equilibrium, equilibria, equilibrium
+from .model.linearize import Linearization, linearize
 from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
 from .model.params import ElasticParams, RigidParams
 from .model.simulate import METHODS, SimulationError, simulate
@@ -9,11 +11,16 @@ __all__ = [
     "ACTUATIONS",
     "METHODS",
     "ElasticParams",
+    "Equilibrium",
+    "Linearization",
     "Model",
     "RigidParams",
     "SimulationError",
     "Trajectory",
     "elastic",
+    "equilibria",
+    "equilibrium",
+    "linearize",
     "make_model",
     "rigid",
     "simulate",
