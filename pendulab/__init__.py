@@ -2,6 +2,7 @@
 
 from .model.equilibria import Equilibrium, equilibria, equilibrium
 from .model.linearize import Linearization, linearize
+from .model.modes import Mode, modes
 from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
 from .model.params import ElasticParams, RigidParams
 from .model.simulate import METHODS, SimulationError, simulate
@@ -10,6 +11,7 @@ from .model.trajectory import Trajectory
 __all__ = [
     "ACTUATIONS",
     "METHODS",
+    "Mode",
     "ElasticParams",
     "Equilibrium",
     "Linearization",
@@ -22,6 +24,7 @@ __all__ = [
     "equilibrium",
     "linearize",
     "make_model",
+    "modes",
     "rigid",
     "simulate",
 ]
