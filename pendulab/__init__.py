@@ -2,8 +2,8 @@
 
 from .model.equilibria import Equilibrium, equilibria, equilibrium
 from .model.linearize import Linearization, linearize
-from .model.modes import Mode, modes
 from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
+from .model.modes import Mode, modes
 from .model.params import ElasticParams, RigidParams
 from .model.simulate import METHODS, SimulationError, simulate
 from .model.trajectory import Trajectory
