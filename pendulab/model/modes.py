@@ -22,7 +22,7 @@ from .equilibria import Equilibrium, equilibrium
 from .linearize import linearize, operating_point
 from .model import Model
 
-__all__ = ["Mode", "modes", "mode_table"]
+__all__ = ["Mode", "modes", "mode_table", "stiffness_sweep"]
 
 
 @dataclass(frozen=True)
@@ -192,3 +192,36 @@ def mode_table(mode_list: Sequence[Mode]) -> str:
             + " ".join(f"{s:>7.3f}" for s in m.shape)
         )
     return "\n".join(lines)
+
+
+def stiffness_sweep(k_values: Sequence[float], **params: float) -> dict[str, np.ndarray]:
+    """Down-down modal frequencies of the elastic model against spring stiffness (k1 = k2 = k).
+
+    Parameters
+    ----------
+    k_values : sequence of float
+        Stiffnesses [N/m], each > 0.
+    **params : float
+        Other elastic parameters (m1, m2, L1, L2, g, ...); the rigid reference uses
+        the same masses, lengths and g.
+
+    Returns
+    -------
+    dict
+        ``k`` (n,) [N/m]; ``pendular`` (n, 2) and ``spring`` (n, 2) natural
+        frequencies [rad/s], ascending; ``rigid`` (2,) [rad/s] of the rigid
+        pendulum with the same masses and lengths.
+    """
+    from .model import elastic, rigid
+
+    k = np.asarray(k_values, dtype=float).ravel()
+    if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):
+        raise ValueError(f"k_values must be positive finite stiffnesses in N/m, got {k_values!r}")
+    shared = {n: v for n, v in params.items() if n in ("m1", "m2", "L1", "L2", "g")}
+    rigid_w = sorted(m.omega_n for m in modes(rigid(**shared), "down-down") if m.kind == "oscillatory")
+    pend, spring = [], []
+    for kk in k:
+        ms = modes(elastic(**{**params, "k1": float(kk), "k2": float(kk)}), "down-down")
+        pend.append(sorted(m.omega_n for m in ms if m.spring_share < 0.5))
+        spring.append(sorted(m.omega_n for m in ms if m.spring_share >= 0.5))
+    return {"k": k, "pendular": np.array(pend), "spring": np.array(spring), "rigid": np.array(rigid_w)}
