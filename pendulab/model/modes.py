@@ -88,7 +88,8 @@ def _real_shape(v: np.ndarray) -> np.ndarray:
     if abs(v[k]) == 0.0:
         return np.zeros(v.shape)
     w = (v * np.conj(v[k]) / abs(v[k])).real
-    return w / np.max(np.abs(w))
+    w = w / np.max(np.abs(w))
+    return np.where(np.abs(w) < 1e-12, 0.0, w)  # exact decoupling shows as 0, not +-1e-17
 
 
 def _spring_share(shape: np.ndarray, M: np.ndarray) -> float:
@@ -164,7 +165,7 @@ def modes(model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None
                 omega_n=wn,
                 freq_hz=wn / (2 * math.pi),
                 omega_d=abs(lam.imag),
-                damping_ratio=-lam.real / wn if wn > 0 else 0.0,
+                damping_ratio=-lam.real / wn if wn > 0 and abs(lam.real) > tol else 0.0,
                 time_constant=1.0 / abs(lam.real) if abs(lam.real) > tol else math.inf,
                 shape=shape,
                 shape_names=model.state_names[:nq],

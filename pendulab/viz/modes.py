@@ -134,7 +134,7 @@ def plot_frequency_vs_stiffness(k_values: Sequence[float] | None = None, **param
     return fig
 
 
-def save_mode_figures(model: Model, directory: str | Path, names: Sequence[str], **sweep_params: Any) -> list[Path]:
+def save_mode_figures(model: Model, directory: str | Path, at: Sequence[str | Equilibrium], **sweep_params: Any) -> list[Path]:
     """Write mode-shape snapshots per equilibrium (and, for the elastic model, the stiffness chart) as PNG.
 
     Returns
@@ -145,9 +145,9 @@ def save_mode_figures(model: Model, directory: str | Path, names: Sequence[str],
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name in names:
-        fig = plot_mode_shapes(model, name)
-        path = out / f"modes_{model.kind}_{name}.png"
+    for eq in at:
+        fig = plot_mode_shapes(model, eq)
+        path = out / f"modes_{model.kind}_{eq if isinstance(eq, str) else eq.name}.png"
         fig.savefig(path, dpi=110)
         plt.close(fig)
         written.append(path)
