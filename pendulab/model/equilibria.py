@@ -85,7 +85,8 @@ class Equilibrium:
         }
 
     def __repr__(self) -> str:
-        state = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.state_names, self.x, strict=True) if v != 0.0)
+        nq = len(self.state_names) // 2
+        state = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.state_names[:nq], self.x[:nq], strict=True))
         return f"Equilibrium({self.name!r}, {self.kind}, {state}, u={self.u.tolist()}, {self.stability})"
 
 

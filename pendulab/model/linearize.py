@@ -16,6 +16,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .equilibria import Equilibrium
 from .model import ACTUATIONS, INPUT_NAMES, Model, _functions, make_model
 
 __all__ = [
@@ -166,7 +167,7 @@ def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np
     x : ndarray, shape (nx,)
     u : ndarray, shape (2,) [N.m]
     """
-    if hasattr(x, "x") and hasattr(x, "u") and hasattr(x, "name"):  # an Equilibrium
+    if isinstance(x, Equilibrium):
         if u is None:
             u = x.u
         x = x.x
