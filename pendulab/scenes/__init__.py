@@ -34,7 +34,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["Scene", "load_scene", "list_scenes", "scene_path", "SCENE_DIR"]
+__all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "SCENE_DIR"]
 
 #: Directory of the scenes shipped with the package.
 SCENE_DIR = Path(__file__).resolve().parent
@@ -119,6 +119,13 @@ class Scene:
                 f"unknown name(s) {unknown} for the {self.model.kind} model of scene {self.name!r}; expected a "
                 f"parameter {list(self.model.param_names)} or a state {list(self.model.state_names)}"
             )
+        for name, value in states.items():
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float, np.floating, np.integer))
+                or not math.isfinite(value)
+            ):
+                raise ValueError(f"initial state {name!r} must be a finite number, got {value!r}")
         model = self.model.with_params(**params) if params else self.model
         initial = {**self.initial, **{k: float(v) for k, v in states.items()}}
         return dataclasses.replace(self, model=model, initial=MappingProxyType(initial), x0=_frozen(model.state(**initial)))
@@ -159,6 +166,29 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
+
+
+def default_scene(kind: str) -> Scene:
+    """A scene of the given model kind with default parameters, at rest, and default settings.
+
+    Used when a model is chosen without a scene file (``pendulab simulate --model rigid``);
+    set the initial state with :meth:`Scene.with_settings`.
+    """
+    model = make_model(kind)
+    d = _SIMULATION_DEFAULTS
+    return Scene(
+        name=f"{kind}_default",
+        description=f"{kind} double pendulum with default parameters",
+        model=model,
+        initial=MappingProxyType({}),
+        x0=_frozen(model.state()),
+        t_final=d["t_final"],
+        dt=d["dt"],
+        method=d["method"],
+        rtol=d["rtol"],
+        atol=d["atol"],
+        outputs=_DEFAULT_OUTPUTS,
+    )
 
 
 def list_scenes() -> tuple[str, ...]:
