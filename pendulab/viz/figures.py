@@ -91,7 +91,7 @@ def fig_snapshots(runs: Any, n_snapshots: int = 5, t_max: float | None = None) -
         ax.set_xlabel("$x$ [m]")
         ax.set_ylabel("$y$ [m]")
         ax.set_title(f"{run.label}: configurations, t = 0 to {last:.1f} s")
-        ax.legend(loc="upper right", fontsize=8)
+        ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig
