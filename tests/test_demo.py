@@ -76,3 +76,13 @@ def test_summary_matches_data(demo_dir, capsys):
     for r in runs.values():
         assert r["n_rhs"] > 0 and r["wall_time_s"] > 0 and r["t_final_s"] == 1.0
         assert r["energy_drift_rel"] < 1e-6
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [(["--t-final", "-2"], "--t-final '-2'"), (["--scene", "no_such_scene"], "'no_such_scene'")],
+)
+def test_demo_bad_input_one_line_exit_2(tmp_path, capsys, args, fragment):
+    assert main(["demo", "--out", str(tmp_path / "out"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("pendulab demo: error:") and fragment in err[0]

@@ -132,8 +132,9 @@ def animate(
     finally:
         plt.close(fig)
     # One shared adaptive palette keeps colours stable between frames and the file small.
-    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-    frames_p = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+    # (method 0 = median cut, dither 0 = none: integer codes valid across Pillow versions.)
+    palette = images[len(images) // 2].quantize(colors=64, method=0)
+    frames_p = [im.quantize(palette=palette, dither=0) for im in images]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     frames_p[0].save(path, save_all=True, append_images=frames_p[1:], duration=int(round(1000 / fps)), loop=0)
