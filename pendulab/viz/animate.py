@@ -35,7 +35,7 @@ def animate(
     duration: float | None = None,
     trail: float = 1.5,
     width: float = 7.2,
-    dpi: int = 72,
+    dpi: int = 80,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Write an animated GIF of the runs side by side (frames blitted with matplotlib, written by Pillow).

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -24,7 +25,7 @@ class Run:
     model: Model
     traj: Trajectory
 
-    @property
+    @cached_property
     def positions(self) -> np.ndarray:
         """x1, y1, x2, y2 [m] at every output time, shape (N, 4)."""
         return np.column_stack([self.traj[n] for n in ("x1", "y1", "x2", "y2")])

@@ -31,6 +31,7 @@ __all__ = [
     "fig_phase",
     "fig_stretch",
     "fig_energy",
+    "energy_components",
     "save_figures",
 ]
 
