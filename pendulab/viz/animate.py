@@ -15,7 +15,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from PIL import Image  # noqa: E402
 
-from .drawing import RUN_COLORS, as_runs, link_polylines, view_limits  # noqa: E402
+from .drawing import as_runs, link_polylines, run_colors, view_limits  # noqa: E402
 
 __all__ = ["animate"]
 
@@ -79,7 +79,7 @@ def animate(
     size = (width, width / len(runs) * ratio + 0.55)
     fig, axes = plt.subplots(1, len(runs), figsize=size, dpi=dpi, squeeze=False)
     artists = []
-    for ax, run, color in zip(axes[0], runs, RUN_COLORS, strict=False):
+    for ax, run, color in zip(axes[0], runs, run_colors(len(runs)), strict=True):
         ax.set_xlim(*xlim)
         ax.set_ylim(*ylim)
         ax.set_aspect("equal")

@@ -11,10 +11,15 @@ import numpy as np
 from ..model.model import Model
 from ..model.trajectory import Trajectory
 
-__all__ = ["Run", "as_runs", "link_polylines", "spring_polyline", "view_limits", "RUN_COLORS"]
+__all__ = ["Run", "as_runs", "link_polylines", "spring_polyline", "view_limits", "RUN_COLORS", "run_colors"]
 
-#: Line colours of the runs, in order (rigid first in the demo).
+#: Line colours of the runs, in order (rigid first in the demo); repeated beyond four runs.
 RUN_COLORS = ("tab:blue", "tab:red", "tab:green", "tab:purple")
+
+
+def run_colors(n: int) -> list[str]:
+    """Colours of ``n`` runs, cycling through :data:`RUN_COLORS`."""
+    return [RUN_COLORS[i % len(RUN_COLORS)] for i in range(n)]
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from .drawing import RUN_COLORS, Run, as_runs, link_polylines, view_limits  # noqa: E402
+from .drawing import Run, as_runs, link_polylines, run_colors, view_limits  # noqa: E402
 
 __all__ = [
     "FIGURES",
@@ -73,7 +73,7 @@ def fig_snapshots(runs: Any, n_snapshots: int = 5, t_max: float | None = None) -
     xlim, ylim = view_limits(runs)
     ratio = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
     fig, axes = _figure(1, len(runs), width=5.0 * len(runs), height=5.0 * ratio + 0.75)
-    for ax, run, color in zip(axes[0], runs, RUN_COLORS, strict=False):
+    for ax, run, color in zip(axes[0], runs, run_colors(len(runs)), strict=True):
         t = run.traj.t
         last = min(t[-1], 2.0) if t_max is None else min(t_max, t[-1])
         idx = np.searchsorted(t, np.linspace(0.0, last, n_snapshots))
@@ -118,7 +118,7 @@ def _overlay(runs: tuple[Run, ...], names: tuple[str, ...], ncols: int, what: st
     nrows = -(-len(names) // ncols)
     fig, axes = _figure(nrows, ncols, width=10.0, sharex=True)
     for ax, name in zip(axes.flat, names, strict=False):
-        for run, color in zip(runs, RUN_COLORS, strict=False):
+        for run, color in zip(runs, run_colors(len(runs)), strict=True):
             ax.plot(run.traj.t, run.traj[name], color=color, label=run.label, lw=1.1)
         ax.set_ylabel(_LABELS[name])
         ax.grid(alpha=0.3)
@@ -145,7 +145,7 @@ def fig_phase(runs: Any) -> Figure:
     runs = as_runs(runs)
     fig, axes = _figure(1, 2, width=11.0, height=4.6)
     for ax, (th, om, link) in zip(axes[0], (("theta1", "omega1", 1), ("theta2", "omega2", 2)), strict=True):
-        for run, color in zip(runs, RUN_COLORS, strict=False):
+        for run, color in zip(runs, run_colors(len(runs)), strict=True):
             ax.plot(run.traj[th], run.traj[om], color=color, lw=0.7, alpha=0.8, label=run.label)
             ax.plot(run.traj[th][0], run.traj[om][0], "o", color=color, ms=5)
         ax.set_xlabel(_LABELS[th])
