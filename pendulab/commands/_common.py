@@ -13,7 +13,7 @@ from ..cli import CLIError
 from ..model.model import Model
 from ..model.trajectory import Trajectory
 
-__all__ = ["parse_number", "parse_settings", "write_trajectory", "summarize", "format_summary"]
+__all__ = ["parse_number", "parse_settings", "trajectory_format", "write_trajectory", "summarize", "format_summary"]
 
 
 def parse_number(option: str, text: str | None, *, positive: bool = False) -> float | None:
@@ -47,15 +47,17 @@ def parse_settings(items: Sequence[str] | None) -> dict[str, float]:
     return out
 
 
+def trajectory_format(path: str | Path) -> str:
+    """``"csv"`` or ``"npz"`` from the suffix of ``--out``; CLIError otherwise."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".csv", ".npz"):
+        raise CLIError(f"--out {str(path)!r}: expected a file name ending in .csv or .npz")
+    return suffix[1:]
+
+
 def write_trajectory(traj: Trajectory, path: str | Path) -> Path:
     """Write a trajectory as CSV or NPZ, chosen by the file suffix."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".csv":
-        return traj.to_csv(path)
-    if suffix == ".npz":
-        return traj.to_npz(path)
-    raise CLIError(f"--out {str(path)!r}: expected a file name ending in .csv or .npz")
+    return traj.to_csv(path) if trajectory_format(path) == "csv" else traj.to_npz(path)
 
 
 def summarize(label: str, model: Model, traj: Trajectory) -> dict[str, Any]:

@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from ..cli import CLIError
-from ._common import format_summary, parse_number, parse_settings, summarize, write_trajectory
+from ._common import format_summary, parse_number, parse_settings, summarize, trajectory_format, write_trajectory
 
 __all__ = ["register", "run"]
 
@@ -63,8 +63,8 @@ def run(args: argparse.Namespace) -> int:
         "atol": parse_number("--atol", args.atol, positive=True),
         "method": args.method,
     }
-    if args.out is not None and not args.out.lower().endswith((".csv", ".npz")):
-        raise CLIError(f"--out {args.out!r}: expected a file name ending in .csv or .npz")
+    if args.out is not None:
+        trajectory_format(args.out)  # fail before simulating
 
     scene = load_scene(args.scene) if args.scene is not None else default_scene(args.model)
     if settings:
