@@ -27,6 +27,8 @@ from pendulab.control import format_roa, lqr_balance, region_of_attraction, simu
 
 #: Torque limit of the demonstration [N.m].
 U_MAX = 20.0
+#: Brief run for tests/test_examples.py.
+TEST_KWARGS = {"kinds": ("rigid",), "actuations": ("pendubot",), "t_final": 2.0, "roa": False}
 
 
 def run(

@@ -19,6 +19,9 @@ import pendulab as pl
 from pendulab.model.modes import mode_table
 from pendulab.viz.modes import save_mode_figures
 
+#: Brief run for tests/test_examples.py.
+TEST_KWARGS = {"names": ("down-down",)}
+
 
 def run(
     *,

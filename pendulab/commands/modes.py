@@ -9,6 +9,7 @@ import sys
 from typing import Any
 
 from ..cli import CLIError
+from ._common import parse_settings
 
 __all__ = ["register", "run"]
 
@@ -37,19 +38,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _parse_set(items: list[str] | None) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for item in items or ():
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise CLIError(f"--set {item!r}: expected NAME=VALUE, e.g. --set k1=800")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise CLIError(f"--set {item!r}: value {value!r} is not a number") from None
-    return out
-
-
 def _parse_torque(text: str | None) -> list[float] | None:
     if text is None:
         return None
@@ -73,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
     if args.equilibrium != "all" and args.equilibrium not in EQUILIBRIUM_NAMES:
         raise CLIError(f"--equilibrium {args.equilibrium!r}: expected one of {[*EQUILIBRIUM_NAMES, 'all']}")
-    model = make_model(args.model, **_parse_set(args.set))
+    model = make_model(args.model, **parse_settings(args.set))
     torque = _parse_torque(args.torque)
     eqs = equilibria(model, torque) if args.equilibrium == "all" else [equilibrium(model, args.equilibrium, torque)]
 
