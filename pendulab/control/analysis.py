@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm, null_space
 
-from ..model.equilibria import Equilibrium, equilibria
+from ..model.equilibria import Equilibrium, equilibria, equilibrium
 from ..model.linearize import OutputSpec, linearize
 from ..model.model import ACTUATIONS, Model
 
@@ -145,7 +145,7 @@ def _weakest(W: np.ndarray, names: Sequence[str]) -> tuple[float, tuple[str, ...
 
 def controllability_report(
     model: Model,
-    at: Sequence[Equilibrium] | None = None,
+    at: Sequence[str | Equilibrium] | None = None,
     actuations: Sequence[str] = tuple(ACTUATIONS),
     outputs: OutputSpec = ("theta1", "theta2"),
     horizon: float = 1.0,
@@ -155,8 +155,8 @@ def controllability_report(
     Parameters
     ----------
     model : Model
-    at : sequence of Equilibrium, optional
-        Default: all equilibria at zero torque.
+    at : sequence of str or Equilibrium, optional
+        Equilibria (names are solved at zero torque); default all four.
     actuations : sequence of {"full", "pendubot", "acrobot"}
     outputs : str or sequence of str
         Measured signals for observability (default the two joint encoders'
@@ -170,7 +170,7 @@ def controllability_report(
     """
     if not (isinstance(horizon, (int, float)) and np.isfinite(horizon) and horizon > 0):
         raise ValueError(f"horizon must be a positive number of seconds, got {horizon!r}")
-    eqs = equilibria(model) if at is None else list(at)
+    eqs = equilibria(model) if at is None else [equilibrium(model, e) if isinstance(e, str) else e for e in at]
     rows = []
     for eq in eqs:
         for act in actuations:

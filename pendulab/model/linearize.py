@@ -9,7 +9,7 @@ groups ``"states"``, ``"positions"``, ``"energy"``, ``"stretch"``, ``"outputs"``
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
@@ -37,7 +37,10 @@ _OUTPUT_GROUPS = ("states", "positions", "energy", "stretch", "outputs")
 
 @dataclass(frozen=True)
 class Linearization:
-    """Linear model ``dx = A dx + B du``, ``dy = C dx + D du`` about an operating point.
+    """Linear model ``d(dx)/dt = A dx + B du``, ``dy = C dx + D du`` about an operating point.
+
+    ``dx = x - x0``, ``du`` the actuated torques minus their operating values,
+    ``dy = y - y0``.
 
     Attributes
     ----------
@@ -56,6 +59,8 @@ class Linearization:
     state_names, input_names, output_names : tuple of str
     actuation : {"full", "pendubot", "acrobot"}
     kind : {"rigid", "elastic"}
+    input_indices : tuple of int
+        Positions of the actuated inputs in (tau1, tau2).
     """
 
     A: np.ndarray
@@ -70,7 +75,7 @@ class Linearization:
     output_names: tuple[str, ...]
     actuation: str
     kind: str
-    input_indices: tuple[int, ...] = field(default=(0, 1))
+    input_indices: tuple[int, ...]
 
     @property
     def eigenvalues(self) -> np.ndarray:
