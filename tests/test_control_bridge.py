@@ -81,13 +81,16 @@ def test_controllability_report_rigid_and_elastic():
     for r in rows:
         # Radial motion decouples at vertical equilibria: torques cannot reach it, encoders cannot see it.
         assert (r.ctrb_rank, r.obsv_rank) == (4, 4) and r.ctrb_min_sv < 1e-12
-        assert set(r.ctrb_weakest) <= {"r1", "r2", "v1", "v2"}
+        assert set(r.ctrb_weakest) == set(r.obsv_weakest) == {"r1", "r2", "v1", "v2"}
         wn = np.sort(np.abs(r.uncontrollable_eigenvalues))
         c = 1.0 if r.equilibrium in ("down-down", "up-up") else -1.0  # e1.e2 (see test_modes)
         M = np.array([[2.3, 1.5 * c], [1.5 * c, 1.5]])
         radial = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(M, np.diag([900.0, 400.0]))).real))
         np.testing.assert_allclose(wn, np.repeat(radial, 2), rtol=1e-8)  # +-i omega of the two spring modes
     assert all(r.obsv_rank == 8 for r in positions)  # bob positions do see the springs
+    # A holding torque tilts the links: gravity then couples radial and angular motion, so all 8 states are reachable.
+    tilted = controllability_report(model, at=pl.equilibria(model, [3.0, 2.0]), actuations=("acrobot",))
+    assert all(r.ctrb_rank == 8 and r.obsv_rank == 8 and r.ctrb_min_sv > 0 for r in tilted)
 
 
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])

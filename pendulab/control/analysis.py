@@ -106,7 +106,8 @@ class ReportRow:
         unit squared) -- compare rows, not absolute values.
     ctrb_weakest, obsv_weakest : tuple of str
         States that dominate the weakest direction (components >= 30 % of the
-        largest, by magnitude).
+        largest, by magnitude), or the uncontrollable / unobservable subspace
+        when the rank is deficient.
     uncontrollable_eigenvalues : ndarray of complex
         Eigenvalues of A restricted to the uncontrollable subspace (empty when
         controllable).
@@ -136,11 +137,22 @@ class ReportRow:
         return d
 
 
-def _weakest(W: np.ndarray, names: Sequence[str]) -> tuple[float, tuple[str, ...]]:
+def _dominant(vectors: np.ndarray, names: Sequence[str]) -> tuple[str, ...]:
+    """States whose rows carry >= 30 % of the largest row norm of a basis (n, r)."""
+    weight = np.linalg.norm(vectors.reshape(len(names), -1), axis=1)
+    return tuple(n for n, w in zip(names, weight, strict=True) if w >= 0.3 * weight.max())
+
+
+def _weakest(W: np.ndarray, missing: np.ndarray, names: Sequence[str]) -> tuple[float, tuple[str, ...]]:
+    """Smallest Gramian eigenvalue and the states of the weakest direction.
+
+    When the rank is deficient the weakest "direction" is the whole missing
+    subspace (``missing``, n x (n - rank)); name its states rather than one
+    arbitrary vector inside it.
+    """
     w, V = np.linalg.eigh(W)
-    v = V[:, 0]
-    big = np.abs(v) >= 0.3 * np.max(np.abs(v))
-    return float(max(w[0], 0.0)), tuple(n for n, b in zip(names, big, strict=True) if b)
+    direction = missing if missing.shape[1] else V[:, :1]
+    return float(max(w[0], 0.0)), _dominant(direction, names)
 
 
 def controllability_report(
@@ -176,9 +188,9 @@ def controllability_report(
         for act in actuations:
             lin = linearize(model, eq, inputs=act, outputs=outputs)
             Qc, Qu = controllable_subspace(lin.A, lin.B)
-            Qo, _ = controllable_subspace(lin.A.T, lin.C.T)
-            c_sv, c_dir = _weakest(finite_gramian(lin.A, lin.B, horizon), lin.state_names)
-            o_sv, o_dir = _weakest(finite_gramian(lin.A.T, lin.C.T, horizon), lin.state_names)
+            Qo, Qno = controllable_subspace(lin.A.T, lin.C.T)
+            c_sv, c_dir = _weakest(finite_gramian(lin.A, lin.B, horizon), Qu, lin.state_names)
+            o_sv, o_dir = _weakest(finite_gramian(lin.A.T, lin.C.T, horizon), Qno, lin.state_names)
             unc = np.linalg.eigvals(Qu.T @ lin.A @ Qu) if Qu.shape[1] else np.zeros(0, dtype=complex)
             rows.append(
                 ReportRow(
