@@ -51,6 +51,8 @@ def test_nlsys_params_and_operating_point():
     np.testing.assert_allclose(resp.states.T, ref.x, atol=1e-7)  # two integrators at 1e-10 over a non-chaotic 2 s
     with pytest.raises(ValueError, match=r"unknown parameter name\(s\) \['mass'\]"):
         ct.input_output_response(sys, T, 0.0, x0, params={"mass": 2.0})
+    with pytest.raises(ValueError, match="parameter 'm2' must be > 0"):
+        ct.input_output_response(sys, T, 0.0, x0, params={"m2": -1.0})
 
 
 def test_named_signals_survive_lqr_feedback_interconnect():

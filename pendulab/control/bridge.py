@@ -6,6 +6,7 @@ Signal names come from the model (``theta1``, ``omega1``, ``tau1``, ``x2``,
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import control as ct
@@ -100,14 +101,16 @@ def to_nlsys(
     param_names = model.param_names
     defaults = dict(zip(param_names, model.p.tolist(), strict=True))
 
-    def pvec(params: dict[str, Any] | None) -> np.ndarray:
-        if not params:
-            return model.p
-        unknown = sorted(set(params) - set(param_names))
+    @lru_cache(maxsize=64)
+    def checked(items: tuple[tuple[str, Any], ...]) -> np.ndarray:
+        unknown = sorted(set(dict(items)) - set(param_names))
         if unknown:
             raise ValueError(f"unknown parameter name(s) {unknown}; expected one of {list(param_names)}")
-        merged = {**defaults, **params}
-        return np.array([float(merged[n]) for n in param_names])
+        # Validate once per distinct parameter set (signs, finiteness) through the parameter class.
+        return type(model.params)(**{**defaults, **dict(items)}).as_vector()
+
+    def pvec(params: dict[str, Any] | None) -> np.ndarray:
+        return checked(tuple(sorted((params or {}).items())))
 
     def full_u(u: np.ndarray) -> np.ndarray:
         uf = np.zeros(len(INPUT_NAMES))
