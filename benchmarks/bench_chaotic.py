@@ -47,6 +47,9 @@ REF_TOL = 1e-13
 #: Fixed steps [s] giving an achieved error of ~1e-6..2e-5, comparable to the adaptive methods at 1e-10.
 FIXED_STEPS = {"rk": 1e-3, "collocation": 5e-3, "collocation-radau": 5e-3, "collocation-legendre": 1e-2}
 ADAMS_SWEEP = (1e-10, 1e-11, 1e-12, 1e-13, 1e-14)
+#: CasADi compiles the RHS and Jacobian to C with the system compiler (the investigation of the target).
+JIT = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}}
+JIT_NAME = "cvodes-adams + CasADi JIT"
 PEER_TOLS = (1e-10, 1e-11)
 
 
@@ -195,6 +198,15 @@ def main(argv: list[str] | None = None) -> int:
     for tol in ADAMS_SWEEP:
         run = sim("cvodes-adams", rtol=tol, atol=tol)
         sweep.append(measure("cvodes-adams", f"rtol = atol = {tol:g}", run, args.repeats, model, ref))
+    jit_sweep: list[Result] = []
+    for tol in ADAMS_SWEEP[2:]:
+        log(f"  {JIT_NAME} at {tol:g} (compiles C on the warm-up run) ...")
+        run = sim("cvodes-adams", rtol=tol, atol=tol, options=JIT)
+        try:
+            jit_sweep.append(measure(JIT_NAME, f"rtol = atol = {tol:g}", run, args.repeats, model, ref))
+        except RuntimeError as exc:  # no C compiler: report without the JIT rows
+            log(f"  JIT unavailable: {exc}")
+            break
 
     log("peers: SciPy DOP853 called directly with a plain RHS ...")
     peers: list[Result] = []
@@ -219,14 +231,17 @@ def main(argv: list[str] | None = None) -> int:
         matched = next((r for r in sweep if r.error <= peer.error), None)
         if matched is not None:
             duels.append(head_to_head(f"matched error, peer at {tol:g}", matched, peer, args.repeats))
+        matched_jit = next((r for r in jit_sweep if r.error <= peer.error), None)
+        if matched_jit is not None:
+            duels.append(head_to_head(f"matched error + JIT, peer at {tol:g}", matched_jit, peer, args.repeats))
         else:
             log(f"  no Adams setting reaches the peer's error {peer.error:.1e} at {tol:g}")
     for d in duels:
         log(f"  {d.label}: Adams {d.t_adams * 1e3:.1f} ms vs peer {d.t_peer * 1e3:.1f} ms = {d.t_peer / d.t_adams:.1f}x")
 
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_csv(args.out.with_suffix(".csv"), results + sweep + peers)
-    args.out.write_text(render(results, sweep, peers, duels, agreement, info, date, args.repeats), encoding="utf-8")
+    write_csv(args.out.with_suffix(".csv"), results + sweep + jit_sweep + peers)
+    args.out.write_text(render(results, sweep + jit_sweep, peers, duels, agreement, info, date, args.repeats), encoding="utf-8")
     log(f"wrote {args.out} and {args.out.with_suffix('.csv')}")
     return 0
 
@@ -265,7 +280,7 @@ def render(results, sweep, peers, duels, agreement, info, date, repeats) -> str:
         "|---|---|---|---|---|---|---|"
     )
     lines = [
-        f"| {d.label} | {d.adams.settings}: {d.t_adams * 1e3:.1f} ms, error {d.adams.error:.1e} | "
+        f"| {d.label} | {d.adams.name}, {d.adams.settings}: {d.t_adams * 1e3:.1f} ms, error {d.adams.error:.1e} | "
         f"{d.peer.name}, {d.peer.settings}: {d.t_peer * 1e3:.1f} ms, error {d.peer.error:.1e} | "
         f"**{d.t_peer / d.t_adams:.1f}x** | {'yes' if d.adams.error <= d.peer.error else 'no'} |"
         for d in duels
@@ -318,6 +333,10 @@ Gauss–Legendre collocation h = 10 ms. "n/a" RHS evaluations: collocation solve
 {chr(10).join(_row(r) for r in results)}
 
 ## CVODES Adams tolerance sweep
+
+Last rows: the same with CasADi's JIT (`options={JIT}`): the right-hand side and its
+Jacobian are compiled to C by the system compiler instead of running in CasADi's SX virtual
+machine: same method and options, less time per step.
 
 {head}
 {chr(10).join(_row(r) for r in sweep)}

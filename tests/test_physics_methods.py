@@ -37,3 +37,14 @@ def test_method_agrees_with_reference(method, kind):
         # Local tolerance 1e-8, accumulated over ~200-2000 steps of a non-chaotic run: measured <= 1e-5 (BDF).
         assert err < 1e-4
     assert traj.success and traj.method == pl.METHODS[method].name
+
+
+def test_nested_integrator_options_are_passed_through():
+    """Dict-valued CasADi options (e.g. jit_options, linear_solver_options) must not break the integrator cache."""
+    model = pl.rigid()
+    x0 = model.state(**START)
+    plain = pl.simulate(model, x0, 0.5, method="cvodes", rtol=TOL, atol=TOL)
+    nested = pl.simulate(model, x0, 0.5, method="cvodes", rtol=TOL, atol=TOL, options={"linear_solver_options": {}})
+    np.testing.assert_array_equal(nested.x, plain.x)  # an empty option dict changes nothing
+    with pytest.raises(RuntimeError, match="no_such_option"):
+        pl.simulate(model, x0, 0.5, method="cvodes", options={"linear_solver_options": {"no_such_option": 1}})

@@ -151,11 +151,36 @@ def _casadi_integrator(kind: str, plugin: str, grid: tuple[float, ...], opts_key
 
     sym = build_rigid() if kind == "rigid" else build_elastic()
     dae = {"x": sym.x, "u": sym.u, "p": sym.p, "ode": sym.xdot}
-    return ca.integrator("pendulab_" + plugin, plugin, dae, 0.0, list(grid), dict(opts_key))
+    return ca.integrator("pendulab_" + plugin, plugin, dae, 0.0, list(grid), _thaw(opts_key))
+
+
+_MAPPING = "__mapping__"
 
 
 def _freeze(opts: Mapping[str, Any]) -> tuple:
-    return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items()))
+    """Hashable form of integrator options (cache key); nested dicts (e.g. ``jit_options``) included."""
+
+    def value(v: Any) -> Any:
+        if isinstance(v, Mapping):
+            return (_MAPPING, _freeze(v))
+        if isinstance(v, (list, tuple)):
+            return tuple(value(x) for x in v)
+        return v
+
+    return tuple(sorted((k, value(v)) for k, v in opts.items()))
+
+
+def _thaw(key: tuple) -> dict:
+    """Inverse of ``_freeze`` (sequences come back as lists)."""
+
+    def value(v: Any) -> Any:
+        if isinstance(v, tuple) and len(v) == 2 and v[0] == _MAPPING:
+            return _thaw(v[1])
+        if isinstance(v, tuple):
+            return [value(x) for x in v]
+        return v
+
+    return {k: value(v) for k, v in key}
 
 
 def _casadi_options(
