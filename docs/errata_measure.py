@@ -11,7 +11,8 @@ What it does
    equations shown in the erratum are *rendered from our derivation*, never typed.
 2. Builds the exhibit: the paper's printed equations, reconstructed as our
    equations with the printed velocity terms (see ``PRINTED_VELOCITY_TERMS``).
-   This is the only place in pendulab where those wrong equations exist.
+   Those wrong equations exist only here and, written out as a closed form to
+   check this reconstruction, in ``tests/test_errata.py``.
 3. Integrates both from theta1 = theta2 = 2 rad with the same integrator
    (SciPy DOP853, same tolerances) and measures the energy drift.
 
@@ -24,6 +25,7 @@ import argparse
 import platform
 import sys
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -149,8 +151,9 @@ def printed_equations(ours: Equations) -> Equations:
     return Equations(ours.M, PRINTED_VELOCITY_TERMS, ours.gravity_terms)
 
 
-def scipy_rhs(eq: Equations, params: dict[str, float] = PARAMS):
-    """f(t, x) for solve_ivp from the accelerations of ``eq`` at numeric parameters."""
+def scipy_rhs(eq: Equations, params: Mapping[str, float] | None = None):
+    """f(t, x) for solve_ivp from the accelerations of ``eq`` at numeric parameters (default ``PARAMS``)."""
+    params = PARAMS if params is None else params
     values = {m1: params["m1"], m2: params["m2"], L1: params["L1"], L2: params["L2"], g: params["g"]}
     acc = sp.lambdify([X], list(eq.qdd.subs(values)), "math")
 
@@ -161,9 +164,9 @@ def scipy_rhs(eq: Equations, params: dict[str, float] = PARAMS):
     return f
 
 
-def ours_rhs(params: dict[str, float] = PARAMS):
+def ours_rhs(params: Mapping[str, float] | None = None):
     """Our right-hand side as plain Python generated from the CasADi graph (no SymPy step)."""
-    model = pl.rigid(**params)
+    model = pl.rigid(**(PARAMS if params is None else params))
     rhs, p = to_python(model.functions["rhs"]), model.p.tolist()
     return lambda _t, x: rhs(x, [0.0, 0.0], p)
 
