@@ -48,3 +48,18 @@ def test_nested_integrator_options_are_passed_through():
     np.testing.assert_array_equal(nested.x, plain.x)  # an empty option dict changes nothing
     with pytest.raises(RuntimeError, match="no_such_option"):
         pl.simulate(model, x0, 0.5, method="cvodes", options={"linear_solver_options": {"no_such_option": 1}})
+
+
+@pytest.mark.parametrize("method", ["cvodes", "cvodes-adams", "idas", "DOP853"])
+def test_sampled_input_is_held_exactly(method):
+    """A torque that changes every output step: every method must restart cleanly at each jump."""
+    model = pl.rigid(b1=0.3, b2=0.2)
+    dt, t_final = 2e-3, 1.0
+    tk = np.arange(round(t_final / dt)) * dt
+    u = np.column_stack([1.5 * np.sin(2.0 * tk), 0.8 * np.cos(3.0 * tk)])
+    x0 = model.state(theta1=0.4, theta2=-0.2)
+    ref = pl.simulate(model, x0, t_final, dt=dt, method="DOP853", rtol=1e-13, atol=1e-13, u=u).x
+    traj = pl.simulate(model, x0, t_final, dt=dt, method=method, rtol=1e-10, atol=1e-10, u=u)
+    # Measured <= 3e-7 at 1e-10 with clean restarts; a CVODES run carrying its history across the
+    # jumps (one whole-grid call) was 5e-6 off and failed outright at 1e-12.
+    assert np.max(np.abs(traj.x - ref)) < 1e-6
