@@ -97,7 +97,7 @@ def identifier_for(model: Model) -> str:
 
 def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
     """Variable layout of the FMU of ``model``; ``x0`` (shape (nx,)) are the state start values."""
-    x_start = model.rest_state() if x0 is None else model.check_state(x0)
+    x_start = model.rest_state() if x0 is None else model.check_state(x0, "x0")
     if x_start.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got shape {x_start.shape}")
     identifier = identifier_for(model)
