@@ -74,15 +74,59 @@ class ValidationScene:
 
 
 SCENES: tuple[ValidationScene, ...] = (
-    ValidationScene("rigid_regular", "rigid", {}, {"theta1": 0.8, "theta2": 0.4}, 5.0, 0.01, 0.5, 0.5, 1e-10, 1e-6,
-                    "moderate swing, regular motion"),
-    ValidationScene("rigid_chaotic", "rigid", {}, {"theta1": 2.0, "theta2": 2.0}, 2.0, 0.01, 0.5, 0.5, 1e-10, 1e-5,
-                    "chaotic: errors grow ~1e2 over 2 s, so the bound is 10x looser"),
-    ValidationScene("elastic_soft", "elastic", {"k1": 200.0, "k2": 200.0}, {"theta1": 0.8, "theta2": 0.4}, 3.0, 0.01,
-                    0.5, 0.5, 1e-10, 1e-6, "soft springs (modes ~9 and 23 rad/s)"),
-    ValidationScene("elastic_stiff", "elastic", {"k1": 1e6, "k2": 1e6}, {"theta1": 0.8, "theta2": 0.4}, 1.0, 0.01,
-                    0.5, 0.5, 1e-10, 1e-6, "stiff springs k = 1e6 N/m (spring mode ~1600 rad/s), quasi-static start",
-                    quasi_static=True),
+    ValidationScene(
+        "rigid_regular",
+        "rigid",
+        {},
+        {"theta1": 0.8, "theta2": 0.4},
+        5.0,
+        0.01,
+        0.5,
+        0.5,
+        1e-10,
+        1e-6,
+        "moderate swing, regular motion",
+    ),
+    ValidationScene(
+        "rigid_chaotic",
+        "rigid",
+        {},
+        {"theta1": 2.0, "theta2": 2.0},
+        2.0,
+        0.01,
+        0.5,
+        0.5,
+        1e-10,
+        1e-5,
+        "chaotic: errors grow ~1e2 over 2 s, so the bound is 10x looser",
+    ),
+    ValidationScene(
+        "elastic_soft",
+        "elastic",
+        {"k1": 200.0, "k2": 200.0},
+        {"theta1": 0.8, "theta2": 0.4},
+        3.0,
+        0.01,
+        0.5,
+        0.5,
+        1e-10,
+        1e-6,
+        "soft springs (modes ~9 and 23 rad/s)",
+    ),
+    ValidationScene(
+        "elastic_stiff",
+        "elastic",
+        {"k1": 1e6, "k2": 1e6},
+        {"theta1": 0.8, "theta2": 0.4},
+        1.0,
+        0.01,
+        0.5,
+        0.5,
+        1e-10,
+        1e-6,
+        "stiff springs k = 1e6 N/m (spring mode ~1600 rad/s), quasi-static start",
+        quasi_static=True,
+    ),
 )
 
 
@@ -138,8 +182,10 @@ class ValidationReport:
 
     def table(self) -> str:
         """Max normalised error per (scene, run) and signal, with PASS/FAIL."""
-        lines = [f"FMU {self.fmu.name} ({self.kind}): fmpy validate_fmu: "
-                 + ("no problem" if not self.problems else f"{len(self.problems)} problem(s)")]
+        lines = [
+            f"FMU {self.fmu.name} ({self.kind}): fmpy validate_fmu: "
+            + ("no problem" if not self.problems else f"{len(self.problems)} problem(s)")
+        ]
         lines += [f"  problem: {p}" for p in self.problems]
         keys = list(dict.fromkeys((r.scene, r.run) for r in self.rows))
         signals = list(dict.fromkeys(r.signal for r in self.rows))
@@ -211,8 +257,9 @@ def _reference(scene: ValidationScene, signals: Sequence[str]) -> np.ndarray:
     def held(t: float, x: np.ndarray) -> np.ndarray:
         return u[min(int(round(t / scene.dt)), len(u) - 1)]
 
-    traj = simulate(model, scene.x0(), scene.t_final, dt=scene.dt, method=REFERENCE_METHOD, rtol=REFERENCE_TOL,
-                    atol=REFERENCE_TOL, u=held)
+    traj = simulate(
+        model, scene.x0(), scene.t_final, dt=scene.dt, method=REFERENCE_METHOD, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, u=held
+    )
     return np.column_stack([traj[s] for s in signals])
 
 

@@ -62,8 +62,17 @@ class Driver:
         self.fmu.freeInstance()
 
 
-def started(built, x0: dict[str, float], *, solver: int = 0, tolerance: float = 1e-10, interface: str = "CS",
-            name: str = "inst", logger=None, **params: float) -> Driver:
+def started(
+    built,
+    x0: dict[str, float],
+    *,
+    solver: int = 0,
+    tolerance: float = 1e-10,
+    interface: str = "CS",
+    name: str = "inst",
+    logger=None,
+    **params: float,
+) -> Driver:
     """An initialized instance with the given start states, parameters and solver."""
     d = Driver(built, interface, name, logger)
     d.set(**x0, **params)

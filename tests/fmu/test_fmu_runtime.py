@@ -98,8 +98,9 @@ def test_rigid_and_elastic_fmus_side_by_side(fmu_builds, version):
     stiff = pl.elastic(k1=1e4, k2=1e4)
     xe = stiff.state(theta1=0.7)  # static spring lengths for k = 1e4
     r = started(fmu_builds[("rigid", version)], {"theta1": 0.7}, name="rigid")
-    e = started(fmu_builds[("elastic", version)], dict(zip(stiff.state_names, xe, strict=True)), name="elastic",
-                k1=1e4, k2=1e4, solver=1)
+    e = started(
+        fmu_builds[("elastic", version)], dict(zip(stiff.state_names, xe, strict=True)), name="elastic", k1=1e4, k2=1e4, solver=1
+    )
     for _ in range(100):  # interleaved: both libraries loaded in one process
         r.step(0.01)
         e.step(0.01)
