@@ -66,3 +66,28 @@ def test_c_importer_is_clean_under_valgrind(fmu_builds, version, tmp_path):
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr
     assert "Invalid" not in proc.stderr and "definitely lost" not in proc.stderr, proc.stderr
+
+
+def test_ode_solvers_converge_and_rodas4_steps_over_a_stiff_spring(tmp_path):
+    """The FMI-independent solvers on their own (tests/fmu/c/ode_solver_test.c states each check)."""
+    c_dir = Path(__file__).parents[2] / "pendulab" / "fmu" / "c"
+    exe = tmp_path / "ode_solver_test"
+    cmd = [
+        find_compiler(),
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-std=c99",
+        "-O2",
+        "-I",
+        str(c_dir),
+        str(HARNESS / "ode_solver_test.c"),
+        str(c_dir / "ode_solver.c"),
+        "-o",
+        str(exe),
+        "-lm",
+    ]
+    subprocess.run(cmd, check=True, capture_output=True, text=True)
+    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60, check=False)
+    assert proc.returncode == 0, proc.stdout
+    assert proc.stdout.count(" ok") == 8, proc.stdout
