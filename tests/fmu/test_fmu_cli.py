@@ -45,3 +45,17 @@ def test_cli_bad_input_exits_2_with_one_line(fmu_builds, tmp_path, capsys):
     assert main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "elastic_soft"]) == 2
     assert "not for the rigid model" in capsys.readouterr().err
     assert main(["fmu", "validate", str(tmp_path / "missing.fmu")]) == 2
+
+
+def test_cli_validate_exits_1_on_fail(fmu_builds, monkeypatch, capsys):
+    import dataclasses
+    import importlib
+
+    v = importlib.import_module("pendulab.fmu.validate")  # the module (the package exports the function)
+
+    # an impossible bound (1e-15, below the solvers' 1e-10 tolerance) must turn into FAIL and exit status 1
+    strict = tuple(dataclasses.replace(s, bound=1e-15) for s in v.SCENES)
+    monkeypatch.setattr(v, "SCENES", strict)
+    assert main(["fmu", "validate", str(fmu_builds[("rigid", 3)].path), "--scene", "rigid_chaotic"]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "overall: FAIL" in out
