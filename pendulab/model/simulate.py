@@ -151,11 +151,36 @@ def _casadi_integrator(kind: str, plugin: str, grid: tuple[float, ...], opts_key
 
     sym = build_rigid() if kind == "rigid" else build_elastic()
     dae = {"x": sym.x, "u": sym.u, "p": sym.p, "ode": sym.xdot}
-    return ca.integrator("pendulab_" + plugin, plugin, dae, 0.0, list(grid), dict(opts_key))
+    return ca.integrator("pendulab_" + plugin, plugin, dae, 0.0, list(grid), _thaw(opts_key))
+
+
+_MAPPING = "__mapping__"
 
 
 def _freeze(opts: Mapping[str, Any]) -> tuple:
-    return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items()))
+    """Hashable form of integrator options (cache key); nested dicts (e.g. ``jit_options``) included."""
+
+    def value(v: Any) -> Any:
+        if isinstance(v, Mapping):
+            return (_MAPPING, _freeze(v))
+        if isinstance(v, (list, tuple)):
+            return tuple(value(x) for x in v)
+        return v
+
+    return tuple(sorted((k, value(v)) for k, v in opts.items()))
+
+
+def _thaw(key: tuple) -> dict:
+    """Inverse of ``_freeze`` (sequences come back as lists)."""
+
+    def value(v: Any) -> Any:
+        if isinstance(v, tuple) and len(v) == 2 and v[0] == _MAPPING:
+            return _thaw(v[1])
+        if isinstance(v, tuple):
+            return [value(x) for x in v]
+        return v
+
+    return {k: value(v) for k, v in key}
 
 
 def _casadi_options(
@@ -185,7 +210,11 @@ def _run_casadi(model, spec, x0, t, sched, u_fun, rtol, atol, max_step, extra):
     if spec.fixed_step:
         n_sub = max(1, math.ceil(h / (max_step or _DEFAULT_FIXED_STEP) - 1e-9))
     stats: dict[str, Any] = {"n_rhs": 0, "n_steps": 0}
-    if sched is not None:
+    # A whole-grid CVODES call carries its multistep history across the jumps of a sampled
+    # input: it misses the requested accuracy by 10-100x and can fail with repeated error-test
+    # failures. Restart it at each output interval instead (IDAS and the fixed-step methods are exact).
+    restart = spec.plugin == "cvodes" and sched is not None and not np.all(sched == sched[0])
+    if sched is not None and not restart:
         fine = np.linspace(0.0, t[-1], n_int * n_sub + 1)
         F = _casadi_integrator(model.kind, spec.plugin, tuple(fine[1:].tolist()), _freeze(opts))
         try:
@@ -202,7 +231,7 @@ def _run_casadi(model, spec, x0, t, sched, u_fun, rtol, atol, max_step, extra):
         U = np.empty((n_int, model.nu))
         X[0] = x0
         for k in range(n_int):
-            U[k] = _eval_feedback(model, u_fun, t[k], X[k])
+            U[k] = sched[k] if sched is not None else _eval_feedback(model, u_fun, t[k], X[k])
             try:
                 X[k + 1] = np.asarray(F(x0=X[k], u=np.tile(U[k], (n_sub, 1)).T, p=model.p)["xf"])[:, -1]
             except RuntimeError as exc:
