@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.model import Model, rigid
+from ..model import counterpart
 from ..model.simulate import simulate
 from .problem import SwingUpProblem
 
@@ -100,19 +100,18 @@ def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
 
 
 def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
-    """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths."""
+    """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths
+    (:func:`pendulab.model.counterpart.rigid_counterpart`); spring bounds are dropped."""
     if problem.model.kind != "elastic":
         raise ValueError(f"rigid_counterpart needs an elastic problem, got model kind {problem.model.kind!r}")
-    pr = problem.model.params
-    model: Model = rigid(m1=pr.m1, m2=pr.m2, L1=pr.L1, L2=pr.L2, g=pr.g, b1=pr.b1, b2=pr.b2)
-    x0, goal = problem.start, problem.target
+    model = counterpart.rigid_counterpart(problem.model)
     return SwingUpProblem(
         model=model,
         actuation=problem.actuation,
         torque_limit=problem.torque_limit,
         velocity_limit=problem.velocity_limit,
-        x0=(x0[0], x0[1], x0[4], x0[5]),
-        goal=(goal[0], goal[1], goal[4], goal[5]),
+        x0=counterpart.rigid_state(problem.model, problem.start),
+        goal=counterpart.rigid_state(problem.model, problem.target),
         horizon=problem.horizon,
         free_horizon=problem.free_horizon,
         horizon_bounds=problem.horizon_bounds,

@@ -26,22 +26,15 @@ controller sample time, ``[initial]`` the start state by name and an optional
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from ..model.model import Model, make_model
+from ..model.model import Model
+from ..scenes import SCENE_DIR, load_scene
 from .problem import SwingUpProblem, upright_state
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
+__all__ = ["Task", "load_task", "task_names"]
 
-__all__ = ["Task", "load_task", "task_names", "SCENE_DIR"]
-
-SCENE_DIR = Path(__file__).resolve().parent.parent / "scenes"
 _PREFIX = "swingup_"
 _TASK_KEYS = {
     "actuation", "torque_limit", "velocity_limit", "stretch_limits", "horizon", "free_horizon", "horizon_bounds",
@@ -97,6 +90,9 @@ def task_names() -> tuple[str, ...]:
 def load_task(name_or_path: str | Path) -> Task:
     """Load a shipped task by name (see :func:`task_names`) or a scene file with a ``[task]`` section.
 
+    The scene itself is read by :func:`pendulab.scenes.load_scene` (validated there);
+    this function interprets its ``[task]`` section.
+
     Raises
     ------
     FileNotFoundError
@@ -104,65 +100,41 @@ def load_task(name_or_path: str | Path) -> Task:
     ValueError
         Missing or malformed sections/keys.
     """
-    path = Path(name_or_path)
-    if not path.suffix:
-        shipped = SCENE_DIR / f"{_PREFIX}{name_or_path}.toml"
-        if not shipped.exists():
-            raise FileNotFoundError(f"unknown task {str(name_or_path)!r}; shipped tasks: {list(task_names())}")
-        path = shipped
-    if not path.exists():
-        raise FileNotFoundError(f"scene file {str(path)!r} does not exist")
-    with path.open("rb") as fh:
-        try:
-            data = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"scene file {str(path)!r} is not valid TOML: {exc}") from exc
-    return _task_from_dict(data, path)
-
-
-def _section(data: dict[str, Any], key: str, path: Path, required: bool = True) -> dict[str, Any]:
-    sec = data.get(key, {})
-    if required and key not in data:
-        raise ValueError(f"scene {str(path)!r} has no [{key}] section (needed for a swing-up task)")
-    if not isinstance(sec, dict):
-        raise ValueError(f"[{key}] in {str(path)!r} must be a table, got {sec!r}")
-    return sec
-
-
-def _task_from_dict(data: dict[str, Any], path: Path) -> Task:
-    scene = _section(data, "scene", path, required=False)
-    model_sec = _section(data, "model", path)
-    task = _section(data, "task", path)
-    sim = _section(data, "simulation", path, required=False)
+    text = str(name_or_path)
+    if not Path(text).is_file() and (SCENE_DIR / f"{_PREFIX}{text}.toml").is_file():
+        name_or_path = SCENE_DIR / f"{_PREFIX}{text}.toml"
+    elif not Path(text).is_file() and not (SCENE_DIR / f"{text}.toml").is_file():
+        raise FileNotFoundError(f"unknown task {text!r}; shipped tasks: {list(task_names())}")
+    scene = load_scene(name_or_path)
+    task = scene.extra.get("task")
+    if not isinstance(task, dict):
+        raise ValueError(f"scene {str(scene.path)!r} has no [task] table (needed for a swing-up task)")
     unknown = sorted(set(task) - _TASK_KEYS)
     if unknown:
-        raise ValueError(f"unknown key(s) {unknown} in [task] of {str(path)!r}; expected some of {sorted(_TASK_KEYS)}")
+        raise ValueError(f"unknown key(s) {unknown} in [task] of {str(scene.path)!r}; expected some of {sorted(_TASK_KEYS)}")
     if "actuation" not in task:
-        raise ValueError(f"[task] of {str(path)!r} must set actuation (pendubot, acrobot or full)")
-    model = make_model(model_sec.get("kind", "rigid"), **dict(model_sec.get("params", {})))
-    x0 = model.state(**dict(data.get("initial", {})))
+        raise ValueError(f"[task] of {str(scene.path)!r} must set actuation (pendubot, acrobot or full)")
+    model = scene.model
     goal = upright_state(model)
     for name, value in dict(task.get("goal", {})).items():
         if name not in model.state_names:
             raise ValueError(f"unknown state {name!r} in [task.goal]; expected one of {list(model.state_names)}")
         goal[model.state_names.index(name)] = float(value)
-    kw = {
-        k: task[k] for k in ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight") if k in task
-    }
+    scalar_keys = ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight")
+    kw = {k: task[k] for k in scalar_keys if k in task}
     for k in ("stretch_limits", "horizon_bounds"):
         if k in task:
             kw[k] = tuple(task[k])
-    name = str(scene.get("name", path.stem))
-    problem = SwingUpProblem(model=model, actuation=task["actuation"], x0=x0, goal=goal, name=name, **kw)
+    problem = SwingUpProblem(model=model, actuation=task["actuation"], x0=scene.x0, goal=goal, name=scene.name, **kw)
     return Task(
-        name=name,
-        description=str(scene.get("description", "")),
+        name=scene.name,
+        description=scene.description,
         problem=problem,
-        t_final=float(sim.get("t_final", 10.0)),
-        dt=float(sim.get("dt", 0.01)),
+        t_final=scene.t_final,
+        dt=scene.dt,
         N=int(task.get("N", 100)),
         method=str(task.get("method", "radau")),
         degree=int(task.get("degree", 3)),
         success_fraction=float(task.get("success_fraction", 0.9)),
-        path=path,
+        path=scene.path,
     )
