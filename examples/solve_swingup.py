@@ -8,6 +8,9 @@ from __future__ import annotations
 from pendulab.control.episode import run_episode
 from pendulab.control.tasks import load_task
 
+#: Keyword arguments of the brief run in the test suite.
+TEST_KWARGS = {"N": 40}
+
 
 def run(*, task: str = "pendubot", N: int = 100, method: str = "radau") -> dict:
     """Solve, replay and track one task; return its summary (SI units)."""

@@ -1,4 +1,4 @@
-"""The ``pendulab swingup`` command and the example, run briefly."""
+"""The ``pendulab swingup`` command, run briefly."""
 
 import json
 
@@ -17,10 +17,3 @@ def test_cli_writes_results_and_reports_success(tmp_path):
 def test_cli_bad_input_exits_2(tmp_path, capsys):
     assert main(["swingup", "--task", "nope", "--out", str(tmp_path)]) == 2
     assert "unknown task" in capsys.readouterr().err
-
-
-def test_example_runs():
-    from examples.solve_swingup import run
-
-    summary = run(task="pendubot", N=40)
-    assert summary["success"] and summary["ipopt_status"] == "Solve_Succeeded"
