@@ -31,6 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--guess", default="auto", choices=("auto", "linear", "energy", "homotopy"), help="initial guess")
     p.add_argument("--out", help="output directory (required unless --list)")
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
+    p.add_argument("--fmu", action="store_true", help="also run the closed loop through an exported FMI 2 Co-Simulation FMU")
     p.set_defaults(func=run)
 
 
@@ -52,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={args.N or task.N}) ...", file=sys.stderr)
     ep = run_episode(task, method=args.method, N=args.N, guess=args.guess)
     summary = ep.summary()
+    if args.fmu and ep.closed_loop is not None:
+        summary.update(_fmu_loop(ep, out))
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
     if not ep.result.success:
         print(f"swing-up failed: {ep.result.message}")
@@ -73,9 +76,30 @@ def run(args: argparse.Namespace) -> int:
     print(f", open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
     print(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m", end="")
     print(f" (limit {s['torque_limit_Nm']:g}), control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
+    if "fmu_success" in s:
+        print(f"  FMU closed loop: {'SUCCESS' if s['fmu_success'] else 'FAILED'}", end="")
+        print(f", max state deviation from the native closed loop {s['fmu_max_state_deviation']:.2e}")
+        figs.append(out / "closed_loop_fmu.csv")
     for f in [out / "summary.json", out / "closed_loop.csv", out / "optimal.csv", *figs]:
         print(f"  wrote {f}")
     return 0 if s["success"] else 1
+
+
+def _fmu_loop(ep, out: Path) -> dict:
+    import numpy as np
+
+    from ..control.check import height_success
+    from ..control.fmu_loop import closed_loop_fmu
+    from ..fmu.export import export
+
+    print("[swingup] exporting the FMU and running the closed loop through it ...", file=sys.stderr)
+    task = ep.task
+    fmu = export(task.model, out / f"{task.name}.fmu", 2, x0=ep.x0, stop_time=task.t_final, step_size=task.dt)
+    traj = closed_loop_fmu(fmu, task.model, ep.x0, ep.controller, task.t_final, task.dt)
+    traj.to_csv(out / "closed_loop_fmu.csv")
+    hc = height_success(traj, task.rest_lengths, task.success_fraction)
+    dev = float(np.max(np.abs(traj.x - ep.closed_loop.x)))
+    return {"fmu_success": hc.success, "fmu_swing_up_time_s": hc.t_up, "fmu_max_state_deviation": dev}
 
 
 def _optimal_csv(ep, path: Path) -> None:

@@ -140,7 +140,8 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
         ax.axhline(ep.height.threshold, color="r", ls=":", lw=0.8)
     (trace,) = ax.plot([], [], "-", color="tab:orange", lw=0.6, alpha=0.6)
     (links,) = ax.plot([], [], "o-", color="tab:blue", lw=3, ms=6)
-    title = ax.set_title("", fontsize=8)
+    # Two-line placeholder so tight_layout reserves room for the per-frame title.
+    title = ax.set_title(f"{ep.task.name}\nt = 0.00 s", fontsize=8)
     T = ep.result.horizon
 
     def draw(i: int):
