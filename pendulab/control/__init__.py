@@ -1,0 +1,1 @@
+"""Controllers for the double pendulum (LQR balance, swing-up, tracking)."""
