@@ -50,6 +50,8 @@ __all__ = [
     "angle_error",
     "as_feedback",
     "full_input",
+    "make_controller",
+    "CONTROLLERS",
 ]
 
 
@@ -542,3 +544,48 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
         return full_input(controller, controller(t, x))
 
     return feedback
+
+
+#: Names accepted by :func:`make_controller`.
+CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr")
+
+
+def make_controller(
+    name: str, model: Model, sample_time: float, *, u_max: float = 20.0, t_ref: float = 6.0
+) -> tuple[SampledController, np.ndarray]:
+    """A named controller for ``model`` and its natural start state.
+
+    Parameters
+    ----------
+    name : {"lqr", "swingup", "tvlqr"}
+        ``lqr``: continuous LQR balance (start 0.1 rad off upright);
+        ``swingup``: energy pumping + LQR catch (start hanging, theta1 = 0.1);
+        ``tvlqr``: discrete TVLQR tracking of the native swing-up reference
+        (:func:`swingup_reference`, ``t_ref`` seconds) then LQR balance.
+    model : Model
+        Design model (e.g. ``FmuInfo.model()`` for an FMU's parameters).
+    sample_time : float
+        [s].
+    u_max : float
+        Torque limit [N.m] (swing-up and tracking).
+    t_ref : float
+        Reference horizon [s] of ``tvlqr``.
+
+    Returns
+    -------
+    controller : SampledController
+    x0 : ndarray, shape (nx,)
+    """
+    h = _positive("sample_time", sample_time)
+    if name == "lqr":
+        x0 = upright_state(model)
+        x0[0] += 0.1
+        return lqr_balance(model, h), x0
+    if name == "swingup":
+        return energy_swingup(model, h, u_max=u_max), model.state(theta1=0.1)
+    if name == "tvlqr":
+        t, x_ref, u_ref = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
+        K = discrete_tvlqr(model, t, x_ref, u_ref)
+        final = lqr_balance(model, h, design="discrete", u_max=u_max)
+        return TVLQRTracker(model, t, x_ref, u_ref, K, h, INPUT_NAMES, final=final, u_max=u_max), x_ref[0].copy()
+    raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
