@@ -50,7 +50,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--fmu-elastic", type=Path, help="elastic FMU (default: export one into --out)")
     s.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     s.add_argument("--steps", default="0.01:0.25:0.01", help="START:STOP:STEP or comma list of comm steps [s]")
-    s.add_argument("--solver", choices=("dopri5", "rodas4"), default="rodas4")
+    s.add_argument("--solver", choices=("dopri5", "rodas4"), default="dopri5")
     s.add_argument("--tolerance", type=float, default=1e-10)
     s.add_argument("--native", action="store_true", help="run the native sampled loop instead of the FMU")
     s.add_argument("--out", type=Path, default=Path("pendulab-out/cosim-sweep"), help="output directory")

@@ -315,14 +315,14 @@ def plot_sweep(results: Sequence[SweepResult], path: str | Path) -> Path:
             ax.axvline(res.h_crit_pred, color="C0", lw=0.8, ls=":")
             ax.annotate(
                 f"predicted h* = {res.h_crit_pred * 1e3:.1f} ms",
-                (res.h_crit_pred, 0.15),
+                (res.h_crit_pred, 1.2),
                 rotation=90,
                 xytext=(-12, 0),
                 textcoords="offset points",
                 fontsize=8,
                 color="C0",
             )
-        ax.set_yscale("log")
+        ax.set_ylim(0.5, max(1.5, float(np.nanmax(res.curve[1])) * 1.05))
         ax.set_xlabel("communication step h = sample time [s]")
         ax.set_ylabel("spectral radius / per-step contraction [-]")
         ax.set_title(f"{res.kind}: fixed continuous LQR gain under ZOH")
