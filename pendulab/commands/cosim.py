@@ -36,6 +36,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--u-max", type=float, default=20.0, help="torque limit [N.m] of swingup/tvlqr (default 20)")
     p.add_argument("--out", type=Path, default=Path("pendulab-out/cosim"), help="output directory")
     p.add_argument("--no-gif", action="store_true", help="skip the animation")
+    p.add_argument(
+        "--gif-fps", type=int, default=20, help="animation frames per simulated second (default 20, at most 160 frames)"
+    )
     p.set_defaults(func=run)
     sub = p.add_subparsers(dest="cosim_action", metavar="ACTION")
     s = sub.add_parser(
@@ -91,6 +94,11 @@ def run(args: argparse.Namespace) -> int:
     from ..fmu.cosim_plots import animate_cosim, plot_cosim
 
     out: Path = args.out
+    for flag, value in (("--comm-step", args.comm_step), ("--sample-time", args.sample_time), ("--t-final", args.t_final)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise CLIError(f"{flag} must be a positive number [s], got {value!r}")
+    if args.gif_fps < 1:
+        raise CLIError(f"--gif-fps must be a positive integer, got {args.gif_fps!r}")
     fmu = _fmu_for(args.kind, args.fmu, args.fmi_version, out)
     info = inspect_fmu(fmu)
     model = info.model()
@@ -100,8 +108,7 @@ def run(args: argparse.Namespace) -> int:
         _progress("building the swing-up reference and TVLQR gains (native)")
     ctrl, x0 = make_controller(args.controller, model, sample_time, u_max=args.u_max)
     x0 = _init_state(x0, info.state_names, args.init)
-    if args.comm_step > 0 and math.isfinite(args.comm_step):
-        t_final = round(t_final / args.comm_step) * args.comm_step  # a whole number of steps
+    t_final = max(1, round(t_final / args.comm_step)) * args.comm_step  # a whole number of steps
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")
     traj = cosim(fmu, ctrl, args.comm_step, t_final, x0=x0, solver=args.solver, tolerance=args.tolerance)
     out.mkdir(parents=True, exist_ok=True)
@@ -109,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     title = f"{info.kind} FMU, {args.controller}, comm step {args.comm_step:g} s"
     plot_cosim(traj, out / "cosim.png", title)
     if not args.no_gif:
-        animate_cosim(traj, out / "cosim.gif", title=f"{args.controller}: ")
+        animate_cosim(traj, out / "cosim.gif", fps=args.gif_fps, title=f"{args.controller}: ")
     summary = {
         "fmu": str(fmu),
         "kind": info.kind,
