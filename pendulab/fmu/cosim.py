@@ -418,16 +418,16 @@ def _n_steps(t_final: float, comm_step: float) -> int:
     return n
 
 
-def _controller_output(controller: SampledController, t: float, x: np.ndarray) -> np.ndarray:
+def _controller_output(controller: SampledController, cols: list[int], t: float, x: np.ndarray) -> np.ndarray:
+    """Controller torques scattered into (tau1, tau2); undriven inputs stay 0."""
     u = np.asarray(controller(t, x.copy()), dtype=float).reshape(-1)
-    if u.shape != (len(controller.input_names),) or not np.all(np.isfinite(u)):
+    if u.shape != (len(cols),) or not np.isfinite(u).all():
         raise ValueError(
-            f"controller returned {u.tolist()!r} at t = {t:.6g} s; expected {len(controller.input_names)} finite torques "
+            f"controller returned {u.tolist()!r} at t = {t:.6g} s; expected {len(cols)} finite torques "
             f"for {list(controller.input_names)}"
         )
     full = np.zeros(len(INPUT_NAMES))
-    for name, value in zip(controller.input_names, u, strict=True):
-        full[INPUT_NAMES.index(name)] = value
+    full[cols] = u
     return full
 
 
@@ -498,6 +498,7 @@ def cosim(
     n = _n_steps(_positive("t_final", t_final), h)
     info = inspect_fmu(fmu_path)
     every = _check_controller(controller, info, h)
+    cols = [INPUT_NAMES.index(name) for name in controller.input_names]
     if max_halvings and not info.can_get_set_state:
         raise ValueError(f"max_halvings={max_halvings} needs an FMU that can get and set its state; {info.path.name!r} cannot")
     nx, ny = len(info.state_names), len(info.output_names)
@@ -513,7 +514,7 @@ def cosim(
                 break
             t = k * h
             if k % every == 0:
-                u = _controller_output(controller, t, X[k])
+                u = _controller_output(controller, cols, t, X[k])
             U[k] = u
             plant.set_inputs(u)
             plant.time = t  # multiply, never accumulate: t_k = k h exactly as in the native grid
@@ -589,6 +590,7 @@ def cosim_many(
     if len(x0s) != len(infos) or len(ps) != len(infos):
         raise ValueError(f"x0 and params must have one entry per FMU ({len(infos)}), got {len(x0s)} and {len(ps)}")
     every = _check_controller(controller, infos[feedback_from], h)
+    cols = [INPUT_NAMES.index(name) for name in controller.input_names]
     controller.reset()
     X = [np.empty((n + 1, len(i.state_names))) for i in infos]
     Y = [np.empty((n + 1, len(i.output_names))) for i in infos]
@@ -605,7 +607,7 @@ def cosim_many(
             if k == n:
                 break
             if k % every == 0:
-                u = _controller_output(controller, k * h, X[feedback_from][k])
+                u = _controller_output(controller, cols, k * h, X[feedback_from][k])
             U[k] = u
             for plant in plants:
                 plant.set_inputs(u)

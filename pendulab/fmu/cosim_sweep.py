@@ -307,9 +307,8 @@ def plot_sweep(results: Sequence[SweepResult], path: str | Path) -> Path:
         ax.plot(*res.curve, "-", color="C0", lw=2, label="predicted: linear ZOH closed loop")
         meas = np.array([p.rho_meas for p in res.points])
         ax.plot(h, meas, "o", color="C1", ms=5, label=f"measured ({res.runner}), {res.small:g} rad start")
-        lost = [p.h for p in res.points if not p.stable_large]
-        if lost:
-            ax.axvspan(min(lost), h[-1], color="C3", alpha=0.12, label=f"lost from {res.large:g} rad start")
+        if math.isfinite(res.h_crit_large):
+            ax.axvspan(res.h_crit_large, h[-1], color="C3", alpha=0.12, label=f"lost from {res.large:g} rad start")
         ax.axhline(1.0, color="k", lw=0.8, ls="--")
         if math.isfinite(res.h_crit_pred):
             ax.axvline(res.h_crit_pred, color="C0", lw=0.8, ls=":")
