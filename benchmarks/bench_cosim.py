@@ -95,7 +95,8 @@ def main(argv: list[str] | None = None) -> int:
         f"Medians of {args.repeats} runs of {args.steps} communication steps; LQR balance from 0.1 rad; embedded dopri5, "
         "tolerance 1e-8. Times in microseconds per communication step. *master* = loop time outside doStep and the "
         "controller (reading states/outputs, setting inputs, bookkeeping through fmpy/ctypes). *native* = the same "
-        "sampled loop through `pendulab.simulate` (CVODES, one integrator call per step).",
+        "sampled loop through `pendulab.simulate` (CVODES, one integrator call per step). Each column is its own median, "
+        "so the columns do not add up exactly to *total*.",
         "",
         "| FMI | plant | comm step | doStep [µs] | controller [µs] | master [µs] | master / doStep | total [µs] "
         "| native loop [µs] | native / total |",

@@ -8,6 +8,7 @@ import zipfile
 import numpy as np
 import pytest
 from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
 
 import pendulab as pl
 from pendulab.control.sampled import LinearStateFeedback, lqr_balance, upright_state
@@ -155,3 +156,20 @@ def test_instance_freed_when_fmu_fails_in_do_step(cosim_fmu, spy_free):
     with pytest.raises(RuntimeError, match=r"failed in doStep at t = 0 s, h = 0.01 s \(status 3\)"):
         cosim(cosim_fmu("elastic", 2), lqr_balance(model, 0.01), 0.01, 0.1, x0=x0)
     assert len(spy_free) == 1
+
+
+def test_fmi3_instance_freed_when_controller_raises(cosim_fmu, monkeypatch):
+    freed = []
+    real = FMU3Slave.freeInstance
+    monkeypatch.setattr(FMU3Slave, "freeInstance", lambda self: (freed.append(1), real(self))[1])
+    model = pl.rigid()
+    ctrl = lqr_balance(model, 0.01)
+
+    def boom(t, x):
+        raise RuntimeError("controller crashed")
+
+    bad = LinearStateFeedback(model, ctrl.K, ctrl.x_eq, ctrl.u_eq, 0.01, ctrl.input_names)
+    bad.__class__ = type("Boom", (LinearStateFeedback,), {"__call__": lambda self, t, x: boom(t, x)})
+    with pytest.raises(RuntimeError, match="controller crashed"):
+        cosim(cosim_fmu("rigid", 3), bad, 0.01, 0.1, x0=model.state(theta1=0.1))
+    assert freed == [1]

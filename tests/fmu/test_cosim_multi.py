@@ -38,10 +38,11 @@ def test_rigid_and_elastic_side_by_side(cosim_fmu):
     assert dev[1] > 0 and dev[0] / dev[1] > 8.0
 
 
-def test_step_retry_restores_state(cosim_fmu):
+@pytest.mark.parametrize("version", [2, 3])
+def test_step_retry_restores_state(cosim_fmu, version):
     """A master-side bound rejects big steps; restored and halved, the run equals the plain run."""
     model = pl.rigid()
-    fmu = cosim_fmu("rigid", 2)
+    fmu = cosim_fmu("rigid", version)
     ctrl = energy_swingup(model, 0.05)
     x0 = model.state(theta1=0.1)
     plain = cosim(fmu, ctrl, 0.05, 4.0, x0=x0, tolerance=1e-10)
