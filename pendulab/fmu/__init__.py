@@ -1,1 +1,17 @@
+<<<<<<< HEAD
 """FMU export, validation and co-simulation."""
+=======
+"""FMU export (FMI 2.0 / 3.0, Co-Simulation + Model Exchange, C) and its fmpy validation harness.
+
+``export(model, path, fmi_version=2|3)`` writes the FMU; ``validate(path)``
+checks it with fmpy against the native integrator. The hand-written C (FMI
+layers, model core, ODE solvers) lives in ``pendulab/fmu/c``; the solvers in
+``ode_solver.{h,c}`` do not depend on FMI and can be reused by a native
+compiled fast path. (A co-simulation master will live in ``cosim.py``.)
+"""
+
+from .export import CompilerNotFoundError, export
+from .validate import SCENES, ValidationReport, validate
+
+__all__ = ["export", "validate", "CompilerNotFoundError", "ValidationReport", "SCENES"]
+>>>>>>> fmu

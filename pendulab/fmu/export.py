@@ -35,9 +35,7 @@ def find_compiler(cc: str | None = None) -> str:
         path = shutil.which(c)
         if path:
             return path
-    raise CompilerNotFoundError(
-        f"no C compiler found (tried {candidates}); install gcc or clang, or pass cc=/path/to/compiler"
-    )
+    raise CompilerNotFoundError(f"no C compiler found (tried {candidates}); install gcc or clang, or pass cc=/path/to/compiler")
 
 
 def binary_platform(fmi_version: int) -> str:

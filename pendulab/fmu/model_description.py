@@ -86,39 +86,98 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
         disp = UNITS[info.unit][1]
         extra = {"displayUnit": disp[0]} if disp else {}
         out.append(
-            _Var(info.name, lay.vr("x", i), "local", "continuous", info.description, initial="exact",
-                 unit=info.unit, start=_fmt(lay.x_start[i]), **extra)
+            _Var(
+                info.name,
+                lay.vr("x", i),
+                "local",
+                "continuous",
+                info.description,
+                initial="exact",
+                unit=info.unit,
+                start=_fmt(lay.x_start[i]),
+                **extra,
+            )
         )
     for i, info in enumerate(model.state_info):
         unit = _DERIVATIVE_UNIT[info.unit]
         disp = UNITS[unit][1]
         extra = {"displayUnit": disp[0]} if disp else {}
         out.append(
-            _Var(f"der({info.name})", lay.vr("dx", i), "local", "continuous", f"time derivative of {info.name}",
-                 initial="calculated", unit=unit, derivative=str(lay.vr("x", i)), **extra)
+            _Var(
+                f"der({info.name})",
+                lay.vr("dx", i),
+                "local",
+                "continuous",
+                f"time derivative of {info.name}",
+                initial="calculated",
+                unit=unit,
+                derivative=str(lay.vr("x", i)),
+                **extra,
+            )
         )
     for i, info in enumerate(model.input_info):
         out.append(_Var(info.name, lay.vr("u", i), "input", "continuous", info.description, unit=info.unit, start="0.0"))
     for i, info in enumerate(model.output_info):
-        out.append(_Var(info.name, lay.vr("y", i), "output", "continuous", info.description, initial="calculated",
-                        unit=info.unit))
+        out.append(
+            _Var(info.name, lay.vr("y", i), "output", "continuous", info.description, initial="calculated", unit=info.unit)
+        )
     for i, info in enumerate(model.param_info):
         tun = lay.p_tunable[i]
         extra = {"min": "0.0"} if not info.positive else {}
         out.append(
-            _Var(info.name, lay.vr("p", i), "parameter", "tunable" if tun else "fixed", _clean(info.description),
-                 initial="exact", unit=info.unit, start=_fmt(lay.p_default[i]), **extra)
+            _Var(
+                info.name,
+                lay.vr("p", i),
+                "parameter",
+                "tunable" if tun else "fixed",
+                _clean(info.description),
+                initial="exact",
+                unit=info.unit,
+                start=_fmt(lay.p_default[i]),
+                **extra,
+            )
         )
-    out.append(_Var("solver_tolerance", VR_TOL, "parameter", "fixed",
-                    "relative and absolute error tolerance of the embedded solver (overridden by the master's "
-                    "tolerance when it defines one)", initial="exact", start=_fmt(DEFAULT_TOLERANCE)))
-    out.append(_Var("max_step", VR_HMAX, "parameter", "fixed",
-                    "largest internal step of the embedded solver (0: unlimited)", initial="exact", unit="s",
-                    start="0.0", min="0.0"))
-    out.append(_Var("solver", VR_SOLVER, "parameter", "fixed",
-                    "embedded co-simulation solver: " + ", ".join(f"{i} = {n}" for i, n in enumerate(SOLVER_NAMES))
-                    + " (Rosenbrock, L-stable: use for stiff springs)", type="Integer", initial="exact",
-                    start="0", min="0", max=str(len(SOLVER_NAMES) - 1)))
+    out.append(
+        _Var(
+            "solver_tolerance",
+            VR_TOL,
+            "parameter",
+            "fixed",
+            "relative and absolute error tolerance of the embedded solver (overridden by the master's "
+            "tolerance when it defines one)",
+            initial="exact",
+            start=_fmt(DEFAULT_TOLERANCE),
+        )
+    )
+    out.append(
+        _Var(
+            "max_step",
+            VR_HMAX,
+            "parameter",
+            "fixed",
+            "largest internal step of the embedded solver (0: unlimited)",
+            initial="exact",
+            unit="s",
+            start="0.0",
+            min="0.0",
+        )
+    )
+    out.append(
+        _Var(
+            "solver",
+            VR_SOLVER,
+            "parameter",
+            "fixed",
+            "embedded co-simulation solver: "
+            + ", ".join(f"{i} = {n}" for i, n in enumerate(SOLVER_NAMES))
+            + " (Rosenbrock, L-stable: use for stiff springs)",
+            type="Integer",
+            initial="exact",
+            start="0",
+            min="0",
+            max=str(len(SOLVER_NAMES) - 1),
+        )
+    )
     return out
 
 
@@ -205,8 +264,13 @@ def model_description(
     index = {}  # FMI 2 ModelStructure refers to 1-based positions in ModelVariables
     for pos, var in enumerate(variables, start=1):
         index[var.vr] = pos
-        common = {"name": var.name, "valueReference": str(var.vr), "description": var.description,
-                  "causality": var.causality, "variability": var.variability}
+        common = {
+            "name": var.name,
+            "valueReference": str(var.vr),
+            "description": var.description,
+            "causality": var.causality,
+            "variability": var.variability,
+        }
         if var.initial:
             common["initial"] = var.initial
         attrs = dict(var.attrs)

@@ -125,6 +125,7 @@ static int lu_factor(int n, double *A, int *piv) { /* column-major, in place */
 }
 
 static void lu_solve(int n, const double *LU, const int *piv, double *b) {
+    /* lu_factor swaps whole rows, so the stored L is in final row order: permute b first */
     for (int k = 0; k < n; k++) {
         int p = piv[k];
         if (p != k) {
@@ -132,8 +133,9 @@ static void lu_solve(int n, const double *LU, const int *piv, double *b) {
             b[k] = b[p];
             b[p] = tmp;
         }
-        for (int i = k + 1; i < n; i++) b[i] -= LU[i + k * n] * b[k];
     }
+    for (int k = 0; k < n; k++)
+        for (int i = k + 1; i < n; i++) b[i] -= LU[i + k * n] * b[k];
     for (int k = n - 1; k >= 0; k--) {
         b[k] /= LU[k + k * n];
         for (int i = 0; i < k; i++) b[i] -= LU[i + k * n] * b[k];
@@ -268,8 +270,13 @@ int ode_integrate(OdeSolver *s, ode_rhs_fn f, ode_jac_fn jac, void *ctx, double 
                     double acc = 0.0;
                     for (int j = 0; j < RS; j++) acc += RO_M[j] * k[j][i];
                     xn[i] = x[i] + acc;
-                    err[i] = k[RS - 1][i];
+                    err[i] = d * k[RS - 1][i];
                 }
+                /* Shampine's filter (as in Hairer's RADAU5): err := (I - h*gamma*J)^-1 err. It leaves
+                 * non-stiff error components unchanged and damps the stiff ones, which the L-stable step
+                 * damps too; without it an undamped stiff oscillation (a stiff spring) of any amplitude
+                 * forces the step size down to resolve it. */
+                lu_solve(n, W, piv, err);
                 en = all_finite(n, xn) ? err_norm(s, err, x, xn) : INFINITY;
             }
         }
