@@ -15,11 +15,7 @@ from collections.abc import Sequence
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
 
 #: Modules under ``pendulab.commands`` that each register one top-level command.
-<<<<<<< HEAD
-COMMAND_MODULES: tuple[str, ...] = ("cosim",)
-=======
-COMMAND_MODULES: tuple[str, ...] = ("fmu",)
->>>>>>> fmu
+COMMAND_MODULES: tuple[str, ...] = ("fmu", "cosim")
 
 
 class CLIError(ValueError):
