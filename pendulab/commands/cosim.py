@@ -30,6 +30,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--comm-step", type=float, default=0.01, help="communication step [s] (default 0.01)")
     p.add_argument("--sample-time", type=float, help="controller sample time [s], a multiple of --comm-step (default: equal)")
     p.add_argument("--t-final", type=float, help="horizon [s] (default: lqr 5, swingup 10, tvlqr 8)")
+    p.add_argument(
+        "--reference",
+        type=Path,
+        help="tvlqr: CSV with columns t, states, tau1, tau2 to track (e.g. optimal.csv of `pendulab swingup`); "
+        "default: the native energy swing-up",
+    )
     p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
     p.add_argument("--solver", choices=("dopri5", "rodas4"), help="embedded solver (default: the FMU's)")
     p.add_argument("--tolerance", type=float, help="embedded solver tolerance (default: the FMU's)")
@@ -89,7 +95,7 @@ def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..control.sampled import make_controller
+    from ..control.sampled import load_reference_csv, make_controller
     from ..fmu.cosim import cosim, inspect_fmu
     from ..fmu.cosim_plots import animate_cosim, plot_cosim
 
@@ -106,7 +112,12 @@ def run(args: argparse.Namespace) -> int:
     t_final = args.t_final if args.t_final is not None else _DEFAULT_T_FINAL[args.controller]
     if args.controller == "tvlqr":
         _progress("building the swing-up reference and TVLQR gains (native)")
-    ctrl, x0 = make_controller(args.controller, model, sample_time, u_max=args.u_max)
+    reference = None
+    if args.reference is not None:
+        if args.controller != "tvlqr":
+            raise CLIError(f"--reference is for --controller tvlqr, got --controller {args.controller}")
+        reference = load_reference_csv(str(args.reference), model)
+    ctrl, x0 = make_controller(args.controller, model, sample_time, u_max=args.u_max, reference=reference)
     x0 = _init_state(x0, info.state_names, args.init)
     t_final = max(1, round(t_final / args.comm_step)) * args.comm_step  # a whole number of steps
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")

@@ -52,6 +52,9 @@ __all__ = [
     "full_input",
     "make_controller",
     "CONTROLLERS",
+    "resample_reference",
+    "tvlqr_tracker",
+    "load_reference_csv",
 ]
 
 
@@ -546,12 +549,99 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
     return feedback
 
 
+def resample_reference(
+    t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Put a reference ``(t, x, u)`` on the uniform sample grid ``0, h, 2h, ... <= t[-1]``.
+
+    States are interpolated linearly; torques are zero-order held (the value of
+    the last reference knot at or before each sample), so a reference whose
+    knots are a multiple of ``h`` apart keeps its torques exactly.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Increasing times [s], starting at 0.
+    x : ndarray, shape (N, nx)
+    u : ndarray, shape (N, 2) or (N-1, 2)
+        Torques held from ``t[k]`` [N.m].
+    sample_time : float
+        [s].
+
+    Returns
+    -------
+    t_s, x_s, u_s : ndarrays, shapes (M,), (M, nx), (M, 2)
+    """
+    h = _positive("sample_time", sample_time)
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0) or abs(t[0]) > 1e-12:
+        raise ValueError(f"reference times must increase from 0 with at least 2 samples, got {t[:3]!r}...")
+    if x.shape[0] != len(t) or u.shape[0] not in (len(t), len(t) - 1):
+        raise ValueError(f"reference x must have {len(t)} rows and u {len(t)} or {len(t) - 1}, got {x.shape}, {u.shape}")
+    n = int(np.floor(t[-1] / h + 1e-9))
+    if n < 1:
+        raise ValueError(f"reference ({t[-1]:g} s) is shorter than one sample ({h:g} s)")
+    ts = np.arange(n + 1) * h
+    xs = np.column_stack([np.interp(ts, t, x[:, j]) for j in range(x.shape[1])])
+    k = np.clip(np.searchsorted(t, ts + 1e-9 * h, side="right") - 1, 0, len(u) - 1)
+    return ts, xs, u[k]
+
+
+def tvlqr_tracker(
+    model: Model, t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, *, u_max: float | None = 20.0
+) -> TVLQRTracker:
+    """TVLQR tracking of any swing-up reference (e.g. an optimized one), handing over to discrete LQR balance.
+
+    The reference is resampled to the sample grid (:func:`resample_reference`),
+    the gains come from :func:`discrete_tvlqr`.
+    """
+    ts, xs, us = resample_reference(t, x, u, sample_time)
+    xs = model.check_state(xs, "x_ref")
+    K = discrete_tvlqr(model, ts, xs, us)
+    final = lqr_balance(model, sample_time, design="discrete", u_max=u_max)
+    return TVLQRTracker(model, ts, xs, us, K, sample_time, INPUT_NAMES, final=final, u_max=u_max)
+
+
+def load_reference_csv(path: str, model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Read a reference ``(t, x, u)`` from a CSV with a header naming ``t``, the model's states and ``tau1, tau2``.
+
+    Trajectory CSVs (``Trajectory.to_csv``, ``pendulab cosim``, ``pendulab simulate``) and the
+    optimal trajectory of ``pendulab swingup`` (``optimal.csv``) have these columns.
+    """
+    import csv
+
+    with open(path, newline="") as fh:
+        reader = csv.reader(fh)
+        header = [h.strip() for h in next(reader)]
+        rows = np.array([[float(v) for v in row] for row in reader if row])
+    need = ("t",) + model.state_names + INPUT_NAMES
+    missing = [n for n in need if n not in header]
+    if missing or rows.ndim != 2 or len(rows) < 2:
+        raise ValueError(
+            f"reference {path!r} must be a CSV with a header containing {list(need)} and at least 2 rows; missing {missing}"
+        )
+    col = {n: header.index(n) for n in need}
+    return (
+        rows[:, col["t"]],
+        rows[:, [col[n] for n in model.state_names]],
+        rows[:, [col[n] for n in INPUT_NAMES]],
+    )
+
+
 #: Names accepted by :func:`make_controller`.
 CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr")
 
 
 def make_controller(
-    name: str, model: Model, sample_time: float, *, u_max: float = 20.0, t_ref: float = 6.0
+    name: str,
+    model: Model,
+    sample_time: float,
+    *,
+    u_max: float = 20.0,
+    t_ref: float = 6.0,
+    reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller for ``model`` and its natural start state.
 
@@ -560,8 +650,9 @@ def make_controller(
     name : {"lqr", "swingup", "tvlqr"}
         ``lqr``: continuous LQR balance (start 0.1 rad off upright);
         ``swingup``: energy pumping + LQR catch (start hanging, theta1 = 0.1);
-        ``tvlqr``: discrete TVLQR tracking of the native swing-up reference
-        (:func:`swingup_reference`, ``t_ref`` seconds) then LQR balance.
+        ``tvlqr``: discrete TVLQR tracking of ``reference`` (default: the native
+        energy swing-up, :func:`swingup_reference`, ``t_ref`` seconds) then
+        discrete LQR balance; starts at the reference's first state.
     model : Model
         Design model (e.g. ``FmuInfo.model()`` for an FMU's parameters).
     sample_time : float
@@ -569,7 +660,10 @@ def make_controller(
     u_max : float
         Torque limit [N.m] (swing-up and tracking).
     t_ref : float
-        Reference horizon [s] of ``tvlqr``.
+        Horizon [s] of the default ``tvlqr`` reference.
+    reference : (t, x, u), optional
+        Reference to track with ``tvlqr`` (any grid; e.g. an optimized swing-up or
+        :func:`load_reference_csv`).
 
     Returns
     -------
@@ -584,8 +678,8 @@ def make_controller(
     if name == "swingup":
         return energy_swingup(model, h, u_max=u_max), model.state(theta1=0.1)
     if name == "tvlqr":
-        t, x_ref, u_ref = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
-        K = discrete_tvlqr(model, t, x_ref, u_ref)
-        final = lqr_balance(model, h, design="discrete", u_max=u_max)
-        return TVLQRTracker(model, t, x_ref, u_ref, K, h, INPUT_NAMES, final=final, u_max=u_max), x_ref[0].copy()
+        if reference is None:
+            reference = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
+        tracker = tvlqr_tracker(model, *reference, h, u_max=u_max)
+        return tracker, tracker.x_ref[0].copy()
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
