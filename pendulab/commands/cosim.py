@@ -36,6 +36,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="tvlqr: CSV with columns t, states, tau1, tau2 to track (e.g. optimal.csv of `pendulab swingup`); "
         "default: the native energy swing-up",
     )
+    p.add_argument("--actuation", choices=("full", "pendubot", "acrobot"), default="full", help="driven torques (lqr, tvlqr)")
+    p.add_argument(
+        "--param", nargs="*", default=[], metavar="NAME=VALUE", help="FMU parameters (also used for the controller design)"
+    )
     p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
     p.add_argument("--solver", choices=("dopri5", "rodas4"), help="embedded solver (default: the FMU's)")
     p.add_argument("--tolerance", type=float, help="embedded solver tolerance (default: the FMU's)")
@@ -81,16 +85,23 @@ def _fmu_for(kind: str, fmu: Path | None, version: int, out: Path) -> Path:
     return export(make_model(kind), path, version)
 
 
-def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.ndarray:
-    x = x0.copy()
+def _named_values(items: list[str], names: tuple[str, ...], flag: str) -> dict[str, float]:
+    values = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or name not in names:
-            raise CLIError(f"--init: expected NAME=VALUE with NAME in {list(names)}, got {item!r}")
+            raise CLIError(f"{flag}: expected NAME=VALUE with NAME in {list(names)}, got {item!r}")
         try:
-            x[names.index(name)] = float(value)
+            values[name] = float(value)
         except ValueError:
-            raise CLIError(f"--init: value of {name} must be a number, got {value!r}") from None
+            raise CLIError(f"{flag}: value of {name} must be a number, got {value!r}") from None
+    return values
+
+
+def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.ndarray:
+    x = x0.copy()
+    for name, value in _named_values(items, names, "--init").items():
+        x[names.index(name)] = value
     return x
 
 
@@ -107,21 +118,24 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--gif-fps must be a positive integer, got {args.gif_fps!r}")
     fmu = _fmu_for(args.kind, args.fmu, args.fmi_version, out)
     info = inspect_fmu(fmu)
-    model = info.model()
+    params = _named_values(args.param, info.parameter_names, "--param")
+    model = info.model(params)
     sample_time = args.sample_time if args.sample_time is not None else args.comm_step
     t_final = args.t_final if args.t_final is not None else _DEFAULT_T_FINAL[args.controller]
     if args.controller == "tvlqr":
-        _progress("building the swing-up reference and TVLQR gains (native)")
+        _progress("computing the TVLQR gains" + ("" if args.reference else " along the native energy swing-up"))
     reference = None
     if args.reference is not None:
         if args.controller != "tvlqr":
             raise CLIError(f"--reference is for --controller tvlqr, got --controller {args.controller}")
         reference = load_reference_csv(str(args.reference), model)
-    ctrl, x0 = make_controller(args.controller, model, sample_time, u_max=args.u_max, reference=reference)
+    ctrl, x0 = make_controller(
+        args.controller, model, sample_time, u_max=args.u_max, reference=reference, actuation=args.actuation
+    )
     x0 = _init_state(x0, info.state_names, args.init)
     t_final = max(1, round(t_final / args.comm_step)) * args.comm_step  # a whole number of steps
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")
-    traj = cosim(fmu, ctrl, args.comm_step, t_final, x0=x0, solver=args.solver, tolerance=args.tolerance)
+    traj = cosim(fmu, ctrl, args.comm_step, t_final, x0=x0, params=params, solver=args.solver, tolerance=args.tolerance)
     out.mkdir(parents=True, exist_ok=True)
     traj.to_csv(out / "cosim.csv")
     title = f"{info.kind} FMU, {args.controller}, comm step {args.comm_step:g} s"
@@ -133,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
         "kind": info.kind,
         "fmi_version": info.fmi_version,
         "controller": args.controller,
+        "actuation": args.actuation,
+        "params": params,
         "comm_step": args.comm_step,
         "sample_time": sample_time,
         "t_final": float(traj.t[-1]),

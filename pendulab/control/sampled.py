@@ -456,6 +456,7 @@ def discrete_tvlqr(
     Q: Any = None,
     R: Any = None,
     Qf: Any = None,
+    actuation: str | Sequence[str] = "full",
 ) -> np.ndarray:
     """Time-varying discrete LQR gains along a reference sampled on a uniform grid.
 
@@ -472,35 +473,35 @@ def discrete_tvlqr(
     u_ref : ndarray, shape (N-1, 2) or (N, 2)
         Full torques (tau1, tau2) [N.m].
     Q, R, Qf : array_like, optional
-        Weights; defaults: Q = diag(10 on angles, 1 elsewhere), R = I, Qf = the
-        continuous LQR cost-to-go of the upright balance if the reference ends
-        there, else 10 Q.
+        Weights; defaults: Q = diag(10 on angles, 1 elsewhere), R = I (m x m),
+        Qf = the cost-to-go of the discrete LQR balance that takes over at the
+        end (plus 1e-6 I, which keeps the uncontrollable spring block positive definite).
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        The torques the gains drive (m of them).
 
     Returns
     -------
-    ndarray, shape (N-1, 2, nx)
+    ndarray, shape (N-1, m, nx)
     """
     t_ref = np.asarray(t_ref, dtype=float)
     x_ref = model.check_state(x_ref, "x_ref")
     u_ref = model.check_input(u_ref, "u_ref")
+    cols = [INPUT_NAMES.index(n) for n in _actuated(actuation)]
     h = np.diff(t_ref)
     if len(t_ref) < 2 or np.ptp(h) > 1e-9 * max(h.max(), 1e-300) + 1e-12 or h.min() <= 0:
         raise ValueError("t_ref must be a uniform increasing grid with at least 2 samples")
     n = model.nx
     q_diag = np.where(_angle_mask(model), 10.0, 1.0)
-    Qm, Rm = _weights(np.diag(q_diag) if Q is None else Q, R, n, model.nu)
+    Qm, Rm = _weights(np.diag(q_diag) if Q is None else Q, R, n, len(cols))
     if Qf is None:
-        Qfm = lqr_balance(model, float(h[0])).P * 1.0
-        if not np.any(Qfm):
-            Qfm = 10 * Qm
-        Qfm = Qfm + 1e-6 * np.eye(n)  # keeps the radial block (zero in the balance P) positive definite
+        Qfm = lqr_balance(model, float(h[0]), design="discrete", actuation=actuation).P + 1e-6 * np.eye(n)
     else:
         Qfm = np.atleast_2d(np.asarray(Qf, dtype=float))
     P = Qfm
-    K = np.empty((len(t_ref) - 1, model.nu, n))
+    K = np.empty((len(t_ref) - 1, len(cols), n))
     for k in range(len(t_ref) - 2, -1, -1):
         A, B = linearize(model, x_ref[k], u_ref[min(k, len(u_ref) - 1)])
-        Ad, Bd = zoh(A, B, float(h[k]))
+        Ad, Bd = zoh(A, B[:, cols], float(h[k]))
         S = Rm + Bd.T @ P @ Bd
         K[k] = np.linalg.solve(S, Bd.T @ P @ Ad)
         P = Qm + Ad.T @ P @ (Ad - Bd @ K[k])
@@ -550,13 +551,16 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
 
 
 def resample_reference(
-    t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float
+    t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, model: Model | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Put a reference ``(t, x, u)`` on the uniform sample grid ``0, h, 2h, ... <= t[-1]``.
 
-    States are interpolated linearly; torques are zero-order held (the value of
-    the last reference knot at or before each sample), so a reference whose
-    knots are a multiple of ``h`` apart keeps its torques exactly.
+    Torques are zero-order held (the value of the last reference knot at or
+    before each sample), so a reference whose knots are a multiple of ``h``
+    apart keeps its torques exactly. States between knots are interpolated by
+    cubic Hermite with the slopes ``f(x, u)`` of ``model`` (a coarse optimized
+    trajectory stays close to a solution: linear interpolation would cut
+    corners and the tracker would fight them), or linearly without a model.
 
     Parameters
     ----------
@@ -567,6 +571,8 @@ def resample_reference(
         Torques held from ``t[k]`` [N.m].
     sample_time : float
         [s].
+    model : Model, optional
+        Gives the Hermite slopes.
 
     Returns
     -------
@@ -584,24 +590,45 @@ def resample_reference(
     if n < 1:
         raise ValueError(f"reference ({t[-1]:g} s) is shorter than one sample ({h:g} s)")
     ts = np.arange(n + 1) * h
-    xs = np.column_stack([np.interp(ts, t, x[:, j]) for j in range(x.shape[1])])
     k = np.clip(np.searchsorted(t, ts + 1e-9 * h, side="right") - 1, 0, len(u) - 1)
+    if model is None:
+        xs = np.column_stack([np.interp(ts, t, x[:, j]) for j in range(x.shape[1])])
+        return ts, xs, u[k]
+    j = np.minimum(k, len(t) - 2)  # interval of each sample
+    dt = t[j + 1] - t[j]
+    s = ((ts - t[j]) / dt)[:, None]
+    f0, f1 = model.rhs(x[j], u[j]), model.rhs(x[j + 1], u[j])
+    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+    xs = h00 * x[j] + h10 * dt[:, None] * f0 + h01 * x[j + 1] + h11 * dt[:, None] * f1
     return ts, xs, u[k]
 
 
 def tvlqr_tracker(
-    model: Model, t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, *, u_max: float | None = 20.0
+    model: Model,
+    t: np.ndarray,
+    x: np.ndarray,
+    u: np.ndarray,
+    sample_time: float,
+    *,
+    u_max: float | None = 20.0,
+    actuation: str | Sequence[str] = "full",
+    Q: Any = None,
+    R: Any = None,
 ) -> TVLQRTracker:
     """TVLQR tracking of any swing-up reference (e.g. an optimized one), handing over to discrete LQR balance.
 
-    The reference is resampled to the sample grid (:func:`resample_reference`),
-    the gains come from :func:`discrete_tvlqr`.
+    The reference ``(t, x, u)`` (u: full torques (tau1, tau2), any grid) is
+    resampled to the sample grid (:func:`resample_reference`); the gains come from
+    :func:`discrete_tvlqr` for the torques named by ``actuation`` (a passive
+    joint gets none); ``Q``, ``R`` as there.
     """
-    ts, xs, us = resample_reference(t, x, u, sample_time)
+    ts, xs, us = resample_reference(t, x, u, sample_time, model)
     xs = model.check_state(xs, "x_ref")
-    K = discrete_tvlqr(model, ts, xs, us)
-    final = lqr_balance(model, sample_time, design="discrete", u_max=u_max)
-    return TVLQRTracker(model, ts, xs, us, K, sample_time, INPUT_NAMES, final=final, u_max=u_max)
+    names = _actuated(actuation)
+    cols = [INPUT_NAMES.index(n) for n in names]
+    K = discrete_tvlqr(model, ts, xs, us, actuation=names, Q=Q, R=R)
+    final = lqr_balance(model, sample_time, design="discrete", u_max=u_max, actuation=names, R=R)
+    return TVLQRTracker(model, ts, xs, us[:, cols], K, sample_time, names, final=final, u_max=u_max)
 
 
 def load_reference_csv(path: str, model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -642,6 +669,7 @@ def make_controller(
     u_max: float = 20.0,
     t_ref: float = 6.0,
     reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    actuation: str = "full",
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller for ``model`` and its natural start state.
 
@@ -664,6 +692,8 @@ def make_controller(
     reference : (t, x, u), optional
         Reference to track with ``tvlqr`` (any grid; e.g. an optimized swing-up or
         :func:`load_reference_csv`).
+    actuation : {"full", "pendubot", "acrobot"}
+        Driven torques of ``lqr`` and ``tvlqr`` (``swingup`` needs both).
 
     Returns
     -------
@@ -674,12 +704,14 @@ def make_controller(
     if name == "lqr":
         x0 = upright_state(model)
         x0[0] += 0.1
-        return lqr_balance(model, h), x0
+        return lqr_balance(model, h, actuation=actuation), x0
     if name == "swingup":
+        if _actuated(actuation) != INPUT_NAMES:
+            raise ValueError(f"the energy swing-up drives both torques; actuation must be 'full', got {actuation!r}")
         return energy_swingup(model, h, u_max=u_max), model.state(theta1=0.1)
     if name == "tvlqr":
         if reference is None:
             reference = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
-        tracker = tvlqr_tracker(model, *reference, h, u_max=u_max)
+        tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
