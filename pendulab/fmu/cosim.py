@@ -191,6 +191,7 @@ class FmuPlant:
         self._unzipdir: str | None = None
         self._instantiated = False
         self._errored = False
+        self._fmi3 = info.fmi_version.startswith("3")
         self._vr = {n: info.variables[n].valueReference for n in info.variables}
         self._read_vrs = [self._vr[n] for n in info.state_names + info.output_names]
         self._input_vrs = [self._vr[n] for n in INPUT_NAMES]
@@ -220,7 +221,7 @@ class FmuPlant:
                 )
             values.update(zip(info.state_names, x.tolist(), strict=True))
         if solver is not None:
-            values.update(_solver_value(info, solver))
+            values.update(_solver_value(solver))
         return values
 
     def _open(self, instance_name: str) -> None:
@@ -231,7 +232,7 @@ class FmuPlant:
         info = self.info
         md = info.model_description
         self._unzipdir = fmpy.extract(str(info.path))
-        cls = FMU3Slave if info.fmi_version.startswith("3") else FMU2Slave
+        cls = FMU3Slave if self._fmi3 else FMU2Slave
         token = md.instantiationToken if cls is FMU3Slave else md.guid
         self._fmu = cls(
             guid=token,
@@ -241,6 +242,9 @@ class FmuPlant:
         )
         self._fmu.instantiate()
         self._instantiated = True
+        fmu = self._fmu  # the FMI 2 / FMI 3 names of the calls the loop needs
+        self._get_real = fmu.getFloat64 if self._fmi3 else fmu.getReal
+        self._set_real = fmu.setFloat64 if self._fmi3 else fmu.setReal
         self._set_by_name(self._values)
         if cls is FMU3Slave:
             self._fmu.enterInitializationMode(tolerance=self.tolerance, startTime=self.time)
@@ -250,31 +254,28 @@ class FmuPlant:
         self._fmu.exitInitializationMode()
 
     def _set_by_name(self, values: Mapping[str, float | int]) -> None:
-        fmi3 = self.info.fmi_version.startswith("3")
-        floats = [(self._vr[n], float(v)) for n, v in values.items() if self.info.variables[n].type in _FLOAT_TYPES]
-        ints = [(self._vr[n], int(v)) for n, v in values.items() if self.info.variables[n].type in _INT_TYPES]
+        floats = {n: float(v) for n, v in values.items() if self.info.variables[n].type in _FLOAT_TYPES}
         if floats:
-            vrs, vals = zip(*floats, strict=True)
-            (self._fmu.setFloat64 if fmi3 else self._fmu.setReal)(list(vrs), list(vals))
-        for vr, v in ints:
-            var_type = next(x.type for x in self.info.model_description.modelVariables if x.valueReference == vr)
-            if fmi3:
-                (self._fmu.setInt64 if var_type in ("Int64", "Enumeration") else self._fmu.setInt32)([vr], [v])
-            else:
-                self._fmu.setInteger([vr], [v])
+            self._set_real([self._vr[n] for n in floats], list(floats.values()))
+        for name, value in values.items():
+            var_type = self.info.variables[name].type
+            if var_type in _INT_TYPES:
+                if not self._fmi3:
+                    self._fmu.setInteger([self._vr[name]], [int(value)])
+                else:
+                    setter = self._fmu.setInt64 if var_type in ("Int64", "Enumeration") else self._fmu.setInt32
+                    setter([self._vr[name]], [int(value)])
 
     # -- stepping ----------------------------------------------------------------
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """States (nx,) and outputs (ny,) at the current communication point."""
-        fmi3 = self.info.fmi_version.startswith("3")
-        values = np.array((self._fmu.getFloat64 if fmi3 else self._fmu.getReal)(self._read_vrs))
+        values = np.array(self._get_real(self._read_vrs))
         nx = len(self.info.state_names)
         return values[:nx], values[nx:]
 
     def set_inputs(self, u: np.ndarray) -> None:
         """Set (tau1, tau2) [N.m], held constant over the next step(s)."""
-        fmi3 = self.info.fmi_version.startswith("3")
-        (self._fmu.setFloat64 if fmi3 else self._fmu.setReal)(self._input_vrs, [float(v) for v in u])
+        self._set_real(self._input_vrs, [float(v) for v in u])
 
     def do_step(self, h: float, *, allow_restore: bool = False) -> None:
         """Advance by ``h`` [s] from ``self.time``.
@@ -309,15 +310,16 @@ class FmuPlant:
     def get_state(self) -> Any:
         """Save the complete FMU state (needs canGetAndSetFMUstate)."""
         self._require_state_access()
-        return self._fmu.getFMUState() if self.info.fmi_version.startswith("3") else self._fmu.getFMUstate()
+        return self._fmu.getFMUState() if self._fmi3 else self._fmu.getFMUstate()
 
     def set_state(self, state: Any, t: float) -> None:
         """Restore a state saved at time ``t`` [s]."""
-        (self._fmu.setFMUState if self.info.fmi_version.startswith("3") else self._fmu.setFMUstate)(state)
+        (self._fmu.setFMUState if self._fmi3 else self._fmu.setFMUstate)(state)
         self.time = t
 
     def free_state(self, state: Any) -> None:
-        (self._fmu.freeFMUState if self.info.fmi_version.startswith("3") else self._fmu.freeFMUstate)(state)
+        """Release a state saved with :meth:`get_state`."""
+        (self._fmu.freeFMUState if self._fmi3 else self._fmu.freeFMUstate)(state)
 
     def _require_state_access(self) -> None:
         if not self.info.can_get_set_state:
@@ -375,7 +377,7 @@ class FmuPlant:
         self.close()
 
 
-def _solver_value(info: FmuInfo, solver: str | int) -> dict[str, int]:
+def _solver_value(solver: str | int) -> dict[str, int]:
     from .codegen import SOLVER_NAMES
 
     if isinstance(solver, str):
@@ -523,7 +525,7 @@ def cosim(
             else:
                 plant.do_step(h)
         stats.update(time_in_do_step=plant.time_in_do_step, n_do_step=plant.n_do_step)
-    U[-1] = U[-2] if n else U[-1]
+    U[-1] = U[-2]  # last row repeats, as in native trajectories
     stats["wall_time"] = time.perf_counter() - wall
     return Trajectory(
         t=np.arange(n + 1) * h,
@@ -616,7 +618,7 @@ def cosim_many(
     finally:
         for plant in plants:
             plant.close()
-    U[-1] = U[-2] if n else U[-1]
+    U[-1] = U[-2]  # last row repeats, as in native trajectories
     wall = time.perf_counter() - wall
     return [
         Trajectory(
