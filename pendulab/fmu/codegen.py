@@ -21,7 +21,17 @@ import numpy as np
 
 from ..model.model import Model
 
-__all__ = ["ModelLayout", "layout", "generate_sources", "FIXED_SOURCES", "C_DIR", "SOLVER_NAMES"]
+__all__ = [
+    "C_DIR",
+    "FIXED_SOURCES",
+    "SOLVER_NAMES",
+    "ModelLayout",
+    "compiled_sources",
+    "generate_sources",
+    "identifier_for",
+    "layout",
+    "token",
+]
 
 C_DIR = Path(str(resources.files("pendulab.fmu") / "c"))
 #: Hand-written C files compiled into every FMU (plus fmi2.c or fmi3.c).

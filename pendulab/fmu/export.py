@@ -104,6 +104,8 @@ def export(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a :class:`~pendulab.Model`.
     ValueError
         Bad ``fmi_version``, ``x0`` or experiment settings.
     CompilerNotFoundError (RuntimeError)
@@ -111,6 +113,8 @@ def export(
     RuntimeError
         Compilation failed.
     """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be a pendulab Model (pendulab.rigid() or pendulab.elastic()), got {type(model).__name__}")
     if fmi_version not in (2, 3) or isinstance(fmi_version, bool):
         raise ValueError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
     for name, value in (("stop_time", stop_time), ("step_size", step_size)):

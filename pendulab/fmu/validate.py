@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,7 +28,7 @@ from ..model.model import Model, make_model
 from ..model.simulate import simulate
 from .codegen import SOLVER_NAMES
 
-__all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind"]
+__all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind", "quasi_static_state"]
 
 REFERENCE_TOL = 1e-12
 REFERENCE_METHOD = "cvodes"
@@ -268,7 +268,7 @@ def validate(
     *,
     scenes: Sequence[str] | None = None,
     out_dir: str | os.PathLike | None = None,
-    progress=None,
+    progress: Callable[[str], None] | None = None,
 ) -> ValidationReport:
     """Validate a pendulab FMU: fmpy ``validate_fmu`` plus agreement with the native integrator.
 

@@ -42,17 +42,35 @@ class BuiltFMU:
         return fmu
 
 
+def _shared_dir(tmp_path_factory) -> Path:
+    """A directory shared by all pytest-xdist workers of this session (the worker's basetemp parent)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if base.name.startswith("popen-gw") else base
+
+
 @pytest.fixture(scope="session")
 def fmu_builds(tmp_path_factory) -> dict[tuple[str, int], BuiltFMU]:
+    import fcntl
+    from concurrent.futures import ThreadPoolExecutor
+
     from fmpy import extract, read_model_description
 
-    root = tmp_path_factory.mktemp("fmus")
+    root = _shared_dir(tmp_path_factory) / "pendulab_fmus"
+    root.mkdir(exist_ok=True)
+    combos = [(kind, version) for kind in ("rigid", "elastic") for version in (2, 3)]
+    # one worker builds (the compiler runs in parallel threads), the others wait and reuse the archives
+    with open(root / "build.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        missing = [c for c in combos if not (root / f"{c[0]}{c[1]}.fmu").exists()]
+        with ThreadPoolExecutor(max_workers=4) as pool:
+            list(pool.map(lambda c: export(pl.make_model(c[0]), root / f"{c[0]}{c[1]}.fmu", c[1], timestamp=False), missing))
+        fcntl.flock(lock, fcntl.LOCK_UN)
     out = {}
-    for kind in ("rigid", "elastic"):
-        for version in (2, 3):
-            path = export(pl.make_model(kind), root / f"{kind}{version}.fmu", version, timestamp=False)
-            unzipdir = extract(str(path), str(root / f"{kind}{version}"))
-            out[(kind, version)] = BuiltFMU(path, kind, version, unzipdir, read_model_description(str(path)))
+    unzip_root = tmp_path_factory.mktemp("unzipped")
+    for kind, version in combos:
+        path = root / f"{kind}{version}.fmu"
+        unzipdir = extract(str(path), str(unzip_root / f"{kind}{version}"))
+        out[(kind, version)] = BuiltFMU(path, kind, version, unzipdir, read_model_description(str(path)))
     return out
 
 

@@ -150,3 +150,17 @@ def test_directional_derivatives_match_casadi_jacobian(fmu_builds, version, inte
         expected = A[:, j] if j < model.nx else B[:, j - model.nx]
         np.testing.assert_allclose(col, expected, rtol=1e-12, atol=1e-9)  # same expression graph, compiled
     d.close()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_max_step_limits_the_internal_step(fmu_builds, version):
+    built = fmu_builds[("rigid", version)]
+    drifts = []
+    for max_step in (0.0, 2e-3):
+        d = started(built, X0_RIGID, tolerance=1e-4, max_step=max_step)
+        e0 = d.get("energy")[0]
+        d.step(10.0)  # one communication step: only tolerance and max_step bound the internal steps
+        drifts.append(abs(d.get("energy")[0] - e0))
+        d.close()
+    # at a loose tolerance the unlimited solver takes large steps; 2 ms steps are far more accurate
+    assert drifts[1] < 1e-2 * drifts[0]

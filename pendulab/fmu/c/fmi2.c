@@ -1,6 +1,5 @@
 /* FMI 2.0 layer (Co-Simulation and Model Exchange) over the model core. */
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"

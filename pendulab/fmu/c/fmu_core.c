@@ -252,26 +252,24 @@ CoreStatus core_get_int(Instance *inst, const char *fname, const unsigned int *v
 }
 
 CoreStatus core_set_int(Instance *inst, const char *fname, const unsigned int *vr, size_t n, const int *value) {
-    if (core_check(inst, MS_INSTANTIATED | MS_INIT | MS_STEP | MS_EVENT | MS_CONT, fname) != ST_OK) return ST_ERROR;
+    /* the only integer variable, solver, is a fixed parameter */
+    if (core_check(inst, MS_INSTANTIATED | MS_INIT, fname) != ST_OK) return ST_ERROR;
     if (n > 0 && (vr == NULL || value == NULL)) {
         core_logf(inst, ST_ERROR, "%s: NULL value reference or value array with n = %zu", fname, n);
         return ST_ERROR;
     }
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < n; i++) { /* validate all before changing anything */
         int k;
         if (core_classify(vr[i], &k) != KIND_SOLVER) {
             core_logf(inst, ST_ERROR, "%s: unknown value reference %u for an integer variable", fname, vr[i]);
             return ST_ERROR;
         }
-    }
-    for (size_t i = 0; i < n; i++) {
-        if (core_check(inst, MS_INSTANTIATED | MS_INIT, fname) != ST_OK) return ST_ERROR;
         if (value[i] != ODE_DOPRI5 && value[i] != ODE_RODAS4) {
             core_logf(inst, ST_ERROR, "%s: solver must be 0 (dopri5) or 1 (rodas4), got %d", fname, value[i]);
             return ST_ERROR;
         }
-        inst->d.solver = value[i];
     }
+    for (size_t i = 0; i < n; i++) inst->d.solver = value[i];
     return ST_OK;
 }
 
