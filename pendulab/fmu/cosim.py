@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 import shutil
 import time
-import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -108,7 +107,7 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInfo:
         raise FileNotFoundError(f"fmu_path: no such file {str(path)!r}")
     try:
         md = read_model_description(str(path))
-    except (zipfile.BadZipFile, KeyError, OSError, ValueError, Exception) as exc:  # fmpy raises bare Exceptions
+    except Exception as exc:  # fmpy raises bare Exceptions (besides BadZipFile, KeyError, XML errors)
         raise ValueError(f"fmu_path: {str(path)!r} is not a readable FMU ({_first_line(exc)})") from None
     variables = {v.name: v for v in md.modelVariables}
     kind = "elastic" if all(n in variables for n in _STATES["elastic"]) else "rigid"
