@@ -11,9 +11,9 @@ from pendulab.control.sampled import (
     as_feedback,
     closed_loop_spectral_radius,
     lqr_balance,
-    resample_reference,
     upright_state,
 )
+from pendulab.control.tracking_sampled import resample_reference
 
 
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])

@@ -76,7 +76,7 @@ def test_controller_sampled_slower_than_comm_step_is_held(cosim_fmu):
 
 def test_tvlqr_tracks_a_reference_from_another_grid(cosim_fmu, tmp_path):
     """Any reference (here a 5 ms swing-up saved as CSV) is resampled to 10 ms and tracked through the FMU."""
-    from pendulab.control.sampled import load_reference_csv, tvlqr_tracker
+    from pendulab.control.tracking_sampled import load_reference_csv, tvlqr_tracker
 
     model = pl.rigid()
     swing = energy_swingup(model, 0.005)
