@@ -8,7 +8,7 @@ import numpy as np
 
 from ..model.trajectory import Trajectory
 
-__all__ = ["plot_cosim", "animate_cosim"]
+__all__ = ["plot_cosim", "animate_cosim", "plot_side_by_side"]
 
 
 def _plt():
@@ -86,4 +86,32 @@ def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_fram
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
+    return path
+
+
+def plot_side_by_side(trajs: list[Trajectory], labels: list[str], path: str | Path, title: str = "") -> Path:
+    """Plants stepped in one master with the same torques: theta1, and |angle difference| to the first plant (log)."""
+    plt = _plt()
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    ref = trajs[0]
+    for i, (traj, label) in enumerate(zip(trajs, labels, strict=True)):
+        axes[0].plot(traj.t, traj["theta1"], label=label, color=f"C{i}")
+        if i:
+            diff = np.abs(traj.x[1:, :2] - ref.x[1:, :2]).max(axis=1)  # t = 0: same start angles, zero difference
+            axes[1].semilogy(traj.t[1:], np.maximum(diff, 1e-16), label=f"{label} vs {labels[0]}", color=f"C{i}")
+    for name in ref.input_names:
+        axes[2].step(ref.t, ref[name], where="post", label=name)
+    axes[0].set_ylabel("theta1 [rad]")
+    axes[1].set_ylabel("max |angle difference| [rad]")
+    axes[2].set_ylabel("torque, same for all [N.m]")
+    axes[-1].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0].set_title(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
     return path
