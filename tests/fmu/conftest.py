@@ -72,3 +72,13 @@ def fmu_builds(tmp_path_factory) -> dict[tuple[str, int], BuiltFMU]:
         unzipdir = extract(str(path), str(unzip_root / f"{kind}{version}"))
         out[(kind, version)] = BuiltFMU(path, kind, version, unzipdir, read_model_description(str(path)))
     return out
+
+
+@pytest.fixture(scope="session")
+def cosim_fmu(fmu_builds):
+    """``cosim_fmu(kind, fmi_version) -> Path`` of the session's FMU with default parameters."""
+
+    def path(kind: str, fmi_version: int = 2) -> Path:
+        return fmu_builds[(kind, fmi_version)].path
+
+    return path
