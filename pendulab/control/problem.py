@@ -15,27 +15,13 @@ from typing import Any
 import numpy as np
 
 from ..model.model import ACTUATIONS, Model
+from .sampled import upright_state
 
 __all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
 
 #: Objectives: ``effort`` = integral of tau^2; ``time`` = horizon T (free horizon);
 #: ``mix`` = time_weight * T + integral of tau^2.
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
-
-
-def upright_state(model: Model) -> np.ndarray:
-    """Up-up equilibrium (theta = pi, pi) at rest, shape (nx,).
-
-    For the elastic model the springs carry the static load of the inverted
-    chain: spring 1 is compressed by (m1 + m2) g / k1, spring 2 by m2 g / k2.
-    """
-    x = np.zeros(model.nx)
-    x[0] = x[1] = math.pi
-    if model.kind == "elastic":
-        pr = model.params
-        x[2] = pr.L1 - (pr.m1 + pr.m2) * pr.g / pr.k1
-        x[3] = pr.L2 - pr.m2 * pr.g / pr.k2
-    return x
 
 
 def _positive(name: str, value: Any) -> float:
@@ -70,7 +56,7 @@ class SwingUpProblem:
         Start state; None = hanging at rest (:meth:`Model.rest_state`).
     goal : array_like, shape (nx,), or None
         Goal state reached exactly at the end of the horizon; None = up-up at
-        rest (:func:`upright_state`).
+        rest (:func:`pendulab.control.sampled.upright_state`; elastic springs statically compressed).
     horizon : float
         Fixed horizon T [s]; with ``free_horizon`` the initial guess of T.
     free_horizon : bool

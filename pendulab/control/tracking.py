@@ -17,9 +17,11 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import expm, solve_discrete_are
+from scipy.linalg import solve_discrete_are
 
 from ..model.model import Model
+from .lqr import wrap_state_error
+from .sampled import zoh
 from .swingup import SwingUpResult
 
 __all__ = ["TrackingController", "tvlqr", "default_weights"]
@@ -37,21 +39,6 @@ def default_weights(model: Model, torque_limit: float) -> tuple[np.ndarray, np.n
     else:
         q = [10.0, 10.0, 100.0, 100.0, 1.0, 1.0, 0.1, 0.1]
     return np.diag(q), np.array(1.0 / torque_limit**2)
-
-
-def _wrap(dx: np.ndarray) -> np.ndarray:
-    """Angle differences (first two entries) wrapped to (-pi, pi]."""
-    out = np.array(dx, dtype=float)
-    out[..., :2] = (out[..., :2] + math.pi) % (2 * math.pi) - math.pi
-    return out
-
-
-def _discretise(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    nx, nu = B.shape
-    M = np.zeros((nx + nu, nx + nu))
-    M[:nx, :nx], M[:nx, nx:] = A, B
-    E = expm(M * dt)
-    return E[:nx, :nx], E[:nx, nx:]
 
 
 @dataclass(frozen=True)
@@ -73,6 +60,8 @@ class TrackingController:
     goal : ndarray, shape (nx,)
     actuated : tuple of int
     torque_limit : float
+    state_names : tuple of str
+        Names of the state entries (angle differences are wrapped).
     """
 
     dt: float
@@ -84,6 +73,7 @@ class TrackingController:
     goal: np.ndarray
     actuated: tuple[int, ...]
     torque_limit: float
+    state_names: tuple[str, ...]
     u_goal: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     @property
@@ -95,9 +85,9 @@ class TrackingController:
         k = int(math.floor(t / self.dt + 1e-6))
         u = np.zeros(2)
         if k < len(self.t_nom):
-            u[act] = self.u_nom[k, act] - self.K[k] @ _wrap(x - self.x_nom[k])
+            u[act] = self.u_nom[k, act] - self.K[k] @ wrap_state_error(x - self.x_nom[k], self.state_names)
         else:
-            u[act] = self.u_goal[act] - self.K_top @ _wrap(x - self.goal)
+            u[act] = self.u_goal[act] - self.K_top @ wrap_state_error(x - self.goal, self.state_names)
         return np.clip(u, -self.torque_limit, self.torque_limit)
 
 
@@ -144,7 +134,7 @@ def tvlqr(
     jac = model.functions["jac_rhs"]
     goal = pb.target
     A, B = (np.asarray(m) for m in jac(goal, np.zeros(2), model.p))
-    Ad, Bd = _discretise(A, B[:, act], dt)
+    Ad, Bd = zoh(A, B[:, act], dt)
     try:
         P = solve_discrete_are(Ad, Bd, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
@@ -162,9 +152,9 @@ def tvlqr(
     nx = model.nx
     K = np.empty((M, len(act), nx))
     for k in range(M - 1, -1, -1):
-        Ak, Bk = _discretise(As[:, k * nx : (k + 1) * nx], Bs[:, 2 * k : 2 * k + 2][:, act], dt)
+        Ak, Bk = zoh(As[:, k * nx : (k + 1) * nx], Bs[:, 2 * k : 2 * k + 2][:, act], dt)
         BtP = Bk.T @ P
         K[k] = np.linalg.solve(R + BtP @ Bk, BtP @ Ak)
         P = Q + Ak.T @ P @ (Ak - Bk @ K[k])
         P = 0.5 * (P + P.T)
-    return TrackingController(dt, t_nom, x_nom, u_nom, K, K_top, goal, tuple(act), pb.torque_limit)
+    return TrackingController(dt, t_nom, x_nom, u_nom, K, K_top, goal, tuple(act), pb.torque_limit, model.state_names)
