@@ -20,6 +20,7 @@ same compiled NLP with different bounds and warm starts.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -187,8 +188,6 @@ def get_transcription(
 def _build(
     kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple
 ) -> Transcription:
-    import time
-
     t_start = time.perf_counter()
     f = _functions(kind)["rhs"]
     nx = f.size1_in(0)
@@ -264,12 +263,10 @@ def _collocation_maps(kind: str, scheme: str, d: int, N: int) -> ca.Function:
 
 def _shooting_map(kind: str, plugin: str, N: int) -> ca.Function:
     """Integrator over one interval (time scaled to [0, 1]), mapped over N intervals."""
-    from ..model.builders import build_elastic, build_rigid
-
-    sym = build_rigid() if kind == "rigid" else build_elastic()
-    h = ca.SX.sym("h")
-    pp = ca.vertcat(sym.u, h, sym.p)
-    dae = {"x": sym.x, "p": pp, "ode": h * sym.xdot}
+    f = _functions(kind)["rhs"]
+    nx, npar = f.size1_in(0), f.size1_in(2)
+    x, u, h, p = ca.SX.sym("x", nx), ca.SX.sym("u", 2), ca.SX.sym("h"), ca.SX.sym("p", npar)
+    dae = {"x": x, "p": ca.vertcat(u, h, p), "ode": h * f(x, u, p)}
     if plugin == "cvodes":
         opts = {"abstol": 1e-10, "reltol": 1e-10, "max_num_steps": 100000}
     else:
@@ -278,10 +275,7 @@ def _shooting_map(kind: str, plugin: str, N: int) -> ca.Function:
     # rk: one interval expands to SX (exact Hessian, one small Function mapped N times);
     # cvodes stays MX (its sensitivities come from CVODES itself).
     Sym = ca.MX if plugin == "cvodes" else ca.SX
-    xk = Sym.sym("xk", sym.x.numel())
-    uk = Sym.sym("uk", 2)
-    hk = Sym.sym("hk")
-    pk = Sym.sym("pk", sym.p.numel())
+    xk, uk, hk, pk = Sym.sym("xk", nx), Sym.sym("uk", 2), Sym.sym("hk"), Sym.sym("pk", npar)
     xf = F(x0=xk, p=ca.vertcat(uk, hk, pk))["xf"]
     one = ca.Function("ms_interval", [xk, uk, hk, pk], [xf])
     return one.map(N)
