@@ -204,7 +204,7 @@ def swing_up(
     out = None
     if guess != "homotopy":
         out = _run(tr, problem, w0, 0.0, "direct", stages)
-    if guess == "homotopy" or (guess == "auto" and not _ok(out, tr)):
+    if guess == "homotopy" or (guess == "auto" and not _ok(out)):
         w = w0
         for frac in _HOMOTOPY:
             out = _run(tr, problem, w, frac, f"passive {frac:g}x limit", stages)
@@ -248,7 +248,7 @@ def _run(tr: Transcription, problem: SwingUpProblem, w0: np.ndarray, passive: fl
     return out
 
 
-def _ok(out: dict | None, tr: Transcription) -> bool:
+def _ok(out: dict | None) -> bool:
     if out is None:
         return False
     status = str(out["stats"].get("return_status", ""))
