@@ -7,7 +7,7 @@ Four studies (``pendulab bench stability``):
    at rest length (the spring mode is excited), over 1 s: *unstable* (state
    non-finite or the energy above the static equilibrium grew tenfold),
    *stable but inaccurate* (bob positions off by more than ``POSITION_TOL``
-   against a DOP853 1e-10 solution at t = 0.1, 0.2, ..., 1 s) or *stable and
+   against a CVODES Adams 1e-10 solution at t = 0.1, 0.2, ..., 1 s) or *stable and
    accurate*. Overlaid: the explicit methods' theoretical limit
    h = c / w_max(k), with w_max the largest |Im| eigenvalue of
    ``jac_rhs`` at the static equilibrium and c the imaginary-axis stability
@@ -188,7 +188,7 @@ def run_stability(*, quick: bool = False, progress: Progress | None = None) -> S
         res.errors[m] = np.zeros((len(ks), len(n_steps)))
     for i, k in enumerate(ks):
         model = elastic(k1=k, k2=k)
-        ref = simulate(model, _start(model, "rest-length"), _HORIZON, 0.1, "DOP853", 1e-10, 1e-10)
+        ref = simulate(model, _start(model, "rest-length"), _HORIZON, 0.1, "cvodes-adams", 1e-10, 1e-10)
         ref_pos = model.positions(ref.x)
         tick(f"reference k={k:.0e}")
         for m in methods:
