@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import sys
 import time
@@ -56,6 +57,36 @@ def _stability(args: argparse.Namespace) -> int:
     return 0
 
 
+def _hierarchy(args: argparse.Namespace) -> int:
+    from ..bench.hierarchy import LEVELS, stiffness_amplitude_study
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    ks = (1e2, 1e4, 1e6) if args.quick else (1e2, 1e3, 1e4, 1e5, 1e6)
+    amps = (0.05, 1.0) if args.quick else (0.05, 0.3, 1.0, 2.0)
+    rows = stiffness_amplitude_study(ks, amps, tolerance=args.tolerance, repeats=1 if args.quick else 3, progress=_Bar())
+    path = out / "hierarchy_table.csv"
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+    lines = [
+        f"| k [N/m] | " + " | ".join(f"theta0 = {a:g} rad" for a in amps) + " |",
+        "|---|" + "---|" * len(amps),
+    ]
+    for k in ks:
+        cells = []
+        for a in amps:
+            r = next(r for r in rows if r["k"] == k and r["amplitude"] == a)
+            errs = ", ".join(f"{lv[:3] if lv != 'rigid+quasi-static' else 'r+qs'} {r[f'error[{lv}]']:.1e}" for lv in LEVELS[:-1])
+            cells.append(f"**{r['chosen']}** ({errs})")
+        lines.append(f"| {k:.0e} | " + " | ".join(cells) + " |")
+    (out / "hierarchy_table.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    print(f"wrote {path} and {out / 'hierarchy_table.md'}")
+    return 0
+
+
 def _references(args: argparse.Namespace) -> int:
     from ..bench.cases import get_cases
     from ..bench.reference import REFERENCE_DIR, compute_reference
@@ -85,6 +116,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     st.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory (default {_DEFAULT_OUT})")
     st.add_argument("--quick", action="store_true", help="coarse map (CI smoke run)")
     st.set_defaults(func=_stability)
+
+    hi = sub.add_parser("hierarchy", help="model-hierarchy choice over spring stiffness x release angle")
+    hi.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory (default {_DEFAULT_OUT})")
+    hi.add_argument("--quick", action="store_true", help="3 x 2 grid (CI smoke run)")
+    hi.add_argument("--tolerance", type=float, default=1e-2, help="error tolerance on theta1, theta2 [rad], x2, y2 [m]")
+    hi.set_defaults(func=_hierarchy)
 
     rf = sub.add_parser("references", help="recompute the stored reference solutions of the cases")
     rf.add_argument("--cases", nargs="+", metavar="CASE", help="case names (default: all)")
