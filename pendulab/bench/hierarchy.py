@@ -141,7 +141,9 @@ class HierarchyReport:
         ]
         for lv in self.levels:
             mark = "yes" if lv.within else "no"
-            lines.append(f"{lv.name:<20} {lv.error:>11.3e} {lv.wall_time:>14.4f}  {mark}{'  (' + lv.note + ')' if lv.note else ''}")
+            lines.append(
+                f"{lv.name:<20} {lv.error:>11.3e} {lv.wall_time:>14.4f}  {mark}{'  (' + lv.note + ')' if lv.note else ''}"
+            )
         lines.append(f"chosen: {self.chosen} (cheapest within tolerance)")
         return "\n".join(lines)
 
@@ -209,9 +211,7 @@ def _run_rigid_states(scene: SceneLike) -> tuple[np.ndarray, Model]:
     model = scene.model
     rm = rigid_counterpart(model)
     th, om = _angles_rates(model, np.asarray(scene.x0))
-    traj = simulate(
-        rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u
-    )
+    traj = simulate(rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u)
     return traj.x, rm
 
 
@@ -236,9 +236,7 @@ def _run_rigid_qs(scene: SceneLike) -> np.ndarray:
 
 
 def _run_full(scene: SceneLike) -> np.ndarray:
-    return simulate(
-        scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u
-    ).x
+    return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
 
 
 def levels_for(model: Model) -> tuple[ModelLevel, ...]:
@@ -337,7 +335,7 @@ def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None =
     runs = [_timed(lambda lv=lv: lv.run(scene), repeats) for lv in levels]
     ref = _signals(scene, runs[-1][0])
     results = []
-    for lv, (X, wall) in zip(levels, runs):
+    for lv, (X, wall) in zip(levels, runs, strict=False):
         sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
         errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
         err = max(errors.values())
@@ -348,7 +346,14 @@ def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None =
     # Timings are noisy on a shared machine: costs within TIE_RATIO of the fastest
     # count as equal, and the simpler model (earlier in the hierarchy) wins the tie.
     chosen = next(r.name for r in ok if r.wall_time <= TIE_RATIO * fastest)
-    return HierarchyReport(scene.name, tuple(scene.outputs), float(tol), f"{levels[-1].name} ({scene.method}, rtol {scene.rtol:g})", tuple(results), chosen)
+    return HierarchyReport(
+        scene.name,
+        tuple(scene.outputs),
+        float(tol),
+        f"{levels[-1].name} ({scene.method}, rtol {scene.rtol:g})",
+        tuple(results),
+        chosen,
+    )
 
 
 def choose_model(scene: SceneLike, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
@@ -409,8 +414,16 @@ def stiffness_amplitude_study(
         model = elastic(k1=k, k2=k)
         for a in amplitudes:
             sc = _GridScene(
-                f"k={k:g}, theta={a:g}", model, model.state(theta1=a, theta2=a), t_final, 0.01, "cvodes", 1e-10, 1e-10,
-                ("theta1", "theta2", "x2", "y2"), tolerance,
+                f"k={k:g}, theta={a:g}",
+                model,
+                model.state(theta1=a, theta2=a),
+                t_final,
+                0.01,
+                "cvodes",
+                1e-10,
+                1e-10,
+                ("theta1", "theta2", "x2", "y2"),
+                tolerance,
             )
             rep = check_scene(sc, repeats=repeats)
             row: dict[str, Any] = {"k": k, "amplitude": a, "chosen": rep.chosen}
@@ -422,4 +435,3 @@ def stiffness_amplitude_study(
             if progress is not None:
                 progress(done, total, f"hierarchy k={k:g} theta={a:g}")
     return rows
-

@@ -32,12 +32,12 @@ from ..model.pycode import to_python
 from ..model.simulate import simulate
 from .cases import Case
 
-__all__ = ["Reference", "REFERENCE_DIR", "load_reference", "compute_reference", "gbs_mp", "ReferenceMissing"]
+__all__ = ["Reference", "REFERENCE_DIR", "load_reference", "compute_reference", "gbs_mp", "ReferenceMissingError"]
 
 REFERENCE_DIR = Path(__file__).resolve().parent / "references"
 
 
-class ReferenceMissing(FileNotFoundError):
+class ReferenceMissingError(FileNotFoundError):
     """No stored reference for a case (run ``pendulab bench references``)."""
 
 
@@ -63,14 +63,14 @@ class Reference:
 
 
 def load_reference(case: Case, directory: Path = REFERENCE_DIR) -> Reference:
-    """Load the stored reference of ``case``; raise ReferenceMissing if absent or stale."""
+    """Load the stored reference of ``case``; raise ReferenceMissingError if absent or stale."""
     path = Path(directory) / f"{case.name}.npz"
     if not path.is_file():
-        raise ReferenceMissing(f"no stored reference for case {case.name!r} at {path}; run 'pendulab bench references'")
+        raise ReferenceMissingError(f"no stored reference for case {case.name!r} at {path}; run 'pendulab bench references'")
     d = np.load(path)
     t = d["t"]
     if not np.isclose(t[-1], case.t_final) or not np.allclose(d["x"][0], case.initial_state(), rtol=0, atol=1e-15):
-        raise ReferenceMissing(f"stored reference {path} does not match case {case.name!r}; run 'pendulab bench references'")
+        raise ReferenceMissingError(f"stored reference {path} does not match case {case.name!r}; run 'pendulab bench references'")
     return Reference(case.name, t, d["x"], str(d["method"]), str(d["check_method"]), float(d["accuracy"]), str(d["notes"]))
 
 
@@ -141,18 +141,18 @@ def gbs_mp(
                 for j, n in enumerate(seq):
                     h = H / n
                     z0 = x
-                    z1 = [a + h * b for a, b in zip(x, f0)]
+                    z1 = [a + h * b for a, b in zip(x, f0, strict=False)]
                     for _i in range(n - 1):
                         fz = f(z1)
-                        z0, z1 = z1, [a + 2 * h * b for a, b in zip(z0, fz)]
+                        z0, z1 = z1, [a + 2 * h * b for a, b in zip(z0, fz, strict=False)]
                     fz = f(z1)
-                    row = [[(a + b + h * c) / 2 for a, b, c in zip(z0, z1, fz)]]
+                    row = [[(a + b + h * c) / 2 for a, b, c in zip(z0, z1, fz, strict=False)]]
                     for m in range(1, j + 1):
                         ratio = (mpmath.mpf(seq[j]) / seq[j - m]) ** 2 - 1
-                        row.append([a + (a - b) / ratio for a, b in zip(row[m - 1], T[j - 1][m - 1])])
+                        row.append([a + (a - b) / ratio for a, b in zip(row[m - 1], T[j - 1][m - 1], strict=False)])
                     T.append(row)
                 x = T[-1][-1]
-                est = max(est, max(abs(a - b) for a, b in zip(T[-1][-1], T[-1][-2])))
+                est = max(est, max(abs(a - b) for a, b in zip(T[-1][-1], T[-1][-2], strict=False)))
             X[k + 1] = [float(v) for v in x]
             if progress is not None:
                 progress(k + 1, n_out)

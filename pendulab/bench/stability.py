@@ -242,7 +242,17 @@ def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
         for m, grid in res.maps.items():
             for i, k in enumerate(res.ks):
                 for j, h in enumerate(res.hs):
-                    w.writerow([m, f"{k:.6g}", f"{res.omega_max[i]:.6g}", f"{h:.6g}", f"{h * res.omega_max[i]:.4g}", names[grid[i, j]], f"{res.errors[m][i, j]:.3e}"])
+                    w.writerow(
+                        [
+                            m,
+                            f"{k:.6g}",
+                            f"{res.omega_max[i]:.6g}",
+                            f"{h:.6g}",
+                            f"{h * res.omega_max[i]:.4g}",
+                            names[grid[i, j]],
+                            f"{res.errors[m][i, j]:.3e}",
+                        ]
+                    )
     with paths[1].open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["k", "h_measured", "h_predicted", "relative_difference"])
@@ -284,7 +294,7 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
 
     kk = np.logspace(lk[0], lk[-1], 100)
     wmax = np.interp(np.log10(kk), lk, np.log10(res.omega_max))
-    for ax, m in zip(axes.flat, methods):
+    for ax, m in zip(axes.flat, methods, strict=False):
         ax.pcolormesh(10 ** edges(lk), 10 ** edges(lh), res.maps[m].T, cmap=cmap, vmin=0, vmax=2, shading="flat")
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -317,11 +327,11 @@ def _plot_steps(res: StabilityResult, path: Path) -> Path:
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     ks = sorted({r["k"] for r in res.step_counts})
-    for ax, start in zip(axes, ("quasi-static", "rest-length")):
-        for m, mk in zip(("RK45", "DOP853", "Radau", "cvodes-bdf"), "osD^"):
+    for ax, start in zip(axes, ("quasi-static", "rest-length"), strict=False):
+        for m, mk in zip(("RK45", "DOP853", "Radau", "cvodes-bdf"), "osD^", strict=False):
             pts = [(r["k"], r["steps"]) for r in res.step_counts if r["start"] == start and r["method"] == m]
             if pts:
-                ax.loglog(*zip(*pts), "-", marker=mk, label=m)
+                ax.loglog(*zip(*pts, strict=False), "-", marker=mk, label=m)
         if ks:
             ref = [r["steps"] for r in res.step_counts if r["method"] == "RK45" and r["start"] == start]
             if ref:

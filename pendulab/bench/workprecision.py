@@ -10,10 +10,13 @@ references (:mod:`pendulab.bench.reference`) three ways:
 * ``energy_drift``: max over the grid of |E(t) - E(0)| [J] (the cases are
   undamped, so the exact value is zero; chaos does not amplify it).
 
-Wall time is the median of ``repeats`` runs of the whole ``simulate`` call
-(the first run includes building the CasADi functions; the median of three
-or more drops it). A run slower than ``slow_run_s`` is not repeated, and the
-tighter settings of that method on that case are skipped.
+Wall time is the median of up to ``repeats`` timed runs of the whole
+``simulate`` call after one untimed warm-up run (which builds and caches the
+CasADi functions; its time is kept as ``first_run``); a point stops repeating
+once its timed runs took ``REPEAT_BUDGET_S``. When a point's median exceeds
+``slow_run_s`` the tighter settings of that method on that case are skipped.
+CPU time (``time.process_time``) is recorded next to wall time because the
+benchmark machine may be shared.
 
 Methods are entries of ``BENCH_METHODS``: a name, the kind of sweep, its
 settings and a runner ``run(model, x0, t_final, dt, setting) -> Trajectory``.
@@ -41,11 +44,21 @@ from ..model.trajectory import Trajectory
 from .cases import Case, get_cases
 from .reference import Reference, load_reference
 
-__all__ = ["BenchMethod", "BENCH_METHODS", "Row", "run_work_precision", "write_csv", "read_csv", "plot_work_precision", "fastest_table"]
+__all__ = [
+    "BenchMethod",
+    "BENCH_METHODS",
+    "Row",
+    "run_work_precision",
+    "write_csv",
+    "read_csv",
+    "plot_work_precision",
+    "fastest_table",
+]
 
 Runner = Callable[[Model, np.ndarray, float, float, float], Trajectory]
 Progress = Callable[[int, int, str], None]
 
+REPEAT_BUDGET_S = 2.0  # stop repeating a point once its timed runs took this long [s]
 _TOLS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
 _TOLS_QUICK = (1e-4, 1e-7)
 _STEPS = (5e-2, 2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)
@@ -124,6 +137,7 @@ class Row:
     wall_median: float = math.nan
     wall_min: float = math.nan
     cpu_median: float = math.nan
+    first_run: float = math.nan
     repeats: int = 0
     n_steps: float = math.nan
     n_rhs: float = math.nan
@@ -131,14 +145,14 @@ class Row:
     message: str = ""
 
 
-def _measure(
-    method: BenchMethod, case: Case, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int, slow_run_s: float
-) -> Row:
+def _measure(method: BenchMethod, case: Case, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int) -> Row:
     row = Row(case.name, method.name, method.sweep, setting, "ok", reference_accuracy=ref.accuracy)
     times: list[float] = []
     cpu: list[float] = []
     traj = None
-    for _ in range(repeats):
+    # Run 0 is a warm-up (it builds and caches the CasADi functions); then up to
+    # `repeats` timed runs, fewer once they have used REPEAT_BUDGET_S.
+    for i in range(repeats + 1):
         start, cpu_start = time.perf_counter(), time.process_time()
         try:
             traj = method.run(model, x0, case.t_final, case.dt, setting)
@@ -146,9 +160,12 @@ def _measure(
             row.status = "unstable" if "non-finite" in str(exc) else "failed"
             row.message = str(exc).splitlines()[0][:200]
             return row
+        if i == 0:
+            row.first_run = time.perf_counter() - start
+            continue
         times.append(time.perf_counter() - start)
         cpu.append(time.process_time() - cpu_start)
-        if times[-1] > slow_run_s:
+        if sum(times) > REPEAT_BUDGET_S:
             break
     X = traj.x
     if X.shape != ref.x.shape:
@@ -193,7 +210,8 @@ def run_work_precision(
     repeats : int
         Timed runs per point (median reported).
     slow_run_s : float
-        A run slower than this [s] is not repeated and ends the method's sweep on that case.
+        A point whose median wall time exceeds this [s] (or whose warm-up run
+        exceeds four times this) ends the method's sweep on that case.
     progress : callable, optional
         ``progress(done, total, label)`` after each point.
 
@@ -221,9 +239,9 @@ def run_work_precision(
             if stop:
                 rows.append(Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s"))
             else:
-                row = _measure(bm, case, model, x0, refs[case.name], s, repeats, slow_run_s)
+                row = _measure(bm, case, model, x0, refs[case.name], s, repeats)
                 rows.append(row)
-                stop = row.status == "ok" and row.wall_median > slow_run_s
+                stop = row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s)
             done += 1
             if progress is not None:
                 progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
@@ -281,7 +299,7 @@ def plot_work_precision(rows: Sequence[Row], path: str | Path, metric: str = "gr
     fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow), squeeze=False)
     cmap = plt.get_cmap("tab20")
     markers = "osD^v<>ph*Xd8P"
-    for ax, case in zip(axes.flat, cases):
+    for ax, case in zip(axes.flat, cases, strict=False):
         acc = math.nan
         for i, m in enumerate(methods):
             pts = [r for r in rows if r.case == case and r.method == m and r.status == "ok"]

@@ -71,7 +71,7 @@ def _hierarchy(args: argparse.Namespace) -> int:
         w.writeheader()
         w.writerows({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
     lines = [
-        f"| k [N/m] | " + " | ".join(f"theta0 = {a:g} rad" for a in amps) + " |",
+        "| k [N/m] | " + " | ".join(f"theta0 = {a:g} rad" for a in amps) + " |",
         "|---|" + "---|" * len(amps),
     ]
     for k in ks:

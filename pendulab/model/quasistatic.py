@@ -82,7 +82,9 @@ def quasi_static_lengths(model: Any, theta: Any, omega: Any, u: Any = None) -> n
     try:
         r = np.asarray(F(np.tile(r0, (n, 1)).T, th.T, om.T, uc, model.p)).T
     except RuntimeError as exc:
-        raise RuntimeError(f"quasi-static spring lengths: Newton failed for theta={th[0].tolist()}, omega={om[0].tolist()}") from exc
+        raise RuntimeError(
+            f"quasi-static spring lengths: Newton failed for theta={th[0].tolist()}, omega={om[0].tolist()}"
+        ) from exc
     return r[0] if np.ndim(theta) == 1 else r
 
 

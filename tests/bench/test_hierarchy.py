@@ -46,7 +46,7 @@ def test_chosen_level_reproduces_its_reported_error():
     ref = load("stiff_moderate_amplitude").model
     assert level.model.kind == "rigid" and traj.x.shape[1] == ref.nx
     err = max(
-        np.max(np.abs(traj[n] - rep_traj)) for n, rep_traj in zip(("theta1", "theta2"), _reference_angles(sc))
+        np.max(np.abs(traj[n] - rep_traj)) for n, rep_traj in zip(("theta1", "theta2"), _reference_angles(sc), strict=False)
     )
     # Same computation as inside check_scene: the error on the angles is at most the reported max.
     assert err <= next(lv.error for lv in rep.levels if lv.name == rep.chosen) * (1 + 1e-12)
