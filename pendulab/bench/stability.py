@@ -167,12 +167,12 @@ def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
 
 def run_stability(*, quick: bool = False, progress: Progress | None = None) -> StabilityResult:
     """Run the four stability studies (about a minute; ``quick``: a few seconds)."""
-    ks = np.array([1e2, 1e4, 1e6]) if quick else np.logspace(2, 6, 9)
+    ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
     n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
     methods = ["euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)
-    blow_ks = [1e4, 1e6] if quick else [1e4, 1e5, 1e6]
+    blow_ks = [1e6] if quick else [1e4, 1e5, 1e6]
     sc_ks = [1e2, 1e4] if quick else [1e2, 1e3, 1e4, 1e5, 1e6]
-    sc_methods = ["RK45", "DOP853", "Radau", "cvodes-bdf"]
+    sc_methods = ["RK45", "Radau"] if quick else ["RK45", "DOP853", "Radau", "cvodes-bdf"]
     total = len(ks) * (1 + len(methods) * len(n_steps)) + len(blow_ks) + len(sc_ks) * len(sc_methods) * 2 + 1
     done = 0
 

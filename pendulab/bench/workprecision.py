@@ -47,6 +47,7 @@ from .reference import Reference, load_reference
 __all__ = [
     "BenchMethod",
     "BENCH_METHODS",
+    "register_method",
     "Row",
     "run_work_precision",
     "write_csv",
@@ -120,6 +121,23 @@ def _native() -> dict[str, BenchMethod]:
 
 #: The benchmark's method registry (insertion order = legend order).
 BENCH_METHODS: dict[str, BenchMethod] = _native()
+
+
+def register_method(method: BenchMethod) -> None:
+    """Add a method to ``BENCH_METHODS`` (e.g. an FMU's embedded solver run through fmpy).
+
+    Raises
+    ------
+    ValueError
+        The name is taken, the sweep kind is unknown or the settings are empty.
+    """
+    if method.name in BENCH_METHODS:
+        raise ValueError(f"method name {method.name!r} is already registered")
+    if method.sweep not in ("tol", "step"):
+        raise ValueError(f"sweep must be 'tol' or 'step', got {method.sweep!r}")
+    if not method.settings or not method.quick:
+        raise ValueError(f"method {method.name!r}: settings and quick settings must be non-empty")
+    BENCH_METHODS[method.name] = method
 
 
 @dataclass
@@ -276,6 +294,7 @@ def read_csv(path: str | Path) -> list[Row]:
     return out
 
 
+_TIME_LABEL = {"wall_median": "median wall time [s]", "cpu_median": "median CPU time [s]"}
 _METRIC_LABEL = {
     "grid_error": "achieved error: max |x - x_ref| over the output grid",
     "final_error": "achieved error: max |x(T) - x_ref(T)|",
@@ -283,8 +302,10 @@ _METRIC_LABEL = {
 }
 
 
-def plot_work_precision(rows: Sequence[Row], path: str | Path, metric: str = "grid_error", title: str = "") -> Path:
-    """Median wall time against achieved error (log-log), one panel per case."""
+def plot_work_precision(
+    rows: Sequence[Row], path: str | Path, metric: str = "grid_error", title: str = "", time_metric: str = "wall_median"
+) -> Path:
+    """Median wall (or CPU) time against achieved error (log-log), one panel per case."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -292,6 +313,8 @@ def plot_work_precision(rows: Sequence[Row], path: str | Path, metric: str = "gr
 
     if metric not in _METRIC_LABEL:
         raise ValueError(f"metric must be one of {list(_METRIC_LABEL)}, got {metric!r}")
+    if time_metric not in _TIME_LABEL:
+        raise ValueError(f"time_metric must be one of {list(_TIME_LABEL)}, got {time_metric!r}")
     cases = list(dict.fromkeys(r.case for r in rows))
     methods = list(dict.fromkeys(r.method for r in rows))
     ncol = min(2, len(cases))
@@ -307,7 +330,7 @@ def plot_work_precision(rows: Sequence[Row], path: str | Path, metric: str = "gr
                 continue
             acc = pts[0].reference_accuracy
             xs = [max(getattr(r, metric), 1e-17) for r in pts]
-            ys = [r.wall_median for r in pts]
+            ys = [getattr(r, time_metric) for r in pts]
             ls = "--" if pts[0].sweep == "step" else "-"
             ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=cmap(i % 20), ms=4, lw=1, label=m)
         if metric != "energy_drift" and math.isfinite(acc):
@@ -315,7 +338,7 @@ def plot_work_precision(rows: Sequence[Row], path: str | Path, metric: str = "gr
             ax.text(acc, ax.get_ylim()[1], " reference\n accuracy", va="top", fontsize=7)
         ax.set_title(case, fontsize=10)
         ax.set_xlabel(_METRIC_LABEL[metric], fontsize=8)
-        ax.set_ylabel("median wall time [s]", fontsize=8)
+        ax.set_ylabel(_TIME_LABEL[time_metric], fontsize=8)
         ax.grid(True, which="major", alpha=0.3)
     for ax in list(axes.flat)[len(cases) :]:
         ax.axis("off")

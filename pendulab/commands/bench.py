@@ -41,6 +41,7 @@ def _work_precision(args: argparse.Namespace) -> int:
         wp.plot_work_precision(rows, out / f"work_precision_{metric}.png", metric)
         for metric in ("grid_error", "final_error", "energy_drift")
     ]
+    figs.append(wp.plot_work_precision(rows, out / "work_precision_grid_error_cpu.png", "grid_error", time_metric="cpu_median"))
     n_ok = sum(r.status == "ok" for r in rows)
     print(f"{n_ok}/{len(rows)} runs ok; wrote {csv_path} and {', '.join(str(f) for f in figs)}")
     return 0

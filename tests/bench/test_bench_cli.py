@@ -82,6 +82,6 @@ def test_rigid_reference_self_consistent_to_stated_accuracy():
 
     case = CASES["rigid_chaotic_2s"]
     ref = load_reference(case)
-    X, _ = gbs_mp(case.model(), case.initial_state(), 0.5, case.dt, substeps=2)
-    # Recomputing the 32-digit GBS over the first 0.5 s reproduces the stored solution to its stated accuracy.
+    X, _ = gbs_mp(case.model(), case.initial_state(), 0.2, case.dt, substeps=2)
+    # Recomputing the 32-digit GBS over the first 0.2 s reproduces the stored solution to its stated accuracy.
     assert np.max(np.abs(X - ref.x[: X.shape[0]])) <= ref.accuracy
