@@ -1,0 +1,94 @@
+"""``pendulab modes``: equilibria, their modes and (optionally) controllability, as tables or JSON."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+from ..cli import CLIError
+from ._common import parse_settings
+
+__all__ = ["register", "run"]
+
+_KINDS = ("rigid", "elastic")
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``modes`` sub-command."""
+    p = subparsers.add_parser(
+        "modes",
+        help="equilibria, natural frequencies, damping, mode shapes (and controllability)",
+        description=(
+            "Solve the equilibria of a model (optionally under a constant torque), linearize exactly and list "
+            "each mode: natural frequency [rad/s, Hz], damping ratio, time constant [s] and normalized shape."
+        ),
+    )
+    p.add_argument("--model", required=True, metavar="KIND", help="rigid | elastic")
+    p.add_argument(
+        "--set", metavar="NAME=VALUE", action="append", default=None, help="parameter in SI units, e.g. k1=800; repeatable"
+    )
+    p.add_argument("--equilibrium", default="all", metavar="NAME", help="down-down | down-up | up-down | up-up | all (default)")
+    p.add_argument("--torque", metavar="TAU1,TAU2", help="constant torques [N.m] holding the arm, e.g. 2,0.5")
+    p.add_argument("--controllability", action="store_true", help="also report controllability/observability per actuation")
+    p.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    p.add_argument("--plot", metavar="DIR", help="write mode-shape figures (and, elastic, the stiffness chart) into DIR")
+    p.set_defaults(func=run)
+
+
+def _parse_torque(text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        values = [float(v) for v in parts]
+    except ValueError:
+        raise CLIError(f"--torque {text!r}: expected two numbers TAU1,TAU2 in N.m") from None
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise CLIError(f"--torque {text!r}: expected two finite numbers TAU1,TAU2 in N.m")
+    return values
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``pendulab modes``; return the exit status."""
+    from ..model.equilibria import EQUILIBRIUM_NAMES, equilibria, equilibrium
+    from ..model.model import make_model
+    from ..model.modes import mode_table, modes
+
+    if args.model not in _KINDS:
+        raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
+    if args.equilibrium != "all" and args.equilibrium not in EQUILIBRIUM_NAMES:
+        raise CLIError(f"--equilibrium {args.equilibrium!r}: expected one of {[*EQUILIBRIUM_NAMES, 'all']}")
+    model = make_model(args.model, **parse_settings(args.set))
+    torque = _parse_torque(args.torque)
+    eqs = equilibria(model, torque) if args.equilibrium == "all" else [equilibrium(model, args.equilibrium, torque)]
+
+    result: dict[str, Any] = {"model": model.kind, "params": model.params.resolved(), "equilibria": []}
+    text = []
+    for eq in eqs:
+        ms = modes(model, eq)
+        result["equilibria"].append({**eq.as_dict(), "modes": [m.as_dict() for m in ms]})
+        state = ", ".join(f"{n} = {v:.6g}" for n, v in zip(model.state_names[: model.nq], eq.x[: model.nq], strict=True))
+        text.append(f"== {eq.name}: {eq.stability}; {state}\n{mode_table(ms)}\n")
+    if args.controllability:
+        from ..control.analysis import controllability_report, format_report
+
+        rows = controllability_report(model, eqs)
+        result["controllability"] = [r.as_dict() for r in rows]
+        text.append("== controllability (staircase rank, finite-horizon Gramian T = 1 s; encoders theta1, theta2)")
+        text.append(format_report(rows))
+    if args.plot is not None:
+        from ..viz.modes import save_mode_figures
+
+        print("pendulab modes: drawing figures ...", file=sys.stderr)
+        written = save_mode_figures(model, args.plot, eqs)
+        result["figures"] = [str(p) for p in written]
+        for path in written:
+            print(f"pendulab modes: wrote {path}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print("\n".join(text))
+    return 0

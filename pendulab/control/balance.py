@@ -1,0 +1,203 @@
+"""Closed-loop balancing simulations and a region-of-attraction estimate by bisection.
+
+The controller is sampled-data: :func:`pendulab.simulate` holds the torque
+over each output step (``dt``), exactly like a co-simulation master would.
+Saturation ``|tau| <= u_max`` is applied inside the feedback.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..model.model import Model
+from ..model.simulate import SimulationError, simulate
+from ..model.trajectory import Trajectory
+from .lqr import LQRDesign, wrap_state_error
+
+__all__ = ["simulate_balance", "balanced", "ROAResult", "region_of_attraction", "format_roa", "DEFAULT_DIRECTIONS"]
+
+#: Perturbation directions in (theta1, theta2); amplitudes are the Euclidean norm [rad].
+DEFAULT_DIRECTIONS: Mapping[str, tuple[float, float]] = {
+    "theta1": (1.0, 0.0),
+    "theta2": (0.0, 1.0),
+    "in-phase": (1.0, 1.0),
+    "anti-phase": (1.0, -1.0),
+}
+
+
+def _sample_time(design: LQRDesign, dt: float | None) -> float:
+    if dt is None:
+        return design.dt if design.dt is not None else 0.01
+    if design.dt is not None and not math.isclose(dt, design.dt, rel_tol=1e-9):
+        raise ValueError(f"dt = {dt!r} s differs from the discrete design's sample time {design.dt!r} s")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive sample time in seconds, got {dt!r}")
+    return float(dt)
+
+
+def simulate_balance(
+    model: Model,
+    design: LQRDesign,
+    x0: Any,
+    t_final: float = 5.0,
+    dt: float | None = None,
+    u_max: float | None = None,
+    method: str = "cvodes",
+    rtol: float = 1e-8,
+    atol: float = 1e-8,
+) -> Trajectory:
+    """Simulate the nonlinear model under the LQR feedback (sampled, optionally saturated).
+
+    Parameters
+    ----------
+    model : Model
+        Must be the model the design was made for (same kind).
+    design : LQRDesign
+    x0 : array_like, shape (nx,)
+        Initial state.
+    t_final : float
+        Horizon [s].
+    dt : float, optional
+        Controller sample time [s] = output step; default the design's ``dt``
+        or 0.01 s for a continuous design.
+    u_max : float, optional
+        Torque limit [N.m] on each actuated joint.
+    method, rtol, atol
+        Integrator settings (see :func:`pendulab.simulate`).
+
+    Returns
+    -------
+    Trajectory
+    """
+    if design.kind != model.kind:
+        raise ValueError(f"design is for the {design.kind} model, got a {model.kind} model")
+    return simulate(
+        model, x0, t_final, dt=_sample_time(design, dt), method=method, rtol=rtol, atol=atol, u=design.controller(u_max)
+    )
+
+
+def balanced(design: LQRDesign, x: Any, tol: float = 1e-2) -> bool:
+    """True when the angles and angular velocities are within ``tol`` of the equilibrium.
+
+    Spring coordinates are not judged: at vertical equilibria the torques cannot
+    reach them to first order, and undamped springs keep ringing.
+    """
+    dx = wrap_state_error(np.asarray(x, dtype=float) - design.x_eq, design.state_names)
+    judged = [i for i, n in enumerate(design.state_names) if n.startswith(("theta", "omega"))]
+    return bool(np.all(np.isfinite(dx)) and np.max(np.abs(dx[judged])) < tol)
+
+
+@dataclass(frozen=True)
+class ROAResult:
+    """Largest converging perturbation along one direction.
+
+    Attributes
+    ----------
+    direction : str
+    vector : ndarray, shape (2,)
+        Unit perturbation of (theta1, theta2).
+    amplitude : float
+        Largest amplitude [rad] found to converge (a lower bound within ``tol``).
+    reached_max : bool
+        True when even ``amplitude_max`` converged.
+    simulations : int
+    """
+
+    direction: str
+    vector: np.ndarray
+    amplitude: float
+    reached_max: bool
+    simulations: int
+
+
+def region_of_attraction(
+    model: Model,
+    design: LQRDesign,
+    directions: Mapping[str, Sequence[float]] | None = None,
+    u_max: float | None = None,
+    t_final: float = 5.0,
+    dt: float | None = None,
+    amplitude_max: float = math.pi / 2,
+    tol: float = 0.01,
+    settle_tol: float = 1e-2,
+    progress: Callable[[str], None] | None = None,
+) -> list[ROAResult]:
+    """Estimate the region of attraction along a few angle directions by bisection.
+
+    Each trial starts at rest at ``x_eq + a * d`` (springs at their equilibrium
+    lengths) and counts as converged when :func:`balanced` holds at ``t_final``.
+    Assumes the converging set is an interval along each direction.
+
+    Parameters
+    ----------
+    model, design
+    directions : mapping of name to (d_theta1, d_theta2), optional
+        Default ``DEFAULT_DIRECTIONS``; vectors are normalized.
+    u_max : float, optional
+        Torque limit [N.m].
+    t_final : float
+        Horizon of each trial [s].
+    dt : float, optional
+        Controller sample time [s].
+    amplitude_max : float
+        Upper end of the search [rad].
+    tol : float
+        Bisection stops when the bracket is narrower than this [rad].
+    settle_tol : float
+        Convergence threshold on angles [rad] and angular velocities [rad/s].
+    progress : callable(str), optional
+        Called with a one-line status after each trial (the CLI prints it).
+
+    Returns
+    -------
+    list of ROAResult
+    """
+    if not (amplitude_max > 0 and tol > 0):
+        raise ValueError(f"amplitude_max and tol must be positive, got {amplitude_max!r} and {tol!r}")
+    dirs = DEFAULT_DIRECTIONS if directions is None else directions
+    results = []
+    for name, vec in dirs.items():
+        d = np.asarray(vec, dtype=float).ravel()
+        if d.shape != (2,) or not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
+            raise ValueError(f"direction {name!r} must be a non-zero (d_theta1, d_theta2), got {vec!r}")
+        d = d / np.linalg.norm(d)
+        count = 0
+
+        def converges(a: float, d: np.ndarray = d, name: str = name) -> bool:
+            nonlocal count
+            count += 1
+            x0 = design.x_eq.copy()
+            x0[:2] += a * d
+            try:
+                traj = simulate_balance(model, design, x0, t_final, dt=dt, u_max=u_max)
+                ok = balanced(design, traj.x[-1], settle_tol)
+            except SimulationError:
+                ok = False
+            if progress is not None:
+                progress(f"{design.kind} {design.actuation} {name}: a = {a:.4f} rad -> {'ok' if ok else 'falls'}")
+            return ok
+
+        if converges(amplitude_max):
+            results.append(ROAResult(name, d, amplitude_max, True, count))
+            continue
+        lo, hi = 0.0, amplitude_max
+        while hi - lo > tol:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if converges(mid) else (lo, mid)
+        results.append(ROAResult(name, d, lo, False, count))
+    return results
+
+
+def format_roa(rows: Sequence[ROAResult], title: str = "") -> str:
+    """Plain-text table of region-of-attraction estimates."""
+    lines = [title] if title else []
+    lines.append(f"{'direction':<11} {'largest converging [rad]':>25} {'[deg]':>7} {'sims':>5}")
+    for r in rows:
+        bound = ">=" if r.reached_max else "  "
+        lines.append(f"{r.direction:<11} {bound:>2}{r.amplitude:>23.3f} {math.degrees(r.amplitude):>7.1f} {r.simulations:>5}")
+    return "\n".join(lines)

@@ -1,0 +1,134 @@
+"""python-control bridge: exact ``StateSpace`` and a ``NonlinearIOSystem`` with named signals.
+
+Signal names come from the model (``theta1``, ``omega1``, ``tau1``, ``x2``,
+...), so ``lqr``, ``feedback`` and ``interconnect`` can connect systems by name.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import control as ct
+import numpy as np
+
+from ..model.equilibria import equilibrium
+from ..model.linearize import OutputSpec, check_actuation, linearize, selected_outputs
+from ..model.model import INPUT_NAMES, Model
+
+__all__ = ["to_statespace", "to_nlsys"]
+
+
+def to_statespace(
+    model: Model,
+    x: Any = "up-up",
+    u: Any = None,
+    actuation: str = "full",
+    outputs: OutputSpec = "states",
+    name: str | None = None,
+) -> ct.StateSpace:
+    """Exact linearization as a named ``control.StateSpace``.
+
+    Parameters
+    ----------
+    model : Model
+    x : str, Equilibrium or array_like of shape (nx,)
+        Operating point: an equilibrium name (solved at torque ``u``), a solved
+        Equilibrium, or any state.
+    u : array_like, shape (2,), optional
+        Operating-point torques (tau1, tau2) [N.m]; default zero.
+    actuation : {"full", "pendubot", "acrobot"}
+    outputs : str or sequence of str
+        As in :func:`pendulab.linearize`.
+    name : str, optional
+        System name (default ``"<kind>_<actuation>"``).
+
+    Returns
+    -------
+    control.StateSpace
+        States, inputs and outputs named after the model's signals; the
+        operating point is kept in ``sys.x0``, ``sys.u0`` (full torque vector)
+        and ``sys.y0`` (deviation variables are what the matrices act on).
+    """
+    check_actuation(actuation)
+    if isinstance(x, str):
+        x = equilibrium(model, x, u)
+    lin = linearize(model, x, u, inputs=actuation, outputs=outputs)
+    sys = ct.ss(
+        lin.A,
+        lin.B,
+        lin.C,
+        lin.D,
+        states=list(lin.state_names),
+        inputs=list(lin.input_names),
+        outputs=list(lin.output_names),
+        name=name or f"{model.kind}_{actuation}",
+    )
+    sys.x0, sys.u0, sys.y0 = lin.x0, lin.u0, lin.y0
+    return sys
+
+
+def to_nlsys(
+    model: Model,
+    actuation: str = "full",
+    outputs: OutputSpec = "states",
+    name: str | None = None,
+) -> ct.NonlinearIOSystem:
+    """The nonlinear model as a named ``control.NonlinearIOSystem``.
+
+    The update and output functions call the compiled CasADi functions; the
+    physical parameters are the system's ``params`` (a dict by parameter name,
+    SI units), so they can be changed per call, e.g.
+    ``control.input_output_response(sys, T, U, X0, params={"m2": 2.0})``.
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the default parameter values.
+    actuation : {"full", "pendubot", "acrobot"}
+        Inputs of the system; unactuated torques are zero.
+    outputs : str or sequence of str
+        As in :func:`pendulab.linearize` (default: the full state).
+    name : str, optional
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+    """
+    idx = list(check_actuation(actuation))
+    names, yfun = selected_outputs(model, outputs)
+    rhs = model.functions["rhs"]
+    param_names = model.param_names
+    defaults = dict(zip(param_names, model.p.tolist(), strict=True))
+
+    @lru_cache(maxsize=64)
+    def checked(items: tuple[tuple[str, Any], ...]) -> np.ndarray:
+        unknown = sorted(set(dict(items)) - set(param_names))
+        if unknown:
+            raise ValueError(f"unknown parameter name(s) {unknown}; expected one of {list(param_names)}")
+        # Validate once per distinct parameter set (signs, finiteness) through the parameter class.
+        return type(model.params)(**{**defaults, **dict(items)}).as_vector()
+
+    def pvec(params: dict[str, Any] | None) -> np.ndarray:
+        return checked(tuple(sorted((params or {}).items())))
+
+    def full_u(u: np.ndarray) -> np.ndarray:
+        uf = np.zeros(len(INPUT_NAMES))
+        uf[idx] = np.asarray(u, dtype=float).ravel()
+        return uf
+
+    def update(_t: float, x: np.ndarray, u: np.ndarray, params: dict[str, Any]) -> np.ndarray:
+        return np.asarray(rhs(x, full_u(u), pvec(params)), dtype=float).ravel()
+
+    def output(_t: float, x: np.ndarray, u: np.ndarray, params: dict[str, Any]) -> np.ndarray:
+        return np.asarray(yfun(x, full_u(u), pvec(params))[0], dtype=float).ravel()
+
+    return ct.nlsys(
+        update,
+        output,
+        states=list(model.state_names),
+        inputs=[INPUT_NAMES[i] for i in idx],
+        outputs=list(names),
+        params=defaults,
+        name=name or f"{model.kind}_{actuation}_nl",
+    )

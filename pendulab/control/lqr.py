@@ -1,0 +1,215 @@
+"""LQR balancing about an equilibrium (by default up-up), continuous or sampled.
+
+The gain is designed on the controllable subspace: at the vertical equilibria
+of the elastic pendulum the torques cannot reach the spring (radial) motion to
+first order, so (A, B) is not controllable there and a plain Riccati solve
+fails. Uncontrollable modes that are asymptotically stable or undamped
+oscillations are left alone (reported in ``uncontrollable_eigenvalues``); an
+uncontrollable mode that is unstable or a drift (eigenvalue at 0) cannot be
+balanced and raises ``UncontrollableError``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import control as ct
+import numpy as np
+from scipy.linalg import expm
+
+from ..model.equilibria import Equilibrium, equilibrium
+from ..model.linearize import linearize
+from ..model.model import Model
+from .analysis import controllable_subspace
+
+__all__ = ["LQRDesign", "UncontrollableError", "lqr_balance", "wrap_state_error"]
+
+
+class UncontrollableError(ValueError):
+    """LQR was asked to stabilize a configuration whose unstable or drifting modes the inputs cannot reach."""
+
+
+@dataclass(frozen=True)
+class LQRDesign:
+    """A state-feedback gain about an equilibrium: ``u = u_eq - K (x - x_eq)``.
+
+    Attributes
+    ----------
+    K : ndarray, shape (m, nx)
+        Gain on the state error [N.m per state unit]; m = 2 for ``full``, else 1.
+    x_eq : ndarray, shape (nx,)
+    u_eq : ndarray, shape (2,)
+        Holding torques (tau1, tau2) [N.m] at the equilibrium.
+    actuation : str
+    input_indices : tuple of int
+        Which of (tau1, tau2) the rows of K drive.
+    Q : ndarray, shape (nx, nx)
+    R : ndarray, shape (m, m)
+    dt : float or None
+        Sample time [s] of a discrete design (``None``: continuous).
+    closed_loop_eigenvalues : ndarray of complex, shape (nx,)
+        Of A - B K [1/s] (continuous) or of the ZOH-sampled loop (discrete, |z| < 1 is stable).
+    uncontrollable_eigenvalues : ndarray of complex
+        Modes the inputs cannot move (empty when controllable).
+    equilibrium : str
+    state_names, input_names : tuple of str
+    kind : str
+    """
+
+    K: np.ndarray
+    x_eq: np.ndarray
+    u_eq: np.ndarray
+    actuation: str
+    input_indices: tuple[int, ...]
+    Q: np.ndarray
+    R: np.ndarray
+    dt: float | None
+    closed_loop_eigenvalues: np.ndarray
+    uncontrollable_eigenvalues: np.ndarray
+    equilibrium: str
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    kind: str
+
+    def torque(self, x: Any) -> np.ndarray:
+        """Full torque vector (tau1, tau2) [N.m] commanded at state ``x`` (angles compared modulo 2 pi)."""
+        dx = wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.state_names)
+        u = self.u_eq.copy()
+        u[list(self.input_indices)] += -self.K @ dx
+        return u
+
+    def controller(self, u_max: float | None = None) -> Callable[[float, np.ndarray], np.ndarray]:
+        """Feedback ``u(t, x) -> (tau1, tau2)`` for :func:`pendulab.simulate`, saturated at ``|tau| <= u_max`` [N.m]."""
+        if u_max is not None and not (np.isfinite(u_max) and u_max > 0):
+            raise ValueError(f"u_max must be a positive torque in N.m or None, got {u_max!r}")
+
+        def feedback(_t: float, x: np.ndarray) -> np.ndarray:
+            u = self.torque(x)
+            return u if u_max is None else np.clip(u, -u_max, u_max)
+
+        return feedback
+
+
+def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray:
+    """Wrap the angle entries of a state difference into (-pi, pi]."""
+    dx = np.array(dx, dtype=float)
+    for i, n in enumerate(state_names):
+        if n.startswith("theta"):
+            dx[..., i] = -((-dx[..., i] + np.pi) % (2 * np.pi) - np.pi)
+    return dx
+
+
+def _weight(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
+    if W is None:
+        return np.eye(n)
+    W = np.atleast_2d(np.asarray(W, dtype=float))
+    if W.shape == (1, n) or W.shape == (n, 1):
+        W = np.diag(W.ravel())
+    if W.shape != (n, n) or not np.all(np.isfinite(W)):
+        raise ValueError(f"{name} must be a finite ({n}, {n}) matrix or a length-{n} diagonal, got shape {W.shape}")
+    if not np.allclose(W, W.T, rtol=1e-12, atol=1e-12 * np.max(np.abs(W))):
+        raise ValueError(f"{name} must be symmetric")
+    lo = np.linalg.eigvalsh(W).min()
+    if (definite and lo <= 0) or lo < -1e-12 * max(1.0, np.abs(W).max()):
+        kind = "positive definite" if definite else "positive semi-definite"
+        raise ValueError(f"{name} must be {kind}; its smallest eigenvalue is {lo:.3g}")
+    return W
+
+
+def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    n, m = B.shape
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = A
+    M[:n, n:] = B
+    E = expm(M * dt)
+    return E[:n, :n], E[:n, n:]
+
+
+def lqr_balance(
+    model: Model,
+    actuation: str = "full",
+    Q: Any = None,
+    R: Any = None,
+    dt: float | None = None,
+    *,
+    at: str | Equilibrium = "up-up",
+) -> LQRDesign:
+    """Linear-quadratic regulator about an equilibrium (default: balancing upright).
+
+    Minimizes ``int (dx' Q dx + du' R du) dt`` (continuous) or the sampled sum
+    (discrete, zero-order hold with sample time ``dt``) for the exact
+    linearization.
+
+    Parameters
+    ----------
+    model : Model
+    actuation : {"full", "pendubot", "acrobot"}
+    Q : array_like, shape (nx, nx) or (nx,), optional
+        State weight (diagonal if 1-D); default identity.
+    R : array_like, shape (m, m) or (m,), optional
+        Input weight [1/(N.m)^2]; default identity.
+    dt : float, optional
+        Sample time [s] for a discrete gain (co-simulation); ``None`` for continuous.
+    at : str or Equilibrium
+        Equilibrium name (zero torque) or a solved :class:`Equilibrium`.
+
+    Returns
+    -------
+    LQRDesign
+
+    Raises
+    ------
+    ValueError
+        Unknown actuation or equilibrium name; bad Q, R or dt.
+    UncontrollableError
+        An uncontrollable mode is unstable or a drift (the configuration cannot be balanced).
+    """
+    eq = equilibrium(model, at) if isinstance(at, str) else at
+    if not isinstance(eq, Equilibrium):
+        raise ValueError(f"at must be an equilibrium name or an Equilibrium, got {at!r}")
+    if dt is not None and not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive sample time in seconds or None, got {dt!r}")
+    lin = linearize(model, eq, inputs=actuation)
+    n, m = lin.B.shape
+    Qm = _weight(Q, n, "Q", definite=False)
+    Rm = _weight(R, m, "R", definite=True)
+    Qc, Qu = controllable_subspace(lin.A, lin.B)
+    unc = np.linalg.eigvals(Qu.T @ lin.A @ Qu) if Qu.shape[1] else np.zeros(0, dtype=complex)
+    scale = max(1.0, float(np.max(np.abs(lin.eigenvalues))))
+    bad = unc[(unc.real > 1e-7 * scale) | (np.abs(unc) <= 1e-7 * scale)]
+    if bad.size:
+        raise UncontrollableError(
+            f"uncontrollable configuration: {model.kind} model with actuation {actuation!r} at {eq.name!r} has "
+            f"controllability rank {Qc.shape[1]} of {n}, and the uncontrollable eigenvalue(s) "
+            f"{np.round(bad, 6).tolist()} [1/s] are unstable or a drift; LQR cannot stabilize them "
+            f"(try another actuation or equilibrium)"
+        )
+    Ar, Br, Qr = Qc.T @ lin.A @ Qc, Qc.T @ lin.B, Qc.T @ Qm @ Qc
+    if dt is None:
+        Kr, _, _ = ct.lqr(Ar, Br, Qr, Rm)
+        K = np.asarray(Kr) @ Qc.T
+        cl = np.linalg.eigvals(lin.A - lin.B @ K)
+    else:
+        Ad, Bd = _zoh(Ar, Br, float(dt))
+        Kr, _, _ = ct.dlqr(Ad, Bd, Qr, Rm)
+        K = np.asarray(Kr) @ Qc.T
+        Afd, Bfd = _zoh(lin.A, lin.B, float(dt))
+        cl = np.linalg.eigvals(Afd - Bfd @ K)
+    return LQRDesign(
+        K=K,
+        x_eq=eq.x.copy(),
+        u_eq=eq.u.copy(),
+        actuation=actuation,
+        input_indices=lin.input_indices,
+        Q=Qm,
+        R=Rm,
+        dt=None if dt is None else float(dt),
+        closed_loop_eigenvalues=cl,
+        uncontrollable_eigenvalues=unc,
+        equilibrium=eq.name,
+        state_names=lin.state_names,
+        input_names=lin.input_names,
+        kind=model.kind,
+    )

@@ -1,0 +1,271 @@
+"""Exact linearization: A, B, C, D from CasADi Jacobians at any operating point.
+
+The Jacobians come from the model's own CasADi Functions (``rhs``, ``outputs``)
+evaluated on fresh symbols, so no physics is re-typed here. Outputs are chosen
+by name: model states, model outputs (positions, energy, spring stretch) or the
+groups ``"states"``, ``"positions"``, ``"energy"``, ``"stretch"``, ``"outputs"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .equilibria import Equilibrium
+from .model import ACTUATIONS, INPUT_NAMES, Model, _functions, make_model
+
+__all__ = [
+    "Linearization",
+    "OutputSpec",
+    "linearize",
+    "linearize_along",
+    "resolve_outputs",
+    "check_actuation",
+    "operating_point",
+    "selected_outputs",
+]
+
+OutputSpec = str | Sequence[str]
+
+_OUTPUT_GROUPS = ("states", "positions", "energy", "stretch", "outputs")
+
+
+@dataclass(frozen=True)
+class Linearization:
+    """Linear model ``d(dx)/dt = A dx + B du``, ``dy = C dx + D du`` about an operating point.
+
+    ``dx = x - x0``, ``du`` the actuated torques minus their operating values,
+    ``dy = y - y0``.
+
+    Attributes
+    ----------
+    A : ndarray, shape (nx, nx)
+    B : ndarray, shape (nx, nu_act)
+        Columns are the actuated inputs only (``input_names``).
+    C : ndarray, shape (ny, nx)
+    D : ndarray, shape (ny, nu_act)
+    x0 : ndarray, shape (nx,)
+        Operating-point state (SI units).
+    u0 : ndarray, shape (2,)
+        Operating-point torques (tau1, tau2) [N.m], both inputs even when only
+        one is actuated.
+    y0 : ndarray, shape (ny,)
+        Outputs at the operating point.
+    state_names, input_names, output_names : tuple of str
+    actuation : {"full", "pendubot", "acrobot"}
+    kind : {"rigid", "elastic"}
+    input_indices : tuple of int
+        Positions of the actuated inputs in (tau1, tau2).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    x0: np.ndarray
+    u0: np.ndarray
+    y0: np.ndarray
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    actuation: str
+    kind: str
+    input_indices: tuple[int, ...]
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """Eigenvalues of A [1/s], shape (nx,)."""
+        return np.linalg.eigvals(self.A)
+
+    def __repr__(self) -> str:
+        return (
+            f"Linearization({self.kind}, actuation={self.actuation!r}, states={list(self.state_names)}, "
+            f"inputs={list(self.input_names)}, outputs={list(self.output_names)})"
+        )
+
+
+def check_actuation(actuation: Any) -> tuple[int, ...]:
+    """Indices into (tau1, tau2) driven by ``actuation``; ValueError for an unknown name."""
+    if not isinstance(actuation, str) or actuation not in ACTUATIONS:
+        raise ValueError(f"unknown actuation {actuation!r}; expected one of {list(ACTUATIONS)}")
+    return ACTUATIONS[actuation]
+
+
+def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
+    """Expand an output specification into signal names.
+
+    Parameters
+    ----------
+    model : Model
+    outputs : str or sequence of str
+        ``"states"`` (full state), ``"positions"`` (x1, y1, x2, y2),
+        ``"energy"``, ``"stretch"`` (elastic only), ``"outputs"`` (all model
+        outputs), or a list of state/output names.
+
+    Returns
+    -------
+    tuple of str
+        Signal names, each a model state or model output.
+    """
+    groups = {
+        "states": model.state_names,
+        "positions": ("x1", "y1", "x2", "y2"),
+        "energy": ("energy",),
+        "outputs": model.output_names,
+    }
+    if model.kind == "elastic":
+        groups["stretch"] = ("stretch1", "stretch2")
+    if isinstance(outputs, str):
+        if outputs in groups:
+            return tuple(groups[outputs])
+        if outputs == "stretch":
+            raise ValueError("outputs='stretch' needs the elastic model; the rigid model has no springs")
+        names: Sequence[str] = (outputs,)
+    else:
+        try:
+            names = tuple(outputs)
+        except TypeError as exc:
+            raise ValueError(f"outputs must be one of {list(_OUTPUT_GROUPS)} or a list of signal names, got {outputs!r}") from exc
+    known = model.state_names + model.output_names
+    bad = [n for n in names if not isinstance(n, str) or n not in known]
+    if bad or not names:
+        raise ValueError(
+            f"outputs {outputs!r}: unknown signal(s) {bad}; expected one of {list(_OUTPUT_GROUPS)} "
+            f"or names among states {list(model.state_names)} and outputs {list(model.output_names)}"
+        )
+    if len(set(names)) != len(names):
+        raise ValueError(f"outputs {outputs!r} names a signal twice")
+    return tuple(names)
+
+
+@cache
+def _output_function(kind: str, names: tuple[str, ...]) -> ca.Function:
+    """CasADi Function ``(y, C, D)(x, u, p)`` of the named signals (built once per kind and names)."""
+    functions = _functions(kind)
+    rhs = functions["rhs"]
+    x = ca.SX.sym("x", rhs.size1_in(0))
+    u = ca.SX.sym("u", rhs.size1_in(1))
+    p = ca.SX.sym("p", rhs.size1_in(2))
+    probe = make_model(kind)
+    yall = functions["outputs"](x, u, p)
+    rows = [x[probe.state_names.index(n)] if n in probe.state_names else yall[probe.output_names.index(n)] for n in names]
+    y = ca.vertcat(*rows)
+    return ca.Function("y_sel", [x, u, p], [y, ca.jacobian(y, x), ca.jacobian(y, u)], ["x", "u", "p"], ["y", "C", "D"])
+
+
+def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...], ca.Function]:
+    """Resolved output names and the CasADi Function ``(y, C, D)(x, u, p)`` for them."""
+    names = resolve_outputs(model, outputs)
+    return names, _output_function(model.kind, names)
+
+
+def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """Check an operating point: an Equilibrium (its own u unless ``u`` is given) or arrays.
+
+    Returns
+    -------
+    x : ndarray, shape (nx,)
+    u : ndarray, shape (2,) [N.m]
+    """
+    if isinstance(x, Equilibrium):
+        if u is None:
+            u = x.u
+        x = x.x
+    xv = model.check_state(x, "x")
+    if xv.ndim != 1:
+        raise ValueError(f"x must be a single state of shape ({model.nx},), got shape {xv.shape}")
+    uv = model.check_input(u, "u")
+    if uv.ndim != 1:
+        raise ValueError(f"u must be a single input (tau1, tau2) of shape ({model.nu},), got shape {uv.shape}")
+    return xv, uv
+
+
+def linearize(
+    model: Model,
+    x: Any,
+    u: Any = None,
+    inputs: str = "full",
+    outputs: OutputSpec = "states",
+) -> Linearization:
+    """Exact linearization of the model about an operating point.
+
+    Parameters
+    ----------
+    model : Model
+    x : array_like, shape (nx,), or Equilibrium
+        Operating-point state in ``model.state_names`` order (SI units). Need
+        not be an equilibrium (time-varying linearization along a trajectory).
+    u : array_like, shape (2,), optional
+        Operating-point torques (tau1, tau2) [N.m]; default zero, or the
+        equilibrium's own torques when ``x`` is an Equilibrium.
+    inputs : {"full", "pendubot", "acrobot"}
+        Which torques are inputs of the linear model (columns of B and D).
+    outputs : str or sequence of str
+        ``"states"`` (default), ``"positions"``, ``"energy"``, ``"stretch"``,
+        ``"outputs"`` or a list of state/output names.
+
+    Returns
+    -------
+    Linearization
+        A (nx, nx), B (nx, m), C (ny, nx), D (ny, m) with m = 2 for ``full``,
+        1 otherwise; signal names attached.
+
+    Raises
+    ------
+    ValueError
+        Unknown actuation or output name, operating point of the wrong size or
+        non-finite.
+    """
+    idx = check_actuation(inputs)
+    xv, uv = operating_point(model, x, u)
+    names, yfun = selected_outputs(model, outputs)
+    A, B = model.functions["jac_rhs"](xv, uv, model.p)
+    y, C, D = yfun(xv, uv, model.p)
+    cols = list(idx)
+    return Linearization(
+        A=np.asarray(A, dtype=float),
+        B=np.asarray(B, dtype=float)[:, cols],
+        C=np.asarray(C, dtype=float),
+        D=np.asarray(D, dtype=float)[:, cols],
+        x0=xv,
+        u0=uv,
+        y0=np.asarray(y, dtype=float).ravel(),
+        state_names=model.state_names,
+        input_names=tuple(INPUT_NAMES[i] for i in idx),
+        output_names=names,
+        actuation=inputs,
+        kind=model.kind,
+        input_indices=tuple(idx),
+    )
+
+
+def linearize_along(model: Model, X: Any, U: Any = None, inputs: str = "full") -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians A(t_k), B(t_k) along a trajectory in one vectorized CasADi call.
+
+    Parameters
+    ----------
+    model : Model
+    X : array_like, shape (N, nx)
+        States along the trajectory.
+    U : array_like, shape (N, 2) or (2,), optional
+        Torques (tau1, tau2) [N.m]; default zero.
+    inputs : {"full", "pendubot", "acrobot"}
+
+    Returns
+    -------
+    A : ndarray, shape (N, nx, nx)
+    B : ndarray, shape (N, nx, m)
+    """
+    idx = list(check_actuation(inputs))
+    Xv = np.atleast_2d(model.check_state(X, "X"))
+    Uv = np.broadcast_to(model.check_input(U, "U"), (Xv.shape[0], model.nu))
+    N, nx = Xv.shape
+    A, B = model.functions["jac_rhs"].map(N)(Xv.T, np.ascontiguousarray(Uv.T), model.p)
+    A = np.asarray(A, dtype=float).reshape(nx, N, nx).transpose(1, 0, 2)
+    B = np.asarray(B, dtype=float).reshape(nx, N, model.nu).transpose(1, 0, 2)
+    return A, B[:, :, idx]

@@ -1,0 +1,93 @@
+"""Geometry shared by the still figures and the animation: links, springs, runs."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..model.model import Model
+from ..model.trajectory import Trajectory
+
+__all__ = ["Run", "as_runs", "link_polylines", "spring_polyline", "view_limits", "RUN_COLORS", "run_colors"]
+
+#: Line colours of the runs, in order (rigid first in the demo); repeated beyond four runs.
+RUN_COLORS = ("tab:blue", "tab:red", "tab:green", "tab:purple")
+
+
+def run_colors(n: int) -> list[str]:
+    """Colours of ``n`` runs, cycling through :data:`RUN_COLORS`."""
+    return [RUN_COLORS[i % len(RUN_COLORS)] for i in range(n)]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One simulated pendulum: its model and trajectory, with a label for legends."""
+
+    label: str
+    model: Model
+    traj: Trajectory
+
+    @cached_property
+    def positions(self) -> np.ndarray:
+        """x1, y1, x2, y2 [m] at every output time, shape (N, 4)."""
+        return np.column_stack([self.traj[n] for n in ("x1", "y1", "x2", "y2")])
+
+
+def as_runs(runs: Mapping[str, tuple[Model, Trajectory]] | list[Run] | tuple[Run, ...]) -> tuple[Run, ...]:
+    """Normalize ``{label: (model, traj)}`` or a sequence of :class:`Run` to a tuple of runs."""
+    if isinstance(runs, Mapping):
+        out = tuple(Run(label, model, traj) for label, (model, traj) in runs.items())
+    else:
+        out = tuple(runs)
+    if not out or not all(isinstance(r, Run) for r in out):
+        raise ValueError(f"runs must be a non-empty mapping label -> (model, trajectory) or a list of Run, got {runs!r}")
+    return out
+
+
+def spring_polyline(p0: np.ndarray, p1: np.ndarray, coils: int = 7, width: float = 0.05) -> np.ndarray:
+    """Zig-zag from ``p0`` to ``p1`` (straight ends), shape (M, 2) [m].
+
+    The zig-zag keeps its width and coil count, so a longer spring looks
+    stretched and a shorter one compressed.
+    """
+    p0 = np.asarray(p0, dtype=float)
+    p1 = np.asarray(p1, dtype=float)
+    d = p1 - p0
+    length = float(np.hypot(*d))
+    if length == 0.0:
+        return np.vstack([p0, p1])
+    along = d / length
+    normal = np.array([-along[1], along[0]])
+    s = np.concatenate([[0.0, 0.15], np.linspace(0.15, 0.85, 2 * coils + 1)[1:-1], [0.85, 1.0]])
+    offset = np.zeros_like(s)
+    offset[2:-2] = width * np.where(np.arange(len(s) - 4) % 2 == 0, 1.0, -1.0)
+    return p0 + np.outer(s * length, along) + np.outer(offset, normal)
+
+
+def link_polylines(model: Model, pos: np.ndarray) -> list[np.ndarray]:
+    """Polylines of both links for one configuration ``pos = (x1, y1, x2, y2)`` [m].
+
+    Rigid links are straight; elastic links are drawn as springs.
+    """
+    origin = np.zeros(2)
+    b1, b2 = np.asarray(pos[:2], dtype=float), np.asarray(pos[2:4], dtype=float)
+    if model.kind == "elastic":
+        return [spring_polyline(origin, b1), spring_polyline(b1, b2)]
+    return [np.vstack([origin, b1]), np.vstack([b1, b2])]
+
+
+def view_limits(runs: tuple[Run, ...], margin: float = 0.15) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Axis limits ``(xlim, ylim)`` [m] holding the pivot and every bob of every run.
+
+    Horizontally symmetric about the pivot; vertically from the lowest bob to
+    the highest point reached (at least the pivot), so a pendulum that never
+    rises above its pivot does not waste half the picture.
+    """
+    pos = np.vstack([r.positions for r in runs])
+    half = float(np.max(np.abs(pos[:, [0, 2]]))) + margin
+    low = float(np.min(pos[:, [1, 3]])) - margin
+    high = max(0.0, float(np.max(pos[:, [1, 3]]))) + margin
+    return (-half, half), (low, high)

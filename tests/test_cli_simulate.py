@@ -1,0 +1,105 @@
+"""``pendulab simulate``: files, --set, summaries, and one-line errors on bad input."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import pendulab as pl
+from pendulab.cli import main
+
+
+def read_csv(path):
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def test_rigid_csv_columns_set_and_energy(tmp_path, capsys):
+    out = tmp_path / "traj.csv"
+    args = ["simulate", "--model", "rigid", "--set", "theta1=2", "--set", "theta2=2", "--set", "m2=0.5"]
+    args += ["--t-final", "2", "--dt", "0.02", "--method", "cvodes-adams", "--rtol", "1e-11", "--atol", "1e-11"]
+    assert main([*args, "--out", str(out)]) == 0
+    header, data = read_csv(out)
+    model = pl.rigid(m2=0.5)
+    assert header == ["t", *model.state_names, *model.input_names, *model.output_names]
+    assert data.shape == (101, len(header)) and data[-1, 0] == 2.0
+    x = data[:, 1 : 1 + model.nx]
+    # --set reached the initial state, and the parameter: the energy column is that of m2 = 0.5 kg.
+    np.testing.assert_array_equal(x[0], [2.0, 2.0, 0.0, 0.0])
+    energy = data[:, header.index("energy")]
+    # Same CasADi function on the values printed with repr(): equal to round-off.
+    np.testing.assert_allclose(energy, model.energy(x), rtol=0, atol=1e-12)
+    assert abs(energy[0] - pl.rigid().energy(x[0])) > 1.0  # m2 = 1 kg would give a different energy
+    # Chaotic start, undamped: energy conserved; CVODES Adams at 1e-11 keeps it to ~1e-9 relative over 2 s.
+    assert np.max(np.abs(energy - energy[0])) < 1e-8 * abs(energy[0])
+    table = capsys.readouterr().out
+    assert "energy drift [J]" in table and "cvodes-adams" in table
+
+
+def test_scene_set_npz_json(tmp_path, capsys):
+    out = tmp_path / "traj.npz"
+    args = ["simulate", "--scene", "elastic_soft", "--set", "k1=800", "--t-final", "0.5", "--json", "--out", str(out)]
+    assert main(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    data = np.load(out)
+    x = data["x"]
+    model = pl.elastic(k1=800.0, k2=100.0)
+    # r1 is not stated in the scene: it starts at the static hanging length of the NEW stiffness.
+    assert x[0, 2] == pytest.approx(1.0 + 2 * 9.81 / 800.0, abs=1e-15)
+    assert summary["params"]["k1"] == 800.0 and summary["model"] == "elastic"
+    e = model.energy(x)
+    assert summary["energy_initial_J"] == pytest.approx(e[0], abs=1e-12)
+    # The summary's drift is the CSV's: same samples, same definition.
+    assert summary["energy_drift_J"] == pytest.approx(np.max(np.abs(e - e[0])), rel=1e-9, abs=1e-15)
+    assert summary["energy_drift_J"] < 1e-6  # rtol = atol = 1e-10 in the scene, 0.5 s
+    stretch = model.stretch(x)
+    assert summary["max_stretch_m"] == pytest.approx(np.max(np.abs(stretch)), rel=1e-12)
+    assert summary["n_rhs"] > 0 and summary["final_state"]["theta1"] == pytest.approx(x[-1, 0], abs=1e-15)
+
+
+def test_plot_writes_figures(tmp_path, capsys):
+    assert main(["simulate", "--scene", "rigid_regular", "--t-final", "1", "--plot", str(tmp_path / "figs")]) == 0
+    pngs = sorted(p.name for p in (tmp_path / "figs").glob("*.png"))
+    # A rigid run has no spring-stretch figure; the six others are written and non-trivial.
+    assert pngs == sorted(
+        ["fig2_snapshots.png", "fig3_angles.png", "fig4_angles_compare.png", "fig5_positions.png", "fig6_phase.png", "energy.png"]
+    )
+    assert all((tmp_path / "figs" / p).stat().st_size > 10_000 for p in pngs)
+
+
+BAD = [
+    (["--model", "rigid", "--set", "k1=5"], "'k1'"),
+    (["--model", "rigid", "--set", "theta1=abc"], "'abc'"),
+    (["--model", "rigid", "--set", "theta1"], "name=value"),
+    (["--model", "rigid", "--set", "theta1=nan"], "finite"),
+    (["--model", "rigid", "--set", "m1=-1"], "'m1'"),
+    (["--model", "elastic", "--set", "k2=0"], "'k2'"),
+    (["--model", "flexible"], "'flexible'"),
+    (["--scene", "no_such_scene"], "'no_such_scene'"),
+    (["--model", "rigid", "--t-final", "-1"], "--t-final '-1'"),
+    (["--model", "rigid", "--dt", "zero"], "--dt 'zero'"),
+    (["--model", "rigid", "--rtol", "0"], "--rtol '0'"),
+    (["--model", "rigid", "--method", "euler"], "'euler'"),
+    (["--model", "rigid", "--out", "traj.txt"], "'traj.txt'"),
+    ([], "exactly one of"),
+    (["--scene", "rigid_regular", "--model", "rigid"], "exactly one of"),
+]
+
+
+@pytest.mark.parametrize(("args", "fragment"), BAD, ids=[" ".join(a) or "none" for a, _ in BAD])
+def test_bad_input_one_line_exit_2(args, fragment, capsys, tmp_path):
+    assert main(["simulate", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("pendulab simulate: error:") and fragment in err[-1]
+    # At most a progress line precedes the error; the error itself is one line.
+    assert len(err) <= 2
+
+
+def test_bad_scene_file_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[model]\nkind = 'rigid'\n[simulation]\ntfinal = 3.0\n")
+    assert main(["simulate", "--scene", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.toml" in err[0] and "[simulation] tfinal = 3.0" in err[0]
