@@ -38,7 +38,8 @@ from typing import Any, Protocol
 import numpy as np
 from scipy.linalg import expm
 
-from ..model.model import Model, elastic, rigid
+from ..model.counterpart import rigid_counterpart
+from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
 from ..model.simulate import simulate
 from ..model.trajectory import Trajectory
@@ -48,7 +49,6 @@ __all__ = ["SceneLike", "LevelResult", "HierarchyReport", "ModelLevel", "check_s
 LEVELS: tuple[str, ...] = ("linearized", "rigid", "rigid+quasi-static", "elastic")
 #: Measured costs within this factor of the cheapest count as a tie (simpler model wins).
 TIE_RATIO = 1.5
-_RIGID_SHARED = ("m1", "m2", "L1", "L2", "g", "b1", "b2")
 
 
 class SceneLike(Protocol):
@@ -149,13 +149,6 @@ class HierarchyReport:
 
 
 # -- levels -------------------------------------------------------------------
-def rigid_counterpart(model: Model) -> Model:
-    """Rigid pendulum with the same m1, m2, L1, L2, g, b1, b2 (point masses at the link ends)."""
-    if model.kind == "rigid":
-        return model
-    return rigid(**{n: getattr(model.params, n) for n in _RIGID_SHARED})
-
-
 def _angles_rates(model: Model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     names = model.state_names
     th = x[..., [names.index("theta1"), names.index("theta2")]]

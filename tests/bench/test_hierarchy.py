@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from pendulab.bench._scene import load
 from pendulab.bench.hierarchy import check_scene, choose_model
 from pendulab.cli import main
+from pendulab.scenes import load_scene as load
 
 
 def _report(name):
