@@ -84,8 +84,38 @@ def _hierarchy(args: argparse.Namespace) -> int:
         lines.append(f"| {k:.0e} | " + " | ".join(cells) + " |")
     (out / "hierarchy_table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
-    print(f"wrote {path} and {out / 'hierarchy_table.md'}")
+    scene_lines = _shipped_scene_table(quick=args.quick)
+    (out / "hierarchy_scenes.md").write_text("\n".join(scene_lines) + "\n")
+    print("\n".join(scene_lines))
+    print(f"wrote {path}, {out / 'hierarchy_table.md'} and {out / 'hierarchy_scenes.md'}")
     return 0
+
+
+def _shipped_scene_table(quick: bool) -> list[str]:
+    """Markdown table: the hierarchy's choice for every shipped scene that states a tolerance."""
+    from ..bench.hierarchy import check_scene
+    from ..scenes import list_scenes, load_scene
+
+    lines = [
+        "| scene | model | tolerance | linearized | rigid | rigid+quasi-static | elastic (reference) | chosen |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name in list_scenes():
+        scene = load_scene(name)
+        if scene.tolerance is None:
+            continue
+        rep = check_scene(scene, repeats=1 if quick else 3)
+        by = {lv.name: lv for lv in rep.levels}
+        cells = [
+            f"{by[n].error:.1e} / {by[n].wall_time * 1e3:.0f} ms" if n in by else "-"
+            for n in ("linearized", "rigid", "rigid+quasi-static")
+        ]
+        ref = by[rep.levels[-1].name]
+        lines.append(
+            f"| {name} | {scene.model.kind} | {rep.tolerance:g} | " + " | ".join(cells) + f" | {ref.wall_time * 1e3:.0f} ms"
+            f" | **{rep.chosen}** |"
+        )
+    return lines
 
 
 def _references(args: argparse.Namespace) -> int:
