@@ -42,9 +42,36 @@ def _work_precision(args: argparse.Namespace) -> int:
         for metric in ("grid_error", "final_error", "energy_drift")
     ]
     figs.append(wp.plot_work_precision(rows, out / "work_precision_grid_error_cpu.png", "grid_error", time_metric="cpu_median"))
+    md = out / "work_precision_fastest.md"
+    md.write_text(_fastest_markdown(rows))
+    figs.append(md)
     n_ok = sum(r.status == "ok" for r in rows)
     print(f"{n_ok}/{len(rows)} runs ok; wrote {csv_path} and {', '.join(str(f) for f in figs)}")
     return 0
+
+
+def _fastest_markdown(rows: list) -> str:
+    """Per case: the fastest method reaching each error level (grid error), with the runner-up."""
+    from ..bench import workprecision as wp
+
+    parts = []
+    for case in dict.fromkeys(r.case for r in rows):
+        parts += [
+            f"### {case}",
+            "",
+            "| error level | fastest method (setting) | achieved error | median wall time | runner-up (x slower) |",
+            "|---|---|---|---|---|",
+        ]
+        for e in wp.fastest_table(rows, case):
+            if e["method"] is None:
+                parts.append(f"| {e['level']:.0e} | none reached it | | | |")
+                continue
+            setting = f"{'rtol' if e['sweep'] == 'tol' else 'h'} = {e['setting']:g}"
+            runner = f"{e['runner_up']} ({e['ratio']:.1f}x)" if "runner_up" in e else "-"
+            wall = f"{e['wall_median'] * 1e3:.1f} ms"
+            parts.append(f"| {e['level']:.0e} | {e['method']} ({setting}) | {e['grid_error']:.1e} | {wall} | {runner} |")
+        parts.append("")
+    return "\n".join(parts)
 
 
 def _stability(args: argparse.Namespace) -> int:
@@ -97,7 +124,8 @@ def _shipped_scene_table(quick: bool) -> list[str]:
     from ..scenes import list_scenes, load_scene
 
     lines = [
-        "| scene | model | tolerance | linearized | rigid | rigid+quasi-static | elastic (reference) | chosen |",
+        "| scene | model | tolerance | linearized: error / cost | rigid | rigid+quasi-static"
+        " | scene model (reference) cost | chosen |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for name in list_scenes():
