@@ -32,7 +32,7 @@ name                 order  implicit   stability
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -289,7 +289,3 @@ def run_fixed(
     stats = {"n_steps": n_steps, "n_rhs": method.stages * n_steps if method.explicit else None, "step": h}
     return X, U, stats
 
-
-def method_names(explicit: bool | None = None) -> Sequence[str]:
-    """Names of the fixed-step methods, optionally only the explicit or implicit ones."""
-    return [n for n, m in FIXED_METHODS.items() if explicit is None or m.explicit == explicit]
