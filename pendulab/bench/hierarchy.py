@@ -325,15 +325,21 @@ def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None =
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
     levels = levels_for(scene.model)
-    runs = [_timed(lambda lv=lv: lv.run(scene), repeats) for lv in levels]
-    ref = _signals(scene, runs[-1][0])
+    X_ref, wall_ref = _timed(lambda: levels[-1].run(scene), repeats)  # a failing reference propagates
+    ref = _signals(scene, X_ref)
     results = []
-    for lv, (X, wall) in zip(levels, runs, strict=False):
+    for lv in levels[:-1]:
+        try:
+            X, wall = _timed(lambda lv=lv: lv.run(scene), repeats)
+        except RuntimeError as exc:  # e.g. no quasi-static solution, or an integrator failure
+            errors = dict.fromkeys(scene.outputs, math.inf)
+            results.append(LevelResult(lv.name, math.inf, errors, math.nan, False, f"failed: {str(exc).splitlines()[0]}"))
+            continue
         sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
         errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
         err = max(errors.values())
-        note = "reference" if lv is levels[-1] else ""
-        results.append(LevelResult(lv.name, err, errors, wall, err <= tol, note))
+        results.append(LevelResult(lv.name, err, errors, wall, err <= tol))
+    results.append(LevelResult(levels[-1].name, 0.0, dict.fromkeys(scene.outputs, 0.0), wall_ref, True, "reference"))
     ok = [r for r in results if r.within]
     fastest = min(r.wall_time for r in ok)
     # Timings are noisy on a shared machine: costs within TIE_RATIO of the fastest

@@ -294,6 +294,8 @@ def read_csv(path: str | Path) -> list[Row]:
     return out
 
 
+# tab20 comes in dark/light pairs: use the dark ones first so neighbours differ.
+_COLOR_ORDER = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19)
 _TIME_LABEL = {"wall_median": "median wall time [s]", "cpu_median": "median CPU time [s]"}
 _METRIC_LABEL = {
     "grid_error": "achieved error: max |x - x_ref| over the output grid",
@@ -332,7 +334,8 @@ def plot_work_precision(
             xs = [max(getattr(r, metric), 1e-17) for r in pts]
             ys = [getattr(r, time_metric) for r in pts]
             ls = "--" if pts[0].sweep == "step" else "-"
-            ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=cmap(i % 20), ms=4, lw=1, label=m)
+            color = cmap(_COLOR_ORDER[i % len(_COLOR_ORDER)])
+            ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=color, ms=4, lw=1, label=m)
         if metric != "energy_drift" and math.isfinite(acc):
             ax.axvline(acc, color="k", ls=":", lw=1)
             ax.text(acc, ax.get_ylim()[1], " reference\n accuracy", va="top", fontsize=7)

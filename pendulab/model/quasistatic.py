@@ -24,21 +24,24 @@ __all__ = ["quasi_static_state", "quasi_static_lengths"]
 
 
 @cache
-def _solver() -> ca.Function:
-    """r*(theta, omega, u, p) for the elastic model via Newton on the radial accelerations."""
+def _solver() -> tuple[ca.Function, ca.Function]:
+    """r*(r0, theta, omega, u, p) by Newton on the radial accelerations, and that residual."""
     from .model import _functions
 
     f = _functions("elastic")["rhs"]
+    npar = f.size1_in(2)
     r = ca.SX.sym("r", 2)
-    theta, omega, u, p = ca.SX.sym("theta", 2), ca.SX.sym("omega", 2), ca.SX.sym("u", 2), ca.SX.sym("p", f.size1_in(2))
-    x = ca.vertcat(theta, r, omega, ca.SX.zeros(2))
-    radial_acc = f(x, u, p)[6:8]
+    theta, omega, u, p = ca.SX.sym("theta", 2), ca.SX.sym("omega", 2), ca.SX.sym("u", 2), ca.SX.sym("p", npar)
+    radial_acc = f(ca.vertcat(theta, r, omega, ca.SX.zeros(2)), u, p)[6:8]
     G = ca.Function("qs_residual", [r, ca.vertcat(theta, omega, u, p)], [radial_acc])
-    rf = ca.rootfinder("qs_newton", "newton", G, {"abstol": 1e-12, "max_iter": 50, "error_on_fail": True})
+    # Failure is detected from the residual afterwards, so a batch can name the point that failed.
+    rf = ca.rootfinder("qs_newton", "newton", G, {"abstol": 1e-12, "max_iter": 50, "error_on_fail": False})
     rm0 = ca.MX.sym("r0", 2)
-    thm, omm, um, pm = ca.MX.sym("theta", 2), ca.MX.sym("omega", 2), ca.MX.sym("u", 2), ca.MX.sym("p", f.size1_in(2))
+    thm, omm, um, pm = ca.MX.sym("theta", 2), ca.MX.sym("omega", 2), ca.MX.sym("u", 2), ca.MX.sym("p", npar)
     rs = rf(rm0, ca.vertcat(thm, omm, um, pm))
-    return ca.Function("quasi_static_r", [rm0, thm, omm, um, pm], [rs], ["r0", "theta", "omega", "u", "p"], ["r"])
+    solve = ca.Function("quasi_static_r", [rm0, thm, omm, um, pm], [rs], ["r0", "theta", "omega", "u", "p"], ["r"])
+    residual = ca.Function("qs_res", [r, theta, omega, u, p], [radial_acc])
+    return solve, residual
 
 
 def _check_elastic(model: Any) -> None:
@@ -78,13 +81,18 @@ def quasi_static_lengths(model: Any, theta: Any, omega: Any, u: Any = None) -> n
     uc = model.check_input(u, "u")
     r0 = model.rest_state()[2:4]
     n = th.shape[0]
-    F = _solver() if n == 1 else _solver().map(n)
-    try:
-        r = np.asarray(F(np.tile(r0, (n, 1)).T, th.T, om.T, uc, model.p)).T
-    except RuntimeError as exc:
+    solve, residual = _solver()
+    args = (th.T, om.T, uc, model.p)
+    r = np.asarray(solve.map(n)(np.tile(r0, (n, 1)).T, *args))
+    res = np.abs(np.asarray(residual.map(n)(r, *args)))
+    bad = ~np.all(np.isfinite(r), axis=0) | ~np.all(res < 1e-6, axis=0) | np.any(r <= 0, axis=0)
+    if np.any(bad):
+        i = int(np.argmax(bad))
         raise RuntimeError(
-            f"quasi-static spring lengths: Newton failed for theta={th[0].tolist()}, omega={om[0].tolist()}"
-        ) from exc
+            f"quasi-static spring lengths: no solution at theta={th[i].tolist()} rad, omega={om[i].tolist()} rad/s "
+            "(the springs are too soft to hold the centrifugal load there)"
+        )
+    r = r.T
     return r[0] if np.ndim(theta) == 1 else r
 
 

@@ -35,3 +35,11 @@ def test_centrifugal_stretch_of_single_spinning_link():
 def test_rigid_model_rejected():
     with pytest.raises(ValueError, match="elastic"):
         quasi_static_state(pl.rigid(), [0.0, 0.0])
+
+
+def test_no_solution_names_the_failing_point():
+    m = pl.elastic(k1=10.0, k2=10.0)
+    th = np.array([[0.1, 0.1], [0.2, 0.2]])
+    om = np.array([[0.0, 0.0], [10.0, 10.0]])  # m w^2 = 100 N/m > k = 10 N/m: the spring cannot hold the bob
+    with pytest.raises(RuntimeError, match=r"theta=\[0\.2, 0\.2\]"):
+        quasi_static_lengths(m, th, om)
