@@ -169,7 +169,7 @@ def run_stability(*, quick: bool = False, progress: Progress | None = None) -> S
     """Run the four stability studies (about a minute; ``quick``: a few seconds)."""
     ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
     n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
-    methods = ["euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)
+    methods = ["forward-euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)
     blow_ks = [1e6] if quick else [1e4, 1e5, 1e6]
     sc_ks = [1e2, 1e4] if quick else [1e2, 1e3, 1e4, 1e5, 1e6]
     sc_methods = ["RK45", "Radau"] if quick else ["RK45", "DOP853", "Radau", "cvodes-bdf"]

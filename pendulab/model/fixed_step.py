@@ -17,16 +17,16 @@ step ``h`` and record every ``record_every``-th step.
 
 Methods (``FIXED_METHODS``):
 
-===================  =====  =========  ==================================================
-name                 order  implicit   stability
-===================  =====  =========  ==================================================
-``euler``            1      no         unstable on every undamped oscillator
-``rk4``              4      no         imaginary-axis limit h w < 2 sqrt(2) = 2.83
-``implicit-euler``   1      yes        L-stable (damps fast modes)
-``implicit-midpoint`` 2     yes        A-stable, symplectic (Gauss, 1 stage)
-``gauss4``           4      yes        A-stable, symplectic (Gauss-Legendre, 2 stages)
-``radau3``           3      yes        L-stable (Radau IIA, 2 stages)
-===================  =====  =========  ==================================================
+=====================  =====  ========  ===============================================
+name                   order  implicit  stability
+=====================  =====  ========  ===============================================
+``forward-euler``      1      no        unstable on every undamped oscillator
+``rk4``                4      no        imaginary-axis limit h w < 2 sqrt(2) = 2.83
+``implicit-euler``     1      yes       L-stable (damps fast modes)
+``implicit-midpoint``  2      yes       A-stable, symplectic (Gauss, 1 stage)
+``gauss4``             4      yes       A-stable, symplectic (Gauss-Legendre, 2 stages)
+``radau3``             3      yes       L-stable (Radau IIA, 2 stages)
+=====================  =====  ========  ===============================================
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ class FixedMethod:
 FIXED_METHODS: dict[str, FixedMethod] = {
     m.name: m
     for m in (
-        FixedMethod("euler", ((0.0,),), (1.0,), (0.0,), 1, "forward Euler, fixed step"),
+        FixedMethod("forward-euler", ((0.0,),), (1.0,), (0.0,), 1, "forward Euler, fixed step"),
         FixedMethod(
             "rk4",
             ((0, 0, 0, 0), (0.5, 0, 0, 0), (0, 0.5, 0, 0), (0, 0, 1.0, 0)),
@@ -100,7 +100,7 @@ FIXED_METHODS: dict[str, FixedMethod] = {
 
 #: Largest |h w| on the imaginary axis for which an explicit method is stable
 #: (|R(i y)| <= 1); RK4: |R(iy)|^2 = 1 - y^6/72 + y^8/576 <= 1 iff y <= 2 sqrt(2).
-IMAG_AXIS_LIMIT: dict[str, float] = {"euler": 0.0, "rk4": 2.0 * math.sqrt(2.0)}
+IMAG_AXIS_LIMIT: dict[str, float] = {"forward-euler": 0.0, "rk4": 2.0 * math.sqrt(2.0)}
 
 _BLOCK = 256  # steps per mapaccum block: building a mapaccum costs superlinear time in its length
 

@@ -16,7 +16,7 @@ evaluated at each output time (the same semantics as a co-simulation master).
 
 Collocation and ``rk`` are fixed-step: their step is ``max_step`` (default
 1e-3 s, at most the output step); ``rtol``/``atol`` do not apply to them.
-The same holds for the Butcher-tableau methods of ``fixed_step.py`` (``euler``,
+The same holds for the Butcher-tableau methods of ``fixed_step.py`` (``forward-euler``,
 ``rk4``, ``implicit-euler``, ``implicit-midpoint``, ``gauss4``, ``radau3``):
 ``dt / ceil(dt / max_step)`` equal steps per output interval.
 """

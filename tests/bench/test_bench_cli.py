@@ -53,7 +53,7 @@ def test_stability_quick(tmp_path):
     with (tmp_path / "stability_map.csv").open() as fh:
         cells = list(csv.DictReader(fh))
     # Forward Euler never reaches "stable and accurate" at k = 1e6; RK4 beyond h w = 2.83 is unstable.
-    assert not any(c["method"] == "euler" and float(c["k"]) == 1e6 and c["class"] == "stable-accurate" for c in cells)
+    assert not any(c["method"] == "forward-euler" and float(c["k"]) == 1e6 and c["class"] == "stable-accurate" for c in cells)
     assert all(c["class"] == "unstable" for c in cells if c["method"] == "rk4" and float(c["h_omega_max"]) > 2.9)
     with (tmp_path / "step_counts.csv").open() as fh:
         steps = {(r["method"], r["start"], float(r["k"])): int(r["steps"]) for r in csv.DictReader(fh)}
