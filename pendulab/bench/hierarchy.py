@@ -41,10 +41,21 @@ from scipy.linalg import expm
 from ..model.counterpart import rigid_counterpart
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
-from ..model.simulate import simulate
+from ..model.simulate import simulate, time_grid
 from ..model.trajectory import Trajectory
 
-__all__ = ["SceneLike", "LevelResult", "HierarchyReport", "ModelLevel", "check_scene", "choose_model", "LEVELS"]
+__all__ = [
+    "SceneLike",
+    "LevelResult",
+    "HierarchyReport",
+    "ModelLevel",
+    "check_scene",
+    "choose_model",
+    "levels_for",
+    "stiffness_amplitude_study",
+    "LEVELS",
+    "TIE_RATIO",
+]
 
 LEVELS: tuple[str, ...] = ("linearized", "rigid", "rigid+quasi-static", "elastic")
 #: Measured costs within this factor of the cheapest count as a tie (simpler model wins).
@@ -200,12 +211,11 @@ def _run_linearized(scene: SceneLike) -> np.ndarray:
     return X + x_eq
 
 
-def _run_rigid_states(scene: SceneLike) -> tuple[np.ndarray, Model]:
-    model = scene.model
-    rm = rigid_counterpart(model)
-    th, om = _angles_rates(model, np.asarray(scene.x0))
-    traj = simulate(rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u)
-    return traj.x, rm
+def _run_rigid_states(scene: SceneLike) -> np.ndarray:
+    """The rigid counterpart's states (theta1, theta2, omega1, omega2) on the scene grid."""
+    th, om = _angles_rates(scene.model, np.asarray(scene.x0))
+    rm = rigid_counterpart(scene.model)
+    return simulate(rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
 
 
 def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -> np.ndarray:
@@ -218,12 +228,12 @@ def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -
 
 
 def _run_rigid(scene: SceneLike) -> np.ndarray:
-    X, _ = _run_rigid_states(scene)
+    X = _run_rigid_states(scene)
     return _embed(scene.model, X[:, :2], X[:, 2:], None)
 
 
 def _run_rigid_qs(scene: SceneLike) -> np.ndarray:
-    X, _ = _run_rigid_states(scene)
+    X = _run_rigid_states(scene)
     r = quasi_static_lengths(scene.model, X[:, :2], X[:, 2:], scene.u)
     return _embed(scene.model, X[:, :2], X[:, 2:], r)
 
@@ -247,8 +257,7 @@ def levels_for(model: Model) -> tuple[ModelLevel, ...]:
 
 # -- evaluation ---------------------------------------------------------------
 def _grid(scene: SceneLike) -> np.ndarray:
-    n = max(1, math.ceil(scene.t_final / scene.dt - 1e-9))
-    return np.linspace(0.0, scene.t_final, n + 1)
+    return time_grid(scene.t_final, scene.dt)
 
 
 def _signals(scene: SceneLike, X: np.ndarray) -> dict[str, np.ndarray]:
