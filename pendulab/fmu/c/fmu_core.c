@@ -1,0 +1,440 @@
+/* Model core shared by the FMI 2 and FMI 3 layers (see fmu_core.h). */
+#include "fmu_core.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+static const double X_START[MODEL_NX] = MODEL_X_START;
+static const double P_DEFAULT[MODEL_NP] = MODEL_P_DEFAULT;
+static const int P_TUNABLE[MODEL_NP] = MODEL_P_TUNABLE;
+static const int P_POSITIVE[MODEL_NP] = MODEL_P_POSITIVE;
+static const char *const P_NAMES[MODEL_NP] = MODEL_P_NAMES;
+
+/* A communication point may differ from the FMU's time by accumulated rounding in the master. */
+#define TIME_RTOL 1e-9
+
+void core_defaults(Instance *inst) {
+    CoreData *d = &inst->d;
+    memset(d, 0, sizeof(*d));
+    d->magic = MODEL_MAGIC;
+    d->machine = MS_INSTANTIATED;
+    d->time = 0.0;
+    memcpy(d->x, X_START, sizeof(d->x));
+    memcpy(d->p, P_DEFAULT, sizeof(d->p));
+    d->tolerance = MODEL_TOL_DEFAULT;
+    d->max_step = MODEL_HMAX_DEFAULT;
+    d->solver = MODEL_SOLVER_DEFAULT;
+}
+
+static void vlog(Instance *inst, CoreStatus status, const char *category, const char *fmt, va_list ap) {
+    char msg[512];
+    if (inst == NULL || inst->log == NULL) return;
+    vsnprintf(msg, sizeof(msg), fmt, ap);
+    inst->log(inst, status, category, msg);
+}
+
+void core_logf(Instance *inst, CoreStatus status, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(inst, status, status >= ST_ERROR ? "logStatusError" : "logStatusWarning", fmt, ap);
+    va_end(ap);
+}
+
+void core_debugf(Instance *inst, const char *fmt, ...) {
+    va_list ap;
+    if (inst == NULL || !inst->logging_on) return;
+    va_start(ap, fmt);
+    vlog(inst, ST_OK, "logCalls", fmt, ap);
+    va_end(ap);
+}
+
+const char *core_machine_name(int machine) {
+    switch (machine) {
+    case MS_INSTANTIATED: return "Instantiated";
+    case MS_INIT: return "InitializationMode";
+    case MS_STEP: return "StepMode";
+    case MS_EVENT: return "EventMode";
+    case MS_CONT: return "ContinuousTimeMode";
+    case MS_TERMINATED: return "Terminated";
+    case MS_ERROR: return "Error";
+    default: return "unknown";
+    }
+}
+
+CoreStatus core_check(Instance *inst, int allowed, const char *fname) {
+    if (inst->d.machine & allowed) return ST_OK;
+    core_logf(inst, ST_ERROR, "%s: not allowed in state %s", fname, core_machine_name(inst->d.machine));
+    return ST_ERROR;
+}
+
+VarKind core_classify(unsigned int vr, int *index) {
+    *index = 0;
+    if (vr == MODEL_VR_TIME) return KIND_TIME;
+#define RANGE(base, n, kind)                                                                                          \
+    if (vr >= (unsigned)(base) && vr < (unsigned)(base) + (unsigned)(n)) {                                            \
+        *index = (int)(vr - (unsigned)(base));                                                                        \
+        return kind;                                                                                                  \
+    }
+    RANGE(MODEL_VR_X, MODEL_NX, KIND_STATE)
+    RANGE(MODEL_VR_DX, MODEL_NX, KIND_DERIV)
+    RANGE(MODEL_VR_U, MODEL_NU, KIND_INPUT)
+    RANGE(MODEL_VR_Y, MODEL_NY, KIND_OUTPUT)
+    RANGE(MODEL_VR_P, MODEL_NP, KIND_PARAM)
+#undef RANGE
+    if (vr == MODEL_VR_TOL) return KIND_TOL;
+    if (vr == MODEL_VR_HMAX) return KIND_HMAX;
+    if (vr == MODEL_VR_SOLVER) return KIND_SOLVER;
+    return KIND_NONE;
+}
+
+/* ------------------------------------------------------------ model calls */
+static int eval(Instance *inst, casadi_fn fn, const double *x, double *out0) {
+    inst->arg[0] = x;
+    inst->arg[1] = inst->d.u;
+    inst->arg[2] = inst->d.p;
+    inst->res[0] = out0;
+    return fn(inst->arg, inst->res, inst->iw, inst->w, 0);
+}
+
+static int rhs_cb(void *ctx, const double *x, double *xdot) { return eval((Instance *)ctx, MODEL_RHS, x, xdot); }
+static int jac_cb(void *ctx, const double *x, double *J) { return eval((Instance *)ctx, MODEL_JAC_X, x, J); }
+
+static int all_finite(const double *v, int n) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+CoreStatus core_derivatives(Instance *inst, double *xdot) {
+    if (eval(inst, MODEL_RHS, inst->d.x, xdot) != 0 || !all_finite(xdot, MODEL_NX)) {
+        core_logf(inst, ST_ERROR, "the right-hand side could not be evaluated (non-finite result) at t = %g", inst->d.time);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static CoreStatus outputs(Instance *inst, double *y) {
+    if (eval(inst, MODEL_OUTPUTS, inst->d.x, y) != 0 || !all_finite(y, MODEL_NY)) {
+        core_logf(inst, ST_ERROR, "the outputs could not be evaluated (non-finite result) at t = %g", inst->d.time);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------ get / set */
+static const int GET_ALLOWED = MS_INIT | MS_STEP | MS_EVENT | MS_CONT | MS_TERMINATED | MS_ERROR;
+
+CoreStatus core_get_real(Instance *inst, const char *fname, const unsigned int *vr, size_t n, double *value) {
+    if (core_check(inst, GET_ALLOWED, fname) != ST_OK) return ST_ERROR;
+    if (n > 0 && (vr == NULL || value == NULL)) {
+        core_logf(inst, ST_ERROR, "%s: NULL value reference or value array with n = %zu", fname, n);
+        return ST_ERROR;
+    }
+    double y[MODEL_NY], xdot[MODEL_NX];
+    int have_y = 0, have_xdot = 0;
+    for (size_t i = 0; i < n; i++) {
+        int k;
+        switch (core_classify(vr[i], &k)) {
+        case KIND_TIME: value[i] = inst->d.time; break;
+        case KIND_STATE: value[i] = inst->d.x[k]; break;
+        case KIND_DERIV:
+            if (!have_xdot && core_derivatives(inst, xdot) != ST_OK) return ST_ERROR;
+            have_xdot = 1;
+            value[i] = xdot[k];
+            break;
+        case KIND_INPUT: value[i] = inst->d.u[k]; break;
+        case KIND_OUTPUT:
+            if (!have_y && outputs(inst, y) != ST_OK) return ST_ERROR;
+            have_y = 1;
+            value[i] = y[k];
+            break;
+        case KIND_PARAM: value[i] = inst->d.p[k]; break;
+        case KIND_TOL: value[i] = inst->d.tolerance; break;
+        case KIND_HMAX: value[i] = inst->d.max_step; break;
+        default:
+            core_logf(inst, ST_ERROR, "%s: unknown value reference %u for a real variable", fname, vr[i]);
+            return ST_ERROR;
+        }
+    }
+    return ST_OK;
+}
+
+static CoreStatus set_one_real(Instance *inst, const char *fname, unsigned int vr, double v) {
+    int k;
+    const int before_run = MS_INSTANTIATED | MS_INIT;
+    VarKind kind = core_classify(vr, &k);
+    if (kind == KIND_NONE || kind == KIND_SOLVER) {
+        core_logf(inst, ST_ERROR, "%s: unknown value reference %u for a real variable", fname, vr);
+        return ST_ERROR;
+    }
+    if (!isfinite(v)) {
+        core_logf(inst, ST_ERROR, "%s: value reference %u: value %g is not finite", fname, vr, v);
+        return ST_ERROR;
+    }
+    switch (kind) {
+    case KIND_STATE:
+        if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
+        inst->d.x[k] = v;
+        return ST_OK;
+    case KIND_INPUT:
+        if (core_check(inst, before_run | MS_STEP | MS_EVENT | MS_CONT, fname) != ST_OK) return ST_ERROR;
+        inst->d.u[k] = v;
+        return ST_OK;
+    case KIND_PARAM:
+        if (core_check(inst, P_TUNABLE[k] ? (before_run | MS_STEP | MS_EVENT) : before_run, fname) != ST_OK) {
+            core_logf(inst, ST_ERROR, "%s: parameter %s is %s", fname, P_NAMES[k],
+                      P_TUNABLE[k] ? "tunable only in step or event mode" : "fixed after initialization");
+            return ST_ERROR;
+        }
+        if (P_POSITIVE[k] ? !(v > 0.0) : !(v >= 0.0)) {
+            core_logf(inst, ST_ERROR, "%s: parameter %s must be %s, got %g", fname, P_NAMES[k],
+                      P_POSITIVE[k] ? "> 0" : ">= 0", v);
+            return ST_ERROR;
+        }
+        inst->d.p[k] = v;
+        return ST_OK;
+    case KIND_TOL:
+        if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
+        if (!(v > 0.0) || v >= 1.0) {
+            core_logf(inst, ST_ERROR, "%s: solver_tolerance must be in (0, 1), got %g", fname, v);
+            return ST_ERROR;
+        }
+        inst->d.tolerance = v;
+        return ST_OK;
+    case KIND_HMAX:
+        if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
+        if (v < 0.0) {
+            core_logf(inst, ST_ERROR, "%s: max_step must be >= 0 (0: unlimited), got %g", fname, v);
+            return ST_ERROR;
+        }
+        inst->d.max_step = v;
+        return ST_OK;
+    default:
+        core_logf(inst, ST_ERROR, "%s: value reference %u (time, derivative or output) cannot be set", fname, vr);
+        return ST_ERROR;
+    }
+}
+
+CoreStatus core_set_real(Instance *inst, const char *fname, const unsigned int *vr, size_t n, const double *value) {
+    if (core_check(inst, MS_INSTANTIATED | MS_INIT | MS_STEP | MS_EVENT | MS_CONT, fname) != ST_OK) return ST_ERROR;
+    if (n > 0 && (vr == NULL || value == NULL)) {
+        core_logf(inst, ST_ERROR, "%s: NULL value reference or value array with n = %zu", fname, n);
+        return ST_ERROR;
+    }
+    /* validate everything first so that a rejected call changes nothing */
+    CoreData saved = inst->d;
+    for (size_t i = 0; i < n; i++) {
+        if (set_one_real(inst, fname, vr[i], value[i]) != ST_OK) {
+            inst->d = saved;
+            return ST_ERROR;
+        }
+    }
+    return ST_OK;
+}
+
+CoreStatus core_get_int(Instance *inst, const char *fname, const unsigned int *vr, size_t n, int *value) {
+    if (core_check(inst, GET_ALLOWED, fname) != ST_OK) return ST_ERROR;
+    if (n > 0 && (vr == NULL || value == NULL)) {
+        core_logf(inst, ST_ERROR, "%s: NULL value reference or value array with n = %zu", fname, n);
+        return ST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) {
+        int k;
+        if (core_classify(vr[i], &k) != KIND_SOLVER) {
+            core_logf(inst, ST_ERROR, "%s: unknown value reference %u for an integer variable", fname, vr[i]);
+            return ST_ERROR;
+        }
+        value[i] = inst->d.solver;
+    }
+    return ST_OK;
+}
+
+CoreStatus core_set_int(Instance *inst, const char *fname, const unsigned int *vr, size_t n, const int *value) {
+    /* the only integer variable, solver, is a fixed parameter */
+    if (core_check(inst, MS_INSTANTIATED | MS_INIT, fname) != ST_OK) return ST_ERROR;
+    if (n > 0 && (vr == NULL || value == NULL)) {
+        core_logf(inst, ST_ERROR, "%s: NULL value reference or value array with n = %zu", fname, n);
+        return ST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) { /* validate all before changing anything */
+        int k;
+        if (core_classify(vr[i], &k) != KIND_SOLVER) {
+            core_logf(inst, ST_ERROR, "%s: unknown value reference %u for an integer variable", fname, vr[i]);
+            return ST_ERROR;
+        }
+        if (value[i] != ODE_DOPRI5 && value[i] != ODE_RODAS4) {
+            core_logf(inst, ST_ERROR, "%s: solver must be 0 (dopri5) or 1 (rodas4), got %d", fname, value[i]);
+            return ST_ERROR;
+        }
+    }
+    for (size_t i = 0; i < n; i++) inst->d.solver = value[i];
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------ life cycle */
+CoreStatus core_set_experiment(Instance *inst, int tolerance_defined, double tolerance, double start_time) {
+    if (!isfinite(start_time)) {
+        core_logf(inst, ST_ERROR, "start time must be finite, got %g", start_time);
+        return ST_ERROR;
+    }
+    if (tolerance_defined) {
+        if (!(tolerance > 0.0) || !(tolerance < 1.0)) {
+            core_logf(inst, ST_ERROR, "tolerance must be in (0, 1), got %g", tolerance);
+            return ST_ERROR;
+        }
+        inst->d.tolerance = tolerance;
+        inst->d.tolerance_from_master = 1;
+    }
+    inst->d.time = start_time;
+    return ST_OK;
+}
+
+CoreStatus core_exit_initialization(Instance *inst) {
+    if (!all_finite(inst->d.x, MODEL_NX)) {
+        core_logf(inst, ST_ERROR, "initial state is not finite");
+        return ST_ERROR;
+    }
+    int rc = ode_init(&inst->d.ode, MODEL_NX, inst->d.solver, inst->d.tolerance, inst->d.tolerance, inst->d.max_step);
+    if (rc != ODE_OK) {
+        core_logf(inst, ST_ERROR, "solver setup failed: %s", ode_error_string(rc));
+        return ST_ERROR;
+    }
+    double y[MODEL_NY];
+    if (outputs(inst, y) != ST_OK) return ST_ERROR;
+    core_debugf(inst, "initialized at t = %g with solver %s, tolerance %g (%s), max_step %g", inst->d.time,
+                inst->d.solver == ODE_RODAS4 ? "rodas4" : "dopri5", inst->d.tolerance,
+                inst->d.tolerance_from_master ? "from the master" : "parameter solver_tolerance", inst->d.max_step);
+    return ST_OK;
+}
+
+CoreStatus core_do_step(Instance *inst, double current, double h) {
+    CoreData *d = &inst->d;
+    if (!isfinite(current) || !isfinite(h) || !(h > 0.0)) {
+        core_logf(inst, ST_ERROR, "DoStep: communication step size must be positive and finite, got %g at point %g", h,
+                  current);
+        return ST_ERROR;
+    }
+    if (fabs(current - d->time) > TIME_RTOL * fmax(1.0, fabs(d->time))) {
+        core_logf(inst, ST_ERROR, "DoStep: communication point %.17g does not match the FMU time %.17g", current, d->time);
+        return ST_ERROR;
+    }
+    if (d->ode.n != MODEL_NX) { /* e.g. an FMU state saved during initialization was restored */
+        int rc0 = ode_init(&d->ode, MODEL_NX, d->solver, d->tolerance, d->tolerance, d->max_step);
+        if (rc0 != ODE_OK) {
+            core_logf(inst, ST_ERROR, "DoStep: solver setup failed: %s", ode_error_string(rc0));
+            return ST_ERROR;
+        }
+    }
+    double t = d->time;
+    double t_end = current + h;
+    if (!(t_end > t)) {
+        core_logf(inst, ST_ERROR, "DoStep: step size %g too small to advance from t = %.17g", h, t);
+        return ST_ERROR;
+    }
+    int rc = ode_integrate(&d->ode, rhs_cb, jac_cb, inst, &t, d->x, t_end);
+    d->time = t;
+    if (rc != ODE_OK) {
+        d->machine = MS_ERROR; /* bad arguments leave the instance usable; a solver failure does not */
+        core_logf(inst, ST_ERROR, "DoStep: %s solver failed at t = %.17g (target %.17g): %s",
+                  d->solver == ODE_RODAS4 ? "rodas4" : "dopri5", t, t_end, ode_error_string(rc));
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+CoreStatus core_set_states(Instance *inst, const double *x, size_t n) {
+    if (x == NULL || n != MODEL_NX) {
+        core_logf(inst, ST_ERROR, "SetContinuousStates: expected %d states and a non-NULL array, got n = %zu", MODEL_NX, n);
+        return ST_ERROR;
+    }
+    if (!all_finite(x, MODEL_NX)) {
+        core_logf(inst, ST_ERROR, "SetContinuousStates: states must be finite");
+        return ST_ERROR;
+    }
+    memcpy(inst->d.x, x, sizeof(inst->d.x));
+    return ST_OK;
+}
+
+CoreStatus core_set_time(Instance *inst, double t) {
+    if (!isfinite(t)) {
+        core_logf(inst, ST_ERROR, "SetTime: time must be finite, got %g", t);
+        return ST_ERROR;
+    }
+    inst->d.time = t;
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------ derivatives */
+CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t n_unknown, const unsigned int *known,
+                            size_t n_known, const double *seed, double *sensitivity) {
+    enum { NR = MODEL_NX + MODEL_NY, NC = MODEL_NX + MODEL_NU };
+    double J[NR * NC];
+    if ((n_unknown > 0 && (unknown == NULL || sensitivity == NULL)) || (n_known > 0 && (known == NULL || seed == NULL))) {
+        core_logf(inst, ST_ERROR, "GetDirectionalDerivative: NULL array argument");
+        return ST_ERROR;
+    }
+    int rows[NR > 0 ? NR : 1], cols[NC > 0 ? NC : 1];
+    if (n_unknown > NR || n_known > NC) {
+        core_logf(inst, ST_ERROR, "GetDirectionalDerivative: too many unknowns (%zu) or knowns (%zu)", n_unknown, n_known);
+        return ST_ERROR;
+    }
+    for (size_t i = 0; i < n_unknown; i++) {
+        int k;
+        VarKind kind = core_classify(unknown[i], &k);
+        if (kind == KIND_DERIV) rows[i] = k;
+        else if (kind == KIND_OUTPUT) rows[i] = MODEL_NX + k;
+        else {
+            core_logf(inst, ST_ERROR, "GetDirectionalDerivative: unknown %u is not a derivative or output", unknown[i]);
+            return ST_ERROR;
+        }
+    }
+    for (size_t j = 0; j < n_known; j++) {
+        int k;
+        VarKind kind = core_classify(known[j], &k);
+        if (kind == KIND_STATE) cols[j] = k;
+        else if (kind == KIND_INPUT) cols[j] = MODEL_NX + k;
+        else {
+            core_logf(inst, ST_ERROR, "GetDirectionalDerivative: known %u is not a state or input", known[j]);
+            return ST_ERROR;
+        }
+        if (!isfinite(seed[j])) {
+            core_logf(inst, ST_ERROR, "GetDirectionalDerivative: seed %zu is not finite", j);
+            return ST_ERROR;
+        }
+    }
+    if (eval(inst, MODEL_JAC_ALL, inst->d.x, J) != 0 || !all_finite(J, NR * NC)) {
+        core_logf(inst, ST_ERROR, "GetDirectionalDerivative: Jacobian evaluation failed");
+        return ST_ERROR;
+    }
+    for (size_t i = 0; i < n_unknown; i++) {
+        double acc = 0.0;
+        for (size_t j = 0; j < n_known; j++) acc += J[rows[i] + NR * cols[j]] * seed[j];
+        sensitivity[i] = acc;
+    }
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------ FMU state */
+CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, const char *fname) {
+    CoreData tmp;
+    if (blob == NULL || size != sizeof(CoreData)) {
+        core_logf(inst, ST_ERROR, "%s: FMU state is NULL or has %zu bytes, expected %zu", fname, size, sizeof(CoreData));
+        return ST_ERROR;
+    }
+    memcpy(&tmp, blob, sizeof(tmp));
+    if (tmp.magic != MODEL_MAGIC) {
+        core_logf(inst, ST_ERROR, "%s: FMU state was not produced by this model (%s)", fname, MODEL_IDENTIFIER);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname) {
+    if (core_check_state_blob(inst, saved, sizeof(CoreData), fname) != ST_OK) return ST_ERROR;
+    int machine = inst->d.machine; /* the life-cycle state stays the importer's */
+    inst->d = *saved;
+    inst->d.machine = machine;
+    return ST_OK;
+}

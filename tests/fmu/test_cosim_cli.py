@@ -1,0 +1,102 @@
+"""`pendulab cosim` and `pendulab cosim sweep` end to end, and the example."""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from pendulab.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_cosim_cli_writes_csv_plot_gif(cosim_fmu, tmp_path, capsys):
+    out = tmp_path / "run"
+    fmu = cosim_fmu("rigid", 2)
+    assert (
+        main(
+            [
+                "cosim",
+                "--fmu",
+                str(fmu),
+                "--controller",
+                "swingup",
+                "--comm-step",
+                "0.02",
+                "--t-final",
+                "6",
+                "--gif-fps",
+                "5",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    rows = list(csv.reader((out / "cosim.csv").open()))
+    assert rows[0][:5] == ["t", "theta1", "theta2", "omega1", "omega2"]
+    data = np.array(rows[1:], dtype=float)
+    assert len(data) == 301 and data[-1, 0] == 6.0
+    # Swung up and balanced: both angles within 0.05 rad of upright (+-pi) at the end.
+    assert np.all(np.abs(np.abs(data[-1, 1:3]) - np.pi) < 0.05)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["caught_at"] is not None and summary["max_abs_torque"] <= 20.0
+    gif = Image.open(out / "cosim.gif")
+    assert gif.n_frames == 31  # 5 frames per simulated second over 6 s
+    assert (out / "cosim.png").stat().st_size > 20_000
+    assert "co-simulated" in capsys.readouterr().out
+
+
+def test_cosim_cli_tracks_a_reference_csv(cosim_fmu, tmp_path):
+    import pendulab as pl
+    from pendulab.control.sampled import as_feedback, energy_swingup
+
+    model = pl.rigid()
+    ref = pl.simulate(model, model.state(theta1=0.2), 5.0, dt=0.01, u=as_feedback(energy_swingup(model, 0.01), model))
+    csv_path = ref.to_csv(tmp_path / "ref.csv")
+    out = tmp_path / "track"
+    argv = ["cosim", "--fmu", str(cosim_fmu("rigid", 2)), "--controller", "tvlqr", "--reference", str(csv_path)]
+    assert main([*argv, "--t-final", "7", "--no-gif", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["x0"]["theta1"] == 0.2  # starts where the reference starts
+    # Tracked and handed over to balance: upright (+-pi) within 1e-2 rad at 7 s.
+    assert abs(abs(summary["x_final"]["theta1"]) - np.pi) < 1e-2
+    assert main(["cosim", "--fmu", str(cosim_fmu("rigid", 2)), "--reference", str(csv_path), "--out", str(out)]) == 2
+
+
+def test_cosim_cli_bad_input(cosim_fmu, tmp_path, capsys):
+    fmu = str(cosim_fmu("rigid", 2))
+    assert main(["cosim", "--fmu", fmu, "--comm-step", "-0.01", "--out", str(tmp_path)]) == 2
+    assert "--comm-step must be a positive number [s], got -0.01" in capsys.readouterr().err
+    assert main(["cosim", "--fmu", fmu, "--init", "phi=1", "--out", str(tmp_path)]) == 2
+    assert "--init: expected NAME=VALUE" in capsys.readouterr().err
+    assert main(["cosim", "--fmu", str(tmp_path / "nope.fmu"), "--out", str(tmp_path)]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert main(["cosim", "sweep", "--steps", "0.1:0.05:0.01", "--out", str(tmp_path)]) == 2
+    assert "--steps" in capsys.readouterr().err
+
+
+def test_cosim_sweep_cli(cosim_fmu, tmp_path):
+    out = tmp_path / "sweep"
+    args = ["cosim", "sweep", "--kinds", "rigid", "--fmu-rigid", str(cosim_fmu("rigid", 2)), "--steps", "0.17,0.18"]
+    assert main([*args, "--out", str(out)]) == 0
+    crit = json.loads((out / "sweep.json").read_text())[0]
+    assert 0.17 < crit["h_crit_pred"] < 0.18  # predicted crossing (175.2 ms)
+    assert abs(crit["h_crit_meas"] - crit["h_crit_pred"]) < 1e-3
+    assert "| 0.17 |" in (out / "sweep.md").read_text()
+
+
+def test_example_runs(cosim_fmu, tmp_path):
+    spec = importlib.util.spec_from_file_location("cosimulate_fmu", ROOT / "examples" / "cosimulate_fmu.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = mod.run(t_final=1.0, fmus=(cosim_fmu("rigid", 2), cosim_fmu("elastic", 2)), out_dir=tmp_path)
+    assert out["max_state_diff_native"] < 1e-6  # the equivalence bound of test_cosim
+    assert out["n_rejected"] > 0 and out["retry_vs_plain"] < 1e-7
+    assert 0 < out["rigid_vs_elastic"] < 0.01  # k = 5e4 N/m: 5.7e-3 rad over 1 s
+    assert (tmp_path / "side_by_side.png").stat().st_size > 20_000

@@ -1,0 +1,61 @@
+"""`pendulab fmu export|validate` from the command line."""
+
+from __future__ import annotations
+
+import zipfile
+
+from pendulab.cli import main
+
+
+def test_cli_export_sets_parameters_and_initial_state(tmp_path, capsys):
+    out = tmp_path / "e.fmu"
+    rc = main(
+        [
+            "fmu",
+            "export",
+            "--model",
+            "rigid",
+            "--set",
+            "m2=2.5",
+            "--initial",
+            "theta1=0.3",
+            "--fmi-version",
+            "3",
+            "--out",
+            str(out),
+            "--no-timestamp",
+        ]
+    )
+    assert rc == 0 and "wrote" in capsys.readouterr().out
+    md = zipfile.ZipFile(out).read("modelDescription.xml").decode()
+    assert 'name="m2"' in md and 'start="2.5"' in md and 'start="0.3"' in md
+
+
+def test_cli_validate_passes_and_writes_plot(fmu_builds, tmp_path, capsys):
+    rc = main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "rigid_chaotic", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    assert "overall: PASS" in out and "no problem" in out
+    assert (tmp_path / "rigid2_validation.png").stat().st_size > 10_000
+
+
+def test_cli_bad_input_exits_2_with_one_line(fmu_builds, tmp_path, capsys):
+    assert main(["fmu", "export", "--model", "rigid", "--set", "m1", "--out", str(tmp_path / "x.fmu")]) == 2
+    assert "--set expects name=value" in capsys.readouterr().err
+    assert main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "elastic_soft"]) == 2
+    assert "not for the rigid model" in capsys.readouterr().err
+    assert main(["fmu", "validate", str(tmp_path / "missing.fmu")]) == 2
+
+
+def test_cli_validate_exits_1_on_fail(fmu_builds, monkeypatch, capsys):
+    import dataclasses
+    import importlib
+
+    v = importlib.import_module("pendulab.fmu.validate")  # the module (the package exports the function)
+
+    # an impossible bound (1e-15, below the solvers' 1e-10 tolerance) must turn into FAIL and exit status 1
+    strict = tuple(dataclasses.replace(s, bound=1e-15) for s in v.SCENES)
+    monkeypatch.setattr(v, "SCENES", strict)
+    assert main(["fmu", "validate", str(fmu_builds[("rigid", 3)].path), "--scene", "rigid_chaotic"]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "overall: FAIL" in out
