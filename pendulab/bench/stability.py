@@ -302,7 +302,8 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
         if lim:
             ax.plot(kk, lim / 10**wmax, "k-", lw=2, label=f"h w_max = {lim:.2f}")
         ax.plot(kk, 1.0 / 10**wmax, "k:", lw=1, label="h w_max = 1")
-        ax.set_title(f"{m} ({FIXED_METHODS[m].description.split(',')[0]})", fontsize=9)
+        fm = FIXED_METHODS[m]
+        ax.set_title(f"{m} (order {fm.order}, {'explicit' if fm.explicit else 'implicit'})", fontsize=9)
         ax.legend(fontsize=7, loc="lower left")
         ax.set_xlabel("spring stiffness k [N/m]")
         ax.set_ylabel("step h [s]")
