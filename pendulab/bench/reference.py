@@ -69,7 +69,8 @@ def load_reference(case: Case, directory: Path = REFERENCE_DIR) -> Reference:
         raise ReferenceMissingError(f"no stored reference for case {case.name!r} at {path}; run 'pendulab bench references'")
     d = np.load(path)
     t = d["t"]
-    if not np.isclose(t[-1], case.t_final) or not np.allclose(d["x"][0], case.initial_state(), rtol=0, atol=1e-15):
+    # 1e-12: the quasi-static start comes from a Newton solve whose last bits may vary by platform.
+    if not np.isclose(t[-1], case.t_final) or not np.allclose(d["x"][0], case.initial_state(), rtol=0, atol=1e-12):
         raise ReferenceMissingError(f"stored reference {path} does not match case {case.name!r}; run 'pendulab bench references'")
     return Reference(case.name, t, d["x"], str(d["method"]), str(d["check_method"]), float(d["accuracy"]), str(d["notes"]))
 

@@ -166,7 +166,7 @@ def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
 
 
 def run_stability(*, quick: bool = False, progress: Progress | None = None) -> StabilityResult:
-    """Run the four stability studies (about a minute; ``quick``: a few seconds)."""
+    """Run the four stability studies (3-9 min on 2 cores; ``quick``: a few seconds)."""
     ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
     n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
     methods = ["forward-euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)

@@ -288,4 +288,3 @@ def run_fixed(
     n_steps = n_int * n_sub
     stats = {"n_steps": n_steps, "n_rhs": method.stages * n_steps if method.explicit else None, "step": h}
     return X, U, stats
-
