@@ -15,7 +15,7 @@ from collections.abc import Sequence
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
 
 #: Modules under ``pendulab.commands`` that each register one top-level command.
-COMMAND_MODULES: tuple[str, ...] = ("simulate", "demo", "modes", "fmu", "cosim", "swingup")
+COMMAND_MODULES: tuple[str, ...] = ("simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup")
 
 
 class CLIError(ValueError):

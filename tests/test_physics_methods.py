@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
+from pendulab.model.fixed_step import FIXED_METHODS
 
 START = {"theta1": 0.3, "theta2": 0.3}
 T_FINAL = 2.0
@@ -21,7 +22,9 @@ def _reference(kind):
 
 
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])
-@pytest.mark.parametrize("method", list(pl.METHODS))
+# Butcher-tableau methods of order < 4 (forward/implicit Euler, implicit midpoint, radau3) cannot meet the
+# 1e-6 bound at h = 2 ms; their convergence orders are tested in tests/bench/test_fixed_step.py.
+@pytest.mark.parametrize("method", [m for m in pl.METHODS if getattr(FIXED_METHODS.get(m), "order", 5) >= 4])
 def test_method_agrees_with_reference(method, kind):
     model = pl.make_model(kind)
     fixed = pl.METHODS[method].fixed_step

@@ -16,6 +16,9 @@ evaluated at each output time (the same semantics as a co-simulation master).
 
 Collocation and ``rk`` are fixed-step: their step is ``max_step`` (default
 1e-3 s, at most the output step); ``rtol``/``atol`` do not apply to them.
+The same holds for the Butcher-tableau methods of ``fixed_step.py`` (``forward-euler``,
+``rk4``, ``implicit-euler``, ``implicit-midpoint``, ``gauss4``, ``radau3``):
+``dt / ceil(dt / max_step)`` equal steps per output interval.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .fixed_step import FIXED_METHODS, run_fixed
 from .model import Model
 from .pycode import to_python
 from .trajectory import Trajectory
@@ -83,6 +87,8 @@ METHODS: Mapping[str, MethodSpec] = {
         MethodSpec("Radau", "scipy", "Radau", False, {}, "SciPy Radau IIA (order 5), exact Jacobian"),
         MethodSpec("BDF", "scipy", "BDF", False, {}, "SciPy BDF, exact Jacobian"),
         MethodSpec("LSODA", "scipy", "LSODA", False, {}, "SciPy LSODA (Adams/BDF switching), exact Jacobian"),
+        # Fixed-step Butcher-tableau methods iterated inside CasADi (see fixed_step.py).
+        *(MethodSpec(n, "fixed", n, True, {}, m.description) for n, m in FIXED_METHODS.items()),
     )
 }
 _IMPLICIT_SCIPY = {"Radau", "BDF", "LSODA"}
@@ -390,7 +396,7 @@ def simulate(
         raise ValueError(f"x0: spring lengths r1, r2 must be > 0 m, got {x0[2:4].tolist()}")
     t = time_grid(t_final, dt)
     sched = _input_schedule(model, u, t)
-    runner = _run_casadi if spec.family == "casadi" else _run_scipy
+    runner = {"casadi": _run_casadi, "scipy": _run_scipy, "fixed": run_fixed}[spec.family]
     start = time.perf_counter()
     feedback = u if callable(u) else None
     X, U, stats = runner(model, spec, x0, t, sched, feedback, rtol, atol, max_step, dict(options or {}))

@@ -1,0 +1,1 @@
+"""Benchmarks and model-selection studies: work-precision, stability, model hierarchy."""

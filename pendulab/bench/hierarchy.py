@@ -1,0 +1,445 @@
+"""Model no more than a scene needs: a hierarchy of models checked on a scene.
+
+Levels, cheapest first (all built from the scene's own model functions):
+
+``linearized``
+    The scene's model linearized about the nearest equilibrium (angles rounded
+    to multiples of pi; spring lengths from :func:`quasi_static_state` at rest),
+    propagated exactly on the output grid (matrix exponential, zero-order-held
+    torques); outputs through the nonlinear output map.
+``rigid``
+    The rigid counterpart (same m, L, g, joint dampers; links of the springs'
+    rest length), started from the scene's angles and rates.
+``rigid+quasi-static``
+    The rigid motion with quasi-static spring lengths r*(theta, omega) (the
+    springs' static and centrifugal stretch, zero radial acceleration) added
+    afterwards, without their fast dynamics.
+``elastic``
+    The scene's full elastic model: the reference.
+
+Every level produces a state trajectory in the scene model's state order, so
+errors are measured on the scene's outputs (state or output names) against
+the reference, as the maximum absolute difference over the output grid.
+The choice is the level with the smallest measured cost (median wall time)
+among those within the scene's tolerance, where costs within ``TIE_RATIO``
+of the cheapest count as equal and the simpler model wins; the reference
+always qualifies.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from scipy.linalg import expm
+
+from ..model.counterpart import rigid_counterpart
+from ..model.model import Model, elastic
+from ..model.quasistatic import quasi_static_lengths, quasi_static_state
+from ..model.simulate import simulate, time_grid
+from ..model.trajectory import Trajectory
+
+__all__ = [
+    "SceneLike",
+    "LevelResult",
+    "HierarchyReport",
+    "ModelLevel",
+    "check_scene",
+    "choose_model",
+    "levels_for",
+    "stiffness_amplitude_study",
+    "LEVELS",
+    "TIE_RATIO",
+]
+
+LEVELS: tuple[str, ...] = ("linearized", "rigid", "rigid+quasi-static", "elastic")
+#: Measured costs within this factor of the cheapest count as a tie (simpler model wins).
+TIE_RATIO = 1.5
+
+
+class SceneLike(Protocol):
+    """What the hierarchy reads from a scene (``pendulab.scenes.Scene`` has it)."""
+
+    name: str
+    model: Model
+    x0: np.ndarray
+    t_final: float
+    dt: float
+    method: str
+    rtol: float
+    atol: float
+    outputs: tuple[str, ...]
+    tolerance: float | None
+    u: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class ModelLevel:
+    """One level of the hierarchy: a way to compute the scene's trajectory.
+
+    Attributes
+    ----------
+    name : str
+        One of ``LEVELS``.
+    model : Model
+        The model it integrates (rigid for ``rigid`` and ``rigid+quasi-static``).
+    run : callable
+        ``run(scene) -> ndarray (N, nx)``: states in the scene model's state order.
+    """
+
+    name: str
+    model: Model
+    run: Callable[[Any], np.ndarray] = field(repr=False)
+
+    def simulate(self, scene: SceneLike) -> Trajectory:
+        """Trajectory of the scene with this level, in the scene model's signals."""
+        return _as_trajectory(scene, self.run(scene), self.name)
+
+
+@dataclass(frozen=True)
+class LevelResult:
+    """Error and cost of one level on a scene."""
+
+    name: str
+    error: float  # max abs error over the grid and the scene outputs (their units)
+    errors: dict[str, float]  # per output
+    wall_time: float  # median wall time [s]
+    within: bool
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class HierarchyReport:
+    """Outcome of :func:`check_scene`."""
+
+    scene: str
+    outputs: tuple[str, ...]
+    tolerance: float
+    reference: str
+    levels: tuple[LevelResult, ...]
+    chosen: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "scene": self.scene,
+            "outputs": list(self.outputs),
+            "tolerance": self.tolerance,
+            "reference": self.reference,
+            "chosen": self.chosen,
+            "levels": [
+                {
+                    "name": lv.name,
+                    "error": lv.error,
+                    "errors": lv.errors,
+                    "wall_time_s": lv.wall_time,
+                    "within_tolerance": lv.within,
+                    "note": lv.note,
+                }
+                for lv in self.levels
+            ],
+        }
+
+    def table(self) -> str:
+        """Plain-text table of the levels."""
+        lines = [
+            f"scene {self.scene}: outputs {', '.join(self.outputs)}; tolerance {self.tolerance:g}; reference {self.reference}",
+            f"{'model':<20} {'max error':>11} {'wall time [s]':>14}  within",
+        ]
+        for lv in self.levels:
+            mark = "yes" if lv.within else "no"
+            lines.append(
+                f"{lv.name:<20} {lv.error:>11.3e} {lv.wall_time:>14.4f}  {mark}{'  (' + lv.note + ')' if lv.note else ''}"
+            )
+        lines.append(f"chosen: {self.chosen} (cheapest within tolerance)")
+        return "\n".join(lines)
+
+
+# -- levels -------------------------------------------------------------------
+def _angles_rates(model: Model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    names = model.state_names
+    th = x[..., [names.index("theta1"), names.index("theta2")]]
+    om = x[..., [names.index("omega1"), names.index("omega2")]]
+    return th, om
+
+
+def _nearest_equilibrium(model: Model, x0: np.ndarray) -> np.ndarray:
+    th, _ = _angles_rates(model, x0)
+    th_eq = np.pi * np.round(th / np.pi)
+    if model.kind == "elastic":
+        return quasi_static_state(model, th_eq)
+    return np.concatenate([th_eq, np.zeros(2)])
+
+
+def _zoh(A: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact discretization of dx' = A dx + b over dt: (e^{A dt}, int_0^dt e^{A s} ds b)."""
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) < 1e8:
+        # Diagonalizable (the usual case): cheaper than scipy's expm, whose BLAS
+        # threading costs ~10 ms per call on a loaded machine.
+        z = lam * dt
+        phi = np.where(np.abs(z) > 1e-8, np.expm1(z) / np.where(z == 0, 1, z), 1.0 + z / 2)
+        Vi = np.linalg.inv(V)
+        return np.real(V @ np.diag(np.exp(z)) @ Vi), np.real(V @ (phi * dt * (Vi @ b)))
+    n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n] = A, b
+    E = expm(M * dt)
+    return E[:n, :n], E[:n, n]
+
+
+def _run_linearized(scene: SceneLike) -> np.ndarray:
+    model = scene.model
+    x_eq = _nearest_equilibrium(model, np.asarray(scene.x0))
+    u0 = np.zeros(model.nu)
+    A, B = (np.asarray(m) for m in model.functions["jac_rhs"](x_eq, u0, model.p))
+    f_eq = model.rhs(x_eq, u0)  # zero at an equilibrium; kept so a slight offset is exact
+    t = _grid(scene)
+    dt = float(t[1] - t[0])
+    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
+    Ad, bd = _zoh(A, B @ u + f_eq, dt)
+    nx = model.nx
+    X = np.empty((len(t), nx))
+    dx = np.asarray(scene.x0, dtype=float) - x_eq
+    for k in range(len(t)):
+        X[k] = dx
+        dx = Ad @ dx + bd
+    return X + x_eq
+
+
+def _run_rigid_states(scene: SceneLike) -> np.ndarray:
+    """The rigid counterpart's states (theta1, theta2, omega1, omega2) on the scene grid."""
+    th, om = _angles_rates(scene.model, np.asarray(scene.x0))
+    rm = rigid_counterpart(scene.model)
+    return simulate(rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
+
+
+def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -> np.ndarray:
+    """Rigid (theta, omega) as states of ``model`` (springs at length r, v = 0)."""
+    if model.kind == "rigid":
+        return np.hstack([th, om])
+    if r is None:
+        r = np.tile([model.params.L1, model.params.L2], (th.shape[0], 1))
+    return np.hstack([th, r, om, np.zeros_like(r)])
+
+
+def _run_rigid(scene: SceneLike) -> np.ndarray:
+    X = _run_rigid_states(scene)
+    return _embed(scene.model, X[:, :2], X[:, 2:], None)
+
+
+def _run_rigid_qs(scene: SceneLike) -> np.ndarray:
+    X = _run_rigid_states(scene)
+    r = quasi_static_lengths(scene.model, X[:, :2], X[:, 2:], scene.u)
+    return _embed(scene.model, X[:, :2], X[:, 2:], r)
+
+
+def _run_full(scene: SceneLike) -> np.ndarray:
+    return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
+
+
+def levels_for(model: Model) -> tuple[ModelLevel, ...]:
+    """The hierarchy for a scene model, cheapest first; the last level is the reference."""
+    if model.kind == "rigid":
+        return (ModelLevel("linearized", model, _run_linearized), ModelLevel("rigid", model, _run_full))
+    rm = rigid_counterpart(model)
+    return (
+        ModelLevel("linearized", model, _run_linearized),
+        ModelLevel("rigid", rm, _run_rigid),
+        ModelLevel("rigid+quasi-static", rm, _run_rigid_qs),
+        ModelLevel("elastic", model, _run_full),
+    )
+
+
+# -- evaluation ---------------------------------------------------------------
+def _grid(scene: SceneLike) -> np.ndarray:
+    return time_grid(scene.t_final, scene.dt)
+
+
+def _signals(scene: SceneLike, X: np.ndarray) -> dict[str, np.ndarray]:
+    model = scene.model
+    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
+    Y = None
+    out: dict[str, np.ndarray] = {}
+    for name in scene.outputs:
+        group, i = model.signal_index(name)
+        if group == "state":
+            out[name] = X[:, i]
+        elif group == "input":
+            out[name] = np.full(X.shape[0], u[i])
+        else:
+            if Y is None:
+                Y = model.outputs(X, u)
+            out[name] = Y[:, i]
+    return out
+
+
+def _as_trajectory(scene: SceneLike, X: np.ndarray, level: str) -> Trajectory:
+    model = scene.model
+    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
+    U = np.tile(u, (X.shape[0], 1))
+    return Trajectory(
+        t=_grid(scene),
+        x=X,
+        u=U,
+        y=model.outputs(X, U),
+        state_names=model.state_names,
+        input_names=model.input_names,
+        output_names=model.output_names,
+        method=f"{level} ({scene.method})",
+        success=True,
+        message=f"model level {level!r}",
+        stats={},
+    )
+
+
+def _timed(fn: Callable[[], np.ndarray], repeats: int) -> tuple[np.ndarray, float]:
+    times, X = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        X = fn()
+        times.append(time.perf_counter() - start)
+    return X, statistics.median(times)
+
+
+def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None = None) -> HierarchyReport:
+    """Run the model hierarchy on a scene and pick the cheapest model within tolerance.
+
+    Parameters
+    ----------
+    scene : Scene
+        A loaded scene (``pendulab.scenes.load_scene``) or any object with the
+        attributes of :class:`SceneLike`.
+    repeats : int
+        Timed runs per level; the cost is the median wall time [s].
+    tolerance : float, optional
+        Overrides the scene's ``[outputs] tolerance`` (in the outputs' units).
+
+    Returns
+    -------
+    HierarchyReport
+
+    Raises
+    ------
+    ValueError
+        No tolerance (neither in the scene nor given), or ``repeats`` < 1.
+    """
+    tol = scene.tolerance if tolerance is None else tolerance
+    if tol is None or not (isinstance(tol, (int, float)) and tol > 0):
+        raise ValueError(f"scene {scene.name!r}: tolerance must be a positive number ([outputs] tolerance), got {tol!r}")
+    if not isinstance(repeats, int) or repeats < 1:
+        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    levels = levels_for(scene.model)
+    X_ref, wall_ref = _timed(lambda: levels[-1].run(scene), repeats)  # a failing reference propagates
+    ref = _signals(scene, X_ref)
+    results = []
+    for lv in levels[:-1]:
+        try:
+            X, wall = _timed(lambda lv=lv: lv.run(scene), repeats)
+        except RuntimeError as exc:  # e.g. no quasi-static solution, or an integrator failure
+            errors = dict.fromkeys(scene.outputs, math.inf)
+            results.append(LevelResult(lv.name, math.inf, errors, math.nan, False, f"failed: {str(exc).splitlines()[0]}"))
+            continue
+        sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
+        errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
+        err = max(errors.values())
+        results.append(LevelResult(lv.name, err, errors, wall, err <= tol))
+    results.append(LevelResult(levels[-1].name, 0.0, dict.fromkeys(scene.outputs, 0.0), wall_ref, True, "reference"))
+    ok = [r for r in results if r.within]
+    fastest = min(r.wall_time for r in ok)
+    # Timings are noisy on a shared machine: costs within TIE_RATIO of the fastest
+    # count as equal, and the simpler model (earlier in the hierarchy) wins the tie.
+    chosen = next(r.name for r in ok if r.wall_time <= TIE_RATIO * fastest)
+    return HierarchyReport(
+        scene.name,
+        tuple(scene.outputs),
+        float(tol),
+        f"{levels[-1].name} ({scene.method}, rtol {scene.rtol:g})",
+        tuple(results),
+        chosen,
+    )
+
+
+def choose_model(scene: SceneLike, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
+    """The cheapest model level within the scene's tolerance, and the report.
+
+    Returns
+    -------
+    level : ModelLevel
+        ``level.simulate(scene)`` gives the scene's trajectory with that level
+        (in the scene model's signal names); ``level.model`` is the Model it integrates.
+    report : HierarchyReport
+    """
+    report = check_scene(scene, repeats=repeats)
+    level = next(lv for lv in levels_for(scene.model) if lv.name == report.chosen)
+    return level, report
+
+
+# -- stiffness x amplitude study ----------------------------------------------
+@dataclass(frozen=True)
+class _GridScene:
+    """A scene built in code for the stiffness x amplitude table."""
+
+    name: str
+    model: Model
+    x0: np.ndarray
+    t_final: float
+    dt: float
+    method: str
+    rtol: float
+    atol: float
+    outputs: tuple[str, ...]
+    tolerance: float | None
+    u: np.ndarray | None = None
+
+
+def stiffness_amplitude_study(
+    ks: tuple[float, ...] = (1e2, 1e3, 1e4, 1e5, 1e6),
+    amplitudes: tuple[float, ...] = (0.05, 0.3, 1.0, 2.0),
+    *,
+    t_final: float = 5.0,
+    tolerance: float = 1e-2,
+    repeats: int = 1,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Hierarchy check over spring stiffness and release angle (theta1 = theta2 = amplitude).
+
+    Scenes: m = 1 kg, L = 1 m, undamped, springs at their static length, outputs
+    theta1, theta2, x2, y2 over ``t_final`` [s] with CVODES BDF at 1e-10.
+
+    Returns
+    -------
+    list of dict
+        One per (k, amplitude): chosen level, and error and wall time per level.
+    """
+    rows = []
+    total, done = len(ks) * len(amplitudes), 0
+    for k in ks:
+        model = elastic(k1=k, k2=k)
+        for a in amplitudes:
+            sc = _GridScene(
+                f"k={k:g}, theta={a:g}",
+                model,
+                model.state(theta1=a, theta2=a),
+                t_final,
+                0.01,
+                "cvodes",
+                1e-10,
+                1e-10,
+                ("theta1", "theta2", "x2", "y2"),
+                tolerance,
+            )
+            rep = check_scene(sc, repeats=repeats)
+            row: dict[str, Any] = {"k": k, "amplitude": a, "chosen": rep.chosen}
+            for lv in rep.levels:
+                row[f"error[{lv.name}]"] = lv.error
+                row[f"time[{lv.name}]"] = lv.wall_time
+            rows.append(row)
+            done += 1
+            if progress is not None:
+                progress(done, total, f"hierarchy k={k:g} theta={a:g}")
+    return rows

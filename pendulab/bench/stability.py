@@ -1,0 +1,366 @@
+"""Stability where methods fail: the elastic pendulum's spring mode against the step.
+
+Four studies (``pendulab bench stability``):
+
+1. **Map** over spring stiffness k and fixed step h for the fixed-step methods
+   of :mod:`pendulab.model.fixed_step`, from theta = 0.3 rad with the springs
+   at rest length (the spring mode is excited), over 1 s: *unstable* (state
+   non-finite or the energy above the static equilibrium grew tenfold),
+   *stable but inaccurate* (bob positions off by more than ``POSITION_TOL``
+   against a CVODES Adams 1e-10 solution at t = 0.1, 0.2, ..., 1 s) or *stable and
+   accurate*. Overlaid: the explicit methods' theoretical limit
+   h = c / w_max(k), with w_max the largest |Im| eigenvalue of
+   ``jac_rhs`` at the static equilibrium and c the imaginary-axis stability
+   bound (2 sqrt(2) for RK4).
+2. **RK4 blow-up step**, measured by bisection on h (blown up = the
+   deviation from rest grew 1000-fold in 2000 steps from a tiny
+   perturbation) against the prediction 2 sqrt(2) / w_max.
+3. **Step counts** of adaptive explicit methods (RK45, DOP853) against k,
+   proportional to sqrt(k) once stability bounds the step, and of L-stable
+   implicit ones (SciPy Radau, CVODES BDF) that step over the spring mode
+   after a quasi-static start (and must resolve it after a rest-length start).
+4. **Energy** on undamped springs (k = 1e4, rest-length start, 10 s) with a
+   step that does not resolve the spring mode: Gauss-Legendre collocation
+   and implicit midpoint (symplectic) keep it, Radau collocation and
+   CVODES BDF dissipate the spring oscillation.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..model.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
+from ..model.model import Model, elastic
+from ..model.quasistatic import quasi_static_state
+from ..model.simulate import simulate
+
+__all__ = [
+    "omega_max",
+    "rk4_blowup_step",
+    "classify",
+    "run_stability",
+    "write_stability",
+    "StabilityResult",
+    "POSITION_TOL",
+    "UNSTABLE",
+    "INACCURATE",
+    "ACCURATE",
+]
+
+POSITION_TOL = 1e-3  # [m] bob-position error that counts as accurate
+UNSTABLE, INACCURATE, ACCURATE = 0, 1, 2
+_HORIZON = 1.0
+_THETA = (0.3, 0.3)
+Progress = Callable[[int, int, str], None]
+
+
+def omega_max(model: Model) -> float:
+    """Fastest linearized mode [rad/s]: max |Im(eig(A))| of ``jac_rhs`` at the static equilibrium."""
+    x = model.rest_state()
+    A = np.asarray(model.functions["jac_rhs"](x, np.zeros(model.nu), model.p)[0])
+    return float(np.max(np.abs(np.linalg.eigvals(A).imag)))
+
+
+def _blows_up(model: Model, method: str, h: float, n_steps: int) -> bool:
+    x_rest = model.rest_state()
+    # Tiny perturbation of every mode: stays linear, so the linear stability bound applies.
+    dx0 = np.array([1e-3, -1e-3, 1e-7, -1e-7, 0, 0, 0, 0])
+    X = integrate_fixed(model, method, x_rest + dx0, h, n_steps, record_every=n_steps // 10)
+    dev = np.max(np.abs(X - x_rest), axis=1)
+    return bool(not np.all(np.isfinite(X)) or dev[-1] > 1e3 * dev[0])
+
+
+def rk4_blowup_step(k: float, *, n_steps: int = 2000, rel_tol: float = 2e-3) -> tuple[float, float]:
+    """Measured and predicted RK4 blow-up step [s] for springs of stiffness k [N/m].
+
+    Returns
+    -------
+    h_measured, h_predicted : float
+        Bisection bracket midpoint of the smallest step that blows up, and
+        ``2 sqrt(2) / omega_max``.
+    """
+    model = elastic(k1=k, k2=k)
+    h_pred = IMAG_AXIS_LIMIT["rk4"] / omega_max(model)
+    lo, hi = 0.7 * h_pred, 1.5 * h_pred
+    if _blows_up(model, "rk4", lo, n_steps) or not _blows_up(model, "rk4", hi, n_steps):
+        raise RuntimeError(f"RK4 blow-up step for k = {k:g} N/m is outside [{lo:.3g}, {hi:.3g}] s")
+    while hi - lo > rel_tol * h_pred:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if _blows_up(model, "rk4", mid, n_steps) else (mid, hi)
+    return 0.5 * (lo + hi), h_pred
+
+
+def _start(model: Model, start: str) -> np.ndarray:
+    if start == "quasi-static":
+        return quasi_static_state(model, _THETA)
+    return model.state(theta1=_THETA[0], theta2=_THETA[1], r1=model.params.L1, r2=model.params.L2)
+
+
+def classify(model: Model, method: str, n_steps: int, ref_positions: np.ndarray) -> tuple[int, float]:
+    """Class (UNSTABLE / INACCURATE / ACCURATE) and position error [m] of one map cell.
+
+    ``ref_positions`` has shape (11, 4): bob positions at t = 0, 0.1, ..., 1 s.
+    """
+    x0 = _start(model, "rest-length")
+    X = integrate_fixed(model, method, x0, _HORIZON / n_steps, n_steps, record_every=n_steps // 10)
+    if not np.all(np.isfinite(X)) or np.max(np.abs(X)) > 1e6:
+        return UNSTABLE, math.inf
+    e_rest = model.energy(model.rest_state())
+    excess = model.energy(X) - e_rest
+    if np.max(excess) > 10.0 * excess[0]:
+        return UNSTABLE, math.inf
+    err = float(np.max(np.abs(model.positions(X) - ref_positions)))
+    return (ACCURATE if err <= POSITION_TOL else INACCURATE), err
+
+
+@dataclass
+class StabilityResult:
+    """Everything ``pendulab bench stability`` measured."""
+
+    ks: np.ndarray
+    n_steps: np.ndarray  # steps over the 1 s horizon; h = 1 / n_steps
+    omega_max: np.ndarray  # per k [rad/s]
+    maps: dict[str, np.ndarray] = field(default_factory=dict)  # method -> (len(ks), len(n_steps)) classes
+    errors: dict[str, np.ndarray] = field(default_factory=dict)
+    blowup: list[tuple[float, float, float]] = field(default_factory=list)  # (k, h_measured, h_predicted)
+    step_counts: list[dict[str, Any]] = field(default_factory=list)
+    energy: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)  # label -> (t, E - E0)
+
+    @property
+    def hs(self) -> np.ndarray:
+        return _HORIZON / self.n_steps
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "rk4_blowup": [
+                {"k": k, "h_measured": hm, "h_predicted": hp, "relative_difference": hm / hp - 1} for k, hm, hp in self.blowup
+            ],
+            "step_counts": self.step_counts,
+            "energy_change_J": {lab: float(dE[-1]) for lab, (_, dE) in self.energy.items()},
+        }
+
+
+def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
+    """Accepted steps over the 1 s horizon."""
+    if method.startswith("cvodes"):
+        return int(simulate(model, x0, _HORIZON, _HORIZON, method, tol, tol).stats["n_steps"])
+    from ..model.simulate import _python_rhs
+
+    rhs, p = _python_rhs("elastic"), model.p.tolist()
+    jac_fun = model.functions["jac_rhs"]
+    kw: dict[str, Any] = {}
+    if method in ("Radau", "BDF"):
+        kw["jac"] = lambda _t, x: np.asarray(jac_fun(x, np.zeros(2), model.p)[0])
+    sol = solve_ivp(lambda _t, x: rhs(x, [0.0, 0.0], p), (0.0, _HORIZON), x0, method=method, rtol=tol, atol=tol, **kw)
+    if sol.status != 0:
+        raise RuntimeError(f"{method} failed for k = {model.params.k1:g}: {sol.message}")
+    return len(sol.t) - 1
+
+
+def run_stability(*, quick: bool = False, progress: Progress | None = None) -> StabilityResult:
+    """Run the four stability studies (3-9 min on 2 cores; ``quick``: a few seconds)."""
+    ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
+    n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
+    methods = ["forward-euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)
+    blow_ks = [1e6] if quick else [1e4, 1e5, 1e6]
+    sc_ks = [1e2, 1e4] if quick else [1e2, 1e3, 1e4, 1e5, 1e6]
+    sc_methods = ["RK45", "Radau"] if quick else ["RK45", "DOP853", "Radau", "cvodes-bdf"]
+    total = len(ks) * (1 + len(methods) * len(n_steps)) + len(blow_ks) + len(sc_ks) * len(sc_methods) * 2 + 1
+    done = 0
+
+    def tick(label: str) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done, total, label)
+
+    res = StabilityResult(ks=ks, n_steps=n_steps, omega_max=np.array([omega_max(elastic(k1=k, k2=k)) for k in ks]))
+    for m in methods:
+        res.maps[m] = np.zeros((len(ks), len(n_steps)), dtype=int)
+        res.errors[m] = np.zeros((len(ks), len(n_steps)))
+    for i, k in enumerate(ks):
+        model = elastic(k1=k, k2=k)
+        ref = simulate(model, _start(model, "rest-length"), _HORIZON, 0.1, "cvodes-adams", 1e-10, 1e-10)
+        ref_pos = model.positions(ref.x)
+        tick(f"reference k={k:.0e}")
+        for m in methods:
+            for j, n in enumerate(n_steps):
+                res.maps[m][i, j], res.errors[m][i, j] = classify(model, m, int(n), ref_pos)
+                tick(f"map {m} k={k:.0e} h={1 / n:.0e}")
+    for k in blow_ks:
+        hm, hp = rk4_blowup_step(k)
+        res.blowup.append((k, hm, hp))
+        tick(f"rk4 blow-up k={k:.0e}")
+    for k in sc_ks:
+        model = elastic(k1=k, k2=k)
+        for start in ("quasi-static", "rest-length"):
+            x0 = _start(model, start)
+            for m in sc_methods:
+                res.step_counts.append({"k": k, "start": start, "method": m, "steps": _step_count(model, m, x0, 1e-6)})
+                tick(f"steps {m} k={k:.0e} {start}")
+    res.energy = _energy_study(quick)
+    tick("energy study")
+    return res
+
+
+def _energy_study(quick: bool) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    model = elastic(k1=1e4, k2=1e4)
+    x0 = _start(model, "rest-length")
+    T = 2.0 if quick else 10.0
+    h = 0.02  # h * omega_max = 3.2: the spring mode is not resolved
+    runs = {
+        "Gauss-Legendre collocation (h = 0.02 s)": dict(method="collocation-legendre", max_step=h),
+        "implicit midpoint (h = 0.02 s)": dict(method="implicit-midpoint", max_step=h),
+        "Radau IIA collocation (h = 0.02 s)": dict(method="collocation-radau", max_step=h),
+        "CVODES BDF (rtol = 1e-4)": dict(method="cvodes-bdf", rtol=1e-4, atol=1e-6),
+    }
+    out = {}
+    for label, kw in runs.items():
+        tr = simulate(model, x0, T, 0.02, **kw)
+        E = model.energy(tr.x)
+        out[label] = (tr.t, E - E[0])
+    return out
+
+
+def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
+    """Write CSVs and charts of a stability run to ``out``; return the paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "stability_map.csv", out / "rk4_limit.csv", out / "step_counts.csv"]
+    names = {UNSTABLE: "unstable", INACCURATE: "stable-inaccurate", ACCURATE: "stable-accurate"}
+    with paths[0].open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["method", "k", "omega_max", "h", "h_omega_max", "class", "position_error"])
+        for m, grid in res.maps.items():
+            for i, k in enumerate(res.ks):
+                for j, h in enumerate(res.hs):
+                    w.writerow(
+                        [
+                            m,
+                            f"{k:.6g}",
+                            f"{res.omega_max[i]:.6g}",
+                            f"{h:.6g}",
+                            f"{h * res.omega_max[i]:.4g}",
+                            names[grid[i, j]],
+                            f"{res.errors[m][i, j]:.3e}",
+                        ]
+                    )
+    with paths[1].open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["k", "h_measured", "h_predicted", "relative_difference"])
+        for k, hm, hp in res.blowup:
+            w.writerow([f"{k:.6g}", f"{hm:.6g}", f"{hp:.6g}", f"{hm / hp - 1:.4f}"])
+    with paths[2].open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=["k", "start", "method", "steps"])
+        w.writeheader()
+        w.writerows(res.step_counts)
+    paths += [_plot_map(res, out / "stability_map.png"), _plot_steps(res, out / "stability_steps.png")]
+    paths.append(_plot_energy(res, out / "stability_energy.png"))
+    return paths
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _plot_map(res: StabilityResult, path: Path) -> Path:
+    plt = _plt()
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    methods = list(res.maps)
+    ncol = 3
+    nrow = math.ceil(len(methods) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow), squeeze=False, sharex=True, sharey=True)
+    cmap = ListedColormap(["#d62728", "#ffbf40", "#2ca02c"])
+    lk, lh = np.log10(res.ks), np.log10(res.hs)
+
+    def edges(v: np.ndarray) -> np.ndarray:
+        mid = 0.5 * (v[1:] + v[:-1])
+        return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
+
+    kk = np.logspace(lk[0], lk[-1], 100)
+    wmax = np.interp(np.log10(kk), lk, np.log10(res.omega_max))
+    for ax, m in zip(axes.flat, methods, strict=False):
+        ax.pcolormesh(10 ** edges(lk), 10 ** edges(lh), res.maps[m].T, cmap=cmap, vmin=0, vmax=2, shading="flat")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        lim = IMAG_AXIS_LIMIT.get(m)
+        if lim:
+            ax.plot(kk, lim / 10**wmax, "k-", lw=2, label=f"h w_max = {lim:.2f}")
+        ax.plot(kk, 1.0 / 10**wmax, "k:", lw=1, label="h w_max = 1")
+        fm = FIXED_METHODS[m]
+        ax.set_title(f"{m} (order {fm.order}, {'explicit' if fm.explicit else 'implicit'})", fontsize=9)
+        ax.legend(fontsize=7, loc="lower left")
+        ax.set_xlabel("spring stiffness k [N/m]")
+        ax.set_ylabel("step h [s]")
+    for ax in list(axes.flat)[len(methods) :]:
+        ax.axis("off")
+    fig.legend(
+        [Patch(color=c) for c in ("#2ca02c", "#ffbf40", "#d62728")],
+        ["stable and accurate (bob positions within 1 mm)", "stable but inaccurate", "unstable (energy x10 within 1 s)"],
+        loc="lower center",
+        ncol=3,
+        fontsize=9,
+        frameon=False,
+    )
+    fig.suptitle("Fixed-step methods on the elastic pendulum (theta = 0.3 rad, springs at rest length, 1 s)", fontsize=11)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _plot_steps(res: StabilityResult, path: Path) -> Path:
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    ks = sorted({r["k"] for r in res.step_counts})
+    for ax, start in zip(axes, ("quasi-static", "rest-length"), strict=False):
+        for m, mk in zip(("RK45", "DOP853", "Radau", "cvodes-bdf"), "osD^", strict=False):
+            pts = [(r["k"], r["steps"]) for r in res.step_counts if r["start"] == start and r["method"] == m]
+            if pts:
+                ax.loglog(*zip(*pts, strict=False), "-", marker=mk, label=m)
+        if ks:
+            ref = [r["steps"] for r in res.step_counts if r["method"] == "RK45" and r["start"] == start]
+            if ref:
+                guide = ref[-1] * np.sqrt(np.array(ks) / ks[-1])
+                ax.loglog(ks, guide, "k:", lw=1, label="~ sqrt(k)")
+        what = "quasi-static lengths" if start == "quasi-static" else "rest length"
+        ax.set_title(f"start: springs at {what} (rtol = atol = 1e-6, 1 s)", fontsize=10)
+        ax.set_xlabel("spring stiffness k [N/m]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0].set_ylabel("accepted steps over 1 s")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _plot_energy(res: StabilityResult, path: Path) -> Path:
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 4.2))
+    for label, (t, dE) in res.energy.items():
+        ax.plot(t, dE, label=label, lw=1.2)
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("energy change E(t) - E(0) [J]")
+    ax.set_title("Undamped springs, k = 1e4 N/m, rest-length start: symplectic vs dissipative methods", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,384 @@
+"""Work-precision benchmark: median wall time against *achieved* error.
+
+Every method runs over a sweep of its accuracy setting (tolerance for the
+adaptive methods, step for the fixed-step ones) on every case of
+:mod:`pendulab.bench.cases`; errors are measured against the stored
+references (:mod:`pendulab.bench.reference`) three ways:
+
+* ``final_error``: max-abs state error at t_final,
+* ``grid_error``: max-abs state error over the output grid,
+* ``energy_drift``: max over the grid of |E(t) - E(0)| [J] (the cases are
+  undamped, so the exact value is zero; chaos does not amplify it).
+
+Wall time is the median of up to ``repeats`` timed runs of the whole
+``simulate`` call after one untimed warm-up run (which builds and caches the
+CasADi functions; its time is kept as ``first_run``); a point stops repeating
+once its timed runs took ``REPEAT_BUDGET_S``. When a point's median exceeds
+``slow_run_s`` the tighter settings of that method on that case are skipped.
+CPU time (``time.process_time``) is recorded next to wall time because the
+benchmark machine may be shared.
+
+Methods are entries of ``BENCH_METHODS``: a name, the kind of sweep, its
+settings and a runner ``run(model, x0, t_final, dt, setting) -> Trajectory``.
+More methods (e.g. the FMU's embedded solvers through fmpy) are added by
+appending one ``BenchMethod`` whose runner returns a Trajectory on the same
+output grid; see ``docs/benchmarks.md``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import statistics
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..model.model import Model
+from ..model.simulate import METHODS, SimulationError, simulate
+from ..model.trajectory import Trajectory
+from .cases import Case, get_cases
+from .reference import Reference, load_reference
+
+__all__ = [
+    "BenchMethod",
+    "BENCH_METHODS",
+    "register_method",
+    "Row",
+    "run_work_precision",
+    "write_csv",
+    "read_csv",
+    "plot_work_precision",
+    "fastest_table",
+]
+
+Runner = Callable[[Model, np.ndarray, float, float, float], Trajectory]
+Progress = Callable[[int, int, str], None]
+
+REPEAT_BUDGET_S = 2.0  # stop repeating a point once its timed runs took this long [s]
+_TOLS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
+_TOLS_QUICK = (1e-4, 1e-7)
+_STEPS = (5e-2, 2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)
+_STEPS_QUICK = (1e-2, 2e-3)
+
+
+def _adaptive(method: str) -> Runner:
+    def run(model: Model, x0: np.ndarray, t_final: float, dt: float, tol: float) -> Trajectory:
+        return simulate(model, x0, t_final, dt, method, rtol=tol, atol=tol)
+
+    return run
+
+
+def _fixed(method: str) -> Runner:
+    def run(model: Model, x0: np.ndarray, t_final: float, dt: float, h: float) -> Trajectory:
+        return simulate(model, x0, t_final, dt, method, max_step=h)
+
+    return run
+
+
+@dataclass(frozen=True)
+class BenchMethod:
+    """One method of the benchmark.
+
+    Attributes
+    ----------
+    name : str
+        Label in tables and charts.
+    sweep : {"tol", "step"}
+        What the settings are: rtol = atol, or the fixed step h [s].
+    settings, quick : tuple of float
+        Full and quick sweeps, loosest first.
+    run : callable
+        ``run(model, x0, t_final, dt, setting) -> Trajectory`` on the output
+        grid ``time_grid(t_final, dt)``; raise ``SimulationError`` on failure.
+    family : str
+        Grouping for colours: "casadi", "scipy", "fixed", "fmu", ...
+    """
+
+    name: str
+    sweep: str
+    settings: tuple[float, ...]
+    quick: tuple[float, ...]
+    run: Runner = field(repr=False)
+    family: str = ""
+
+
+def _native() -> dict[str, BenchMethod]:
+    out: dict[str, BenchMethod] = {}
+    for name in ("cvodes-bdf", "cvodes-adams", "idas", "RK45", "DOP853", "Radau", "BDF", "LSODA"):
+        out[name] = BenchMethod(name, "tol", _TOLS, _TOLS_QUICK, _adaptive(name), METHODS[name].family)
+    for name in ("rk", "collocation-radau", "collocation-legendre"):
+        # CasADi builds one integrator over the whole refined grid: keep the grid below ~5000 points.
+        out[name] = BenchMethod(name, "step", _STEPS[:5], _STEPS_QUICK, _fixed(name), "casadi")
+    for name in ("rk4", "gauss4", "radau3"):
+        out[name] = BenchMethod(name, "step", _STEPS, _STEPS_QUICK, _fixed(name), "fixed")
+    return out
+
+
+#: The benchmark's method registry (insertion order = legend order).
+BENCH_METHODS: dict[str, BenchMethod] = _native()
+
+
+def register_method(method: BenchMethod) -> None:
+    """Add a method to ``BENCH_METHODS`` (e.g. an FMU's embedded solver run through fmpy).
+
+    Raises
+    ------
+    ValueError
+        The name is taken, the sweep kind is unknown or the settings are empty.
+    """
+    if method.name in BENCH_METHODS:
+        raise ValueError(f"method name {method.name!r} is already registered")
+    if method.sweep not in ("tol", "step"):
+        raise ValueError(f"sweep must be 'tol' or 'step', got {method.sweep!r}")
+    if not method.settings or not method.quick:
+        raise ValueError(f"method {method.name!r}: settings and quick settings must be non-empty")
+    BENCH_METHODS[method.name] = method
+
+
+@dataclass
+class Row:
+    """One (case, method, setting) measurement."""
+
+    case: str
+    method: str
+    sweep: str
+    setting: float
+    status: str  # ok | failed | unstable | skipped
+    final_error: float = math.nan
+    grid_error: float = math.nan
+    energy_drift: float = math.nan
+    wall_median: float = math.nan
+    wall_min: float = math.nan
+    cpu_median: float = math.nan
+    first_run: float = math.nan
+    repeats: int = 0
+    n_steps: float = math.nan
+    n_rhs: float = math.nan
+    reference_accuracy: float = math.nan
+    message: str = ""
+
+
+def _measure(method: BenchMethod, case: Case, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int) -> Row:
+    row = Row(case.name, method.name, method.sweep, setting, "ok", reference_accuracy=ref.accuracy)
+    times: list[float] = []
+    cpu: list[float] = []
+    traj = None
+    # Run 0 is a warm-up (it builds and caches the CasADi functions); then up to
+    # `repeats` timed runs, fewer once they have used REPEAT_BUDGET_S.
+    for i in range(repeats + 1):
+        start, cpu_start = time.perf_counter(), time.process_time()
+        try:
+            traj = method.run(model, x0, case.t_final, case.dt, setting)
+        except SimulationError as exc:
+            row.status = "unstable" if "non-finite" in str(exc) else "failed"
+            row.message = str(exc).splitlines()[0][:200]
+            return row
+        if i == 0:
+            row.first_run = time.perf_counter() - start
+            continue
+        times.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - cpu_start)
+        if sum(times) > REPEAT_BUDGET_S:
+            break
+    X = traj.x
+    if X.shape != ref.x.shape:
+        row.status, row.message = "failed", f"grid shape {X.shape} differs from the reference {ref.x.shape}"
+        return row
+    if not np.all(np.isfinite(X)) or np.max(np.abs(X)) > 1e6:
+        row.status, row.message = "unstable", "state blew up"
+        return row
+    err = np.abs(X - ref.x)
+    E = model.energy(X)
+    row.final_error = float(np.max(err[-1]))
+    row.grid_error = float(np.max(err))
+    row.energy_drift = float(np.max(np.abs(E - E[0])))
+    row.wall_median = float(statistics.median(times))
+    row.wall_min = float(min(times))
+    row.cpu_median = float(statistics.median(cpu))
+    row.repeats = len(times)
+    row.n_steps = float(traj.stats.get("n_steps") or math.nan)
+    row.n_rhs = float(traj.stats.get("n_rhs") or math.nan)
+    return row
+
+
+def run_work_precision(
+    cases: Sequence[str] | None = None,
+    methods: Sequence[str] | None = None,
+    *,
+    quick: bool = False,
+    repeats: int = 3,
+    slow_run_s: float = 5.0,
+    progress: Progress | None = None,
+) -> list[Row]:
+    """Run the work-precision sweep.
+
+    Parameters
+    ----------
+    cases : sequence of str, optional
+        Case names (default: all of ``CASES``).
+    methods : sequence of str, optional
+        Method names of ``BENCH_METHODS`` (default: all).
+    quick : bool
+        Use the short sweeps (CI smoke run).
+    repeats : int
+        Timed runs per point (median reported).
+    slow_run_s : float
+        A point whose median wall time exceeds this [s] (or whose warm-up run
+        exceeds four times this) ends the method's sweep on that case.
+    progress : callable, optional
+        ``progress(done, total, label)`` after each point.
+
+    Returns
+    -------
+    list of Row
+    """
+    if not isinstance(repeats, int) or repeats < 1:
+        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    selected = list(BENCH_METHODS) if methods is None else list(methods)
+    unknown = [m for m in selected if m not in BENCH_METHODS]
+    if unknown:
+        raise ValueError(f"unknown method(s) {unknown}; expected some of {list(BENCH_METHODS)}")
+    case_list = get_cases(cases)
+    refs = {c.name: load_reference(c) for c in case_list}
+    plan = [(c, BENCH_METHODS[m]) for c in case_list for m in selected]
+    total = sum(len(bm.quick if quick else bm.settings) for _, bm in plan)
+    rows: list[Row] = []
+    done = 0
+    for case, bm in plan:
+        model, x0 = case.model(), case.initial_state()
+        settings = bm.quick if quick else bm.settings
+        stop = False
+        for s in settings:
+            if stop:
+                rows.append(Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s"))
+            else:
+                row = _measure(bm, case, model, x0, refs[case.name], s, repeats)
+                rows.append(row)
+                stop = row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s)
+            done += 1
+            if progress is not None:
+                progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
+    return rows
+
+
+_FIELDS = [f for f in Row.__dataclass_fields__]
+
+
+def write_csv(rows: Iterable[Row], path: str | Path) -> Path:
+    """Write rows to CSV (one line per case, method and setting)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=_FIELDS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in asdict(r).items()})
+    return path
+
+
+def read_csv(path: str | Path) -> list[Row]:
+    """Read rows written by :func:`write_csv`."""
+    out = []
+    with Path(path).open() as fh:
+        for d in csv.DictReader(fh):
+            kw: dict[str, Any] = {}
+            for k, v in d.items():
+                typ = Row.__dataclass_fields__[k].type
+                kw[k] = float(v) if typ == "float" else int(v) if typ == "int" else v
+            out.append(Row(**kw))
+    return out
+
+
+# tab20 comes in dark/light pairs: use the dark ones first so neighbours differ.
+_COLOR_ORDER = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19)
+_TIME_LABEL = {"wall_median": "median wall time [s]", "cpu_median": "median CPU time [s]"}
+_METRIC_LABEL = {
+    "grid_error": "achieved error: max |x - x_ref| over the output grid",
+    "final_error": "achieved error: max |x(T) - x_ref(T)|",
+    "energy_drift": "energy drift: max |E(t) - E(0)| [J]",
+}
+
+
+def plot_work_precision(
+    rows: Sequence[Row], path: str | Path, metric: str = "grid_error", title: str = "", time_metric: str = "wall_median"
+) -> Path:
+    """Median wall (or CPU) time against achieved error (log-log), one panel per case."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if metric not in _METRIC_LABEL:
+        raise ValueError(f"metric must be one of {list(_METRIC_LABEL)}, got {metric!r}")
+    if time_metric not in _TIME_LABEL:
+        raise ValueError(f"time_metric must be one of {list(_TIME_LABEL)}, got {time_metric!r}")
+    cases = list(dict.fromkeys(r.case for r in rows))
+    methods = list(dict.fromkeys(r.method for r in rows))
+    ncol = min(2, len(cases))
+    nrow = math.ceil(len(cases) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow), squeeze=False)
+    cmap = plt.get_cmap("tab20")
+    markers = "osD^v<>ph*Xd8P"
+    for ax, case in zip(axes.flat, cases, strict=False):
+        acc = math.nan
+        for i, m in enumerate(methods):
+            pts = [r for r in rows if r.case == case and r.method == m and r.status == "ok"]
+            if not pts:
+                continue
+            acc = pts[0].reference_accuracy
+            xs = [max(getattr(r, metric), 1e-17) for r in pts]
+            ys = [getattr(r, time_metric) for r in pts]
+            ls = "--" if pts[0].sweep == "step" else "-"
+            color = cmap(_COLOR_ORDER[i % len(_COLOR_ORDER)])
+            ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=color, ms=4, lw=1, label=m)
+        if metric != "energy_drift" and math.isfinite(acc):
+            ax.axvline(acc, color="k", ls=":", lw=1)
+            ax.text(acc, ax.get_ylim()[1], " reference\n accuracy", va="top", fontsize=7)
+        ax.set_title(case, fontsize=10)
+        ax.set_xlabel(_METRIC_LABEL[metric], fontsize=8)
+        ax.set_ylabel(_TIME_LABEL[time_metric], fontsize=8)
+        ax.grid(True, which="major", alpha=0.3)
+    for ax in list(axes.flat)[len(cases) :]:
+        ax.axis("off")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    for ax in axes.flat:
+        h, lab = ax.get_legend_handles_labels()
+        if len(lab) > len(labels):
+            handles, labels = h, lab
+    fig.legend(handles, labels, loc="lower center", ncol=min(7, len(labels)), fontsize=8, frameon=False)
+    fig.suptitle(title or "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep", fontsize=11)
+    fig.tight_layout(rect=(0, 0.06 if nrow > 1 else 0.1, 1, 0.97))
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def fastest_table(rows: Sequence[Row], case: str, levels: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) -> list[dict]:
+    """For each error level, the method reaching it (grid error) in the least median time.
+
+    Returns a list of dicts: level, method, setting, grid_error, wall_median, and
+    the runner-up with its time ratio, or method None when nobody reaches it.
+    """
+    ok = [r for r in rows if r.case == case and r.status == "ok"]
+    table = []
+    for lev in levels:
+        best: dict[str, Row] = {}
+        for r in ok:
+            if r.grid_error <= lev and (r.method not in best or r.wall_median < best[r.method].wall_median):
+                best[r.method] = r
+        ranked = sorted(best.values(), key=lambda r: r.wall_median)
+        entry: dict[str, Any] = {"level": lev, "method": None}
+        if ranked:
+            w = ranked[0]
+            entry.update(method=w.method, setting=w.setting, sweep=w.sweep, grid_error=w.grid_error, wall_median=w.wall_median)
+            if len(ranked) > 1:
+                entry.update(runner_up=ranked[1].method, ratio=ranked[1].wall_median / w.wall_median)
+        table.append(entry)
+    return table

@@ -1,0 +1,39 @@
+"""Work-precision bookkeeping: fastest-method table, method registry, CSV round trip."""
+
+import math
+
+import pytest
+
+from pendulab.bench.workprecision import BENCH_METHODS, BenchMethod, Row, fastest_table, read_csv, register_method, write_csv
+
+
+def _row(method, err, wall, setting=1e-6):
+    return Row("c", method, "tol", setting, "ok", grid_error=err, wall_median=wall)
+
+
+def test_fastest_table_picks_cheapest_run_reaching_each_level():
+    rows = [_row("A", 1e-3, 0.01), _row("A", 1e-7, 1.0), _row("B", 1e-5, 0.1), _row("B", 1e-9, 0.5)]
+    rows.append(Row("c", "C", "tol", 1e-3, "failed"))
+    t = {e["level"]: e for e in fastest_table(rows, "c", levels=(1e-2, 1e-4, 1e-6, 1e-8, 1e-10))}
+    assert t[1e-2]["method"] == "A" and t[1e-2]["runner_up"] == "B" and t[1e-2]["ratio"] == pytest.approx(10.0)
+    assert t[1e-4]["method"] == "B" and t[1e-4]["runner_up"] == "A"
+    assert t[1e-6]["method"] == "B" and t[1e-6]["wall_median"] == 0.5  # B's 0.5 s beats A's 1 s
+    assert t[1e-10]["method"] is None
+
+
+def test_register_method_rejects_duplicates_and_bad_sweeps():
+    def run(*_args):
+        raise NotImplementedError
+
+    with pytest.raises(ValueError, match="already registered"):
+        register_method(BenchMethod("DOP853", "tol", (1e-6,), (1e-6,), run))
+    with pytest.raises(ValueError, match="sweep must be"):
+        register_method(BenchMethod("fmu-x", "order", (1.0,), (1.0,), run))
+    assert "fmu-x" not in BENCH_METHODS
+
+
+def test_csv_round_trip(tmp_path):
+    rows = [_row("A", 1.5e-7, 0.25), Row("c", "B", "step", 0.01, "unstable", message="state blew up")]
+    back = read_csv(write_csv(rows, tmp_path / "r.csv"))
+    assert back[0].grid_error == pytest.approx(1.5e-7) and back[0].wall_median == pytest.approx(0.25)
+    assert back[1].status == "unstable" and math.isnan(back[1].grid_error)
