@@ -27,6 +27,7 @@ native adaptive methods).
 from __future__ import annotations
 
 import atexit
+import math
 import shutil
 import tempfile
 from pathlib import Path
@@ -97,12 +98,14 @@ def fmu_runner(solver: int):
                 record_events=False,
             )
         except Exception as exc:  # fmpy raises FMICallException (an Exception) on an Error status
-            raise SimulationError(f"{method} (tolerance {tol:g}) failed: {str(exc).splitlines()[0]}") from exc
+            reason = f"the FMU returned an error ({str(exc).splitlines()[0]}; time of failure not reported by fmpy)"
+            raise SimulationError(method, math.nan, t_final, reason, "see the FMU's log message above") from exc
         x = np.column_stack([res[n] for n in model.state_names])
         if len(x) != len(t):
-            raise SimulationError(f"{method} returned {len(x)} samples, expected {len(t)} on the output grid")
-        if not np.all(np.isfinite(x)):
-            raise SimulationError(f"{method} (tolerance {tol:g}): non-finite state")
+            raise SimulationError(method, float(res["time"][-1]), t_final, f"{len(x)} samples, expected {len(t)}")
+        bad = ~np.all(np.isfinite(x), axis=1)
+        if bad.any():
+            raise SimulationError(method, float(t[np.argmax(bad)]), t_final, "non-finite state")
         return Trajectory(
             t=t,
             x=x,
