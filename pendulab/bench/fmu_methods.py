@@ -30,14 +30,18 @@ import atexit
 import math
 import shutil
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..model.model import Model
 from ..model.simulate import SimulationError, time_grid
 from ..model.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from .workprecision import BenchMethod
 
 __all__ = ["FMU_SOLVERS", "fmu_runner", "fmu_bench_methods", "register_fmu_methods"]
 
@@ -64,7 +68,7 @@ def _unpacked_fmu(model: Model) -> tuple[str, Any]:
     return _cache[model.kind]
 
 
-def fmu_runner(solver: int):
+def fmu_runner(solver: int) -> Callable[[Model, np.ndarray, float, float, float], Trajectory]:
     """Runner ``run(model, x0, t_final, dt, tol) -> Trajectory`` for the FMU's embedded ``solver`` (0 or 1).
 
     Raises ``SimulationError`` when the FMU reports an error (e.g. a solver
@@ -72,7 +76,7 @@ def fmu_runner(solver: int):
     """
     if solver not in FMU_SOLVERS.values():
         raise ValueError(f"solver must be one of {sorted(FMU_SOLVERS.values())}, got {solver!r}")
-    method = f"fmu:{next(n for n, s in FMU_SOLVERS.items() if s == solver)}"
+    method = "fmu:" + ("dopri5", "rodas4")[solver]
 
     def run(model: Model, x0: np.ndarray, t_final: float, dt: float, tol: float) -> Trajectory:
         from fmpy import simulate_fmu
@@ -120,7 +124,7 @@ def fmu_runner(solver: int):
     return run
 
 
-def fmu_bench_methods(settings: tuple[float, ...], quick: tuple[float, ...]) -> list:
+def fmu_bench_methods(settings: tuple[float, ...], quick: tuple[float, ...]) -> list[BenchMethod]:
     """One ``BenchMethod`` per embedded solver (tolerance sweeps ``settings`` / ``quick``)."""
     from .workprecision import BenchMethod
 

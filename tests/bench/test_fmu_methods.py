@@ -35,7 +35,7 @@ def test_fmu_rodas4_steps_over_stiff_springs_after_quasi_static_start():
     case = CASES["elastic_stiff_1e6_qs"]
     ref = load_reference(case)
     traj = fmu_runner(1)(case.model(), case.initial_state(), case.t_final, case.dt, 1e-7)
-    assert traj.method == "fmu:fmu-rodas4" and traj.x.shape == ref.x.shape
+    assert traj.method == "fmu:rodas4" and traj.x.shape == ref.x.shape
     # L-stable rodas4 at 1e-7 on k = 1e6 N/m: measured 3.6e-7 over the grid; 1e-5 leaves room for platform noise.
     assert np.max(np.abs(traj.x - ref.x)) < 1e-5
     np.testing.assert_allclose(traj.t, ref.t, rtol=0, atol=1e-12)  # one doStep per output point of the case grid
@@ -48,5 +48,5 @@ def test_fmu_runner_rejects_unknown_solver_and_reports_failures():
     # A NaN start value is refused by the FMU (Error status): reported as a SimulationError naming the method.
     x0 = case.initial_state().copy()
     x0[0] = math.nan
-    with pytest.raises(SimulationError, match="fmu-dopri5"):
+    with pytest.raises(SimulationError, match="fmu:dopri5"):
         fmu_runner(0)(case.model(), x0, case.t_final, case.dt, 1e-6)
