@@ -363,6 +363,8 @@ def plot_work_precision(
             ys = [getattr(r, time_metric) for r in pts]
             ls = "-." if _family(m) == "fmu" else "--" if pts[0].sweep == "step" else "-"
             color = cmap(_COLOR_ORDER[i % len(_COLOR_ORDER)])
+            if _family(m) == "fmu":  # tab20's light shades are hard to see; the FMU lines get black and grey
+                color = ("black", "dimgray")[sum(_family(n) == "fmu" for n in methods[:i]) % 2]
             ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=color, ms=4, lw=1, label=m)
         if metric != "energy_drift" and math.isfinite(acc):
             ax.axvline(acc, color="k", ls=":", lw=1)
