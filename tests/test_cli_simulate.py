@@ -8,6 +8,7 @@ import pytest
 
 import pendulab as pl
 from pendulab.cli import main
+from pendulab.scenes import load_scene
 
 
 def read_csv(path):
@@ -103,3 +104,52 @@ def test_bad_scene_file_one_line(tmp_path, capsys):
     assert main(["simulate", "--scene", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.toml" in err[0] and "[simulation] tfinal = 3.0" in err[0]
+
+
+def _auto(tmp_path, capsys, scene, *extra):
+    out = tmp_path / f"{scene}.csv"
+    args = ["simulate", "--scene", scene, "--model", "auto", "--json", "--out", str(out), *extra]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    header, data = read_csv(out)
+    return json.loads(captured.out), captured.err, dict(zip(header, data.T, strict=True))
+
+
+def test_model_auto_stiff_scene_runs_the_rigid_model(tmp_path, capsys):
+    summary, err, cols = _auto(tmp_path, capsys, "elastic_stiff", "--t-final", "1")
+    assert summary["model_level"] == "rigid"
+    assert "chosen: rigid" in err and "linearized" in err  # the hierarchy report went to stderr
+    assert cols["t"][-1] == 1.0  # --t-final reached the scene before the choice
+    # The CSV is the rigid trajectory in the elastic model's columns: springs held at rest length, no spring motion.
+    np.testing.assert_array_equal(cols["r1"], 1.0)
+    np.testing.assert_array_equal(cols["v2"], 0.0)
+    scene = load_scene("elastic_stiff")
+    rigid = pl.simulate(pl.rigid(), [0.3, 0.3, 0.0, 0.0], 1.0, scene.dt, scene.method, scene.rtol, scene.atol)
+    # Same rigid model, method and tolerances as the hierarchy's rigid level: equal to round-off.
+    np.testing.assert_allclose(cols["theta1"], rigid["theta1"], rtol=0, atol=1e-12)
+    full = scene.simulate(t_final=1.0)
+    dev = np.max(np.abs(cols["x2"] - full["x2"]))
+    # Within the scene's 1e-3 m tolerance of the elastic model, yet not the elastic run itself (~1e-5 m static stretch).
+    assert 1e-7 < dev < scene.tolerance
+
+
+def test_model_auto_soft_scene_runs_the_elastic_model(tmp_path, capsys):
+    summary, err, cols = _auto(tmp_path, capsys, "elastic_soft", "--t-final", "0.5")
+    assert summary["model_level"] == "elastic" and "chosen: elastic" in err
+    full = load_scene("elastic_soft").simulate(t_final=0.5)
+    # The chosen level is the scene's own native run: identical samples.
+    np.testing.assert_allclose(cols["theta2"], full["theta2"], rtol=0, atol=1e-12)
+    assert np.ptp(cols["r1"]) > 1e-3  # the springs really move (soft: static stretch 0.2 m)
+
+
+def test_model_auto_applies_set_before_choosing(tmp_path, capsys):
+    # The soft scene made stiff with --set: the hierarchy sees k = 1e6 N/m and the rigid model suffices.
+    summary, _, cols = _auto(tmp_path, capsys, "elastic_soft", "--t-final", "1", "--set", "k1=1e6", "--set", "k2=1e6")
+    assert summary["model_level"] == "rigid" and summary["params"]["k1"] == 1e6
+    np.testing.assert_array_equal(cols["r2"], 1.0)
+
+
+def test_model_auto_without_scene_is_a_one_line_error(capsys):
+    assert main(["simulate", "--model", "auto", "--t-final", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--model auto needs --scene" in err and "\n" not in err

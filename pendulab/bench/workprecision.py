@@ -42,6 +42,7 @@ from ..model.model import Model
 from ..model.simulate import METHODS, SimulationError, simulate
 from ..model.trajectory import Trajectory
 from .cases import Case, get_cases
+from .fmu_methods import register_fmu_methods
 from .reference import Reference, load_reference
 
 __all__ = [
@@ -54,6 +55,7 @@ __all__ = [
     "read_csv",
     "plot_work_precision",
     "fastest_table",
+    "merge_rows",
 ]
 
 Runner = Callable[[Model, np.ndarray, float, float, float], Trajectory]
@@ -138,6 +140,10 @@ def register_method(method: BenchMethod) -> None:
     if not method.settings or not method.quick:
         raise ValueError(f"method {method.name!r}: settings and quick settings must be non-empty")
     BENCH_METHODS[method.name] = method
+
+
+# The FMU's embedded solvers (exported once per model kind, run through fmpy) are part of the default run.
+register_fmu_methods(_TOLS, _TOLS_QUICK)
 
 
 @dataclass
@@ -294,6 +300,23 @@ def read_csv(path: str | Path) -> list[Row]:
     return out
 
 
+def merge_rows(old: Iterable[Row], new: Iterable[Row]) -> list[Row]:
+    """Rows of ``old`` whose (case, method) was not re-measured, plus ``new``.
+
+    Sorted by case order of ``CASES`` and method order of ``BENCH_METHODS`` (unknown names last), so a partial re-run
+    merged into a complete CSV gives the same layout as a full run.
+    """
+    from .cases import CASES
+
+    new = list(new)
+    remeasured = {(r.case, r.method) for r in new}
+    rows = [r for r in old if (r.case, r.method) not in remeasured] + new
+    case_rank = {c: i for i, c in enumerate(CASES)}
+    method_rank = {m: i for i, m in enumerate(BENCH_METHODS)}
+    big = len(case_rank) + len(method_rank)
+    return sorted(rows, key=lambda r: (case_rank.get(r.case, big), method_rank.get(r.method, big)))
+
+
 # tab20 comes in dark/light pairs: use the dark ones first so neighbours differ.
 _COLOR_ORDER = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19)
 _TIME_LABEL = {"wall_median": "median wall time [s]", "cpu_median": "median CPU time [s]"}
@@ -302,6 +325,11 @@ _METRIC_LABEL = {
     "final_error": "achieved error: max |x(T) - x_ref(T)|",
     "energy_drift": "energy drift: max |E(t) - E(0)| [J]",
 }
+
+
+def _family(method: str) -> str:
+    bm = BENCH_METHODS.get(method)
+    return bm.family if bm is not None else ""
 
 
 def plot_work_precision(
@@ -323,7 +351,7 @@ def plot_work_precision(
     nrow = math.ceil(len(cases) / ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow), squeeze=False)
     cmap = plt.get_cmap("tab20")
-    markers = "osD^v<>ph*Xd8P"
+    markers = "osD^v<>ph*Xd8PH+"
     for ax, case in zip(axes.flat, cases, strict=False):
         acc = math.nan
         for i, m in enumerate(methods):
@@ -333,8 +361,10 @@ def plot_work_precision(
             acc = pts[0].reference_accuracy
             xs = [max(getattr(r, metric), 1e-17) for r in pts]
             ys = [getattr(r, time_metric) for r in pts]
-            ls = "--" if pts[0].sweep == "step" else "-"
+            ls = "-." if _family(m) == "fmu" else "--" if pts[0].sweep == "step" else "-"
             color = cmap(_COLOR_ORDER[i % len(_COLOR_ORDER)])
+            if _family(m) == "fmu":  # tab20's light shades are hard to see; the FMU lines get black and grey
+                color = ("black", "dimgray")[sum(_family(n) == "fmu" for n in methods[:i]) % 2]
             ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=color, ms=4, lw=1, label=m)
         if metric != "energy_drift" and math.isfinite(acc):
             ax.axvline(acc, color="k", ls=":", lw=1)
@@ -351,7 +381,8 @@ def plot_work_precision(
         if len(lab) > len(labels):
             handles, labels = h, lab
     fig.legend(handles, labels, loc="lower center", ncol=min(7, len(labels)), fontsize=8, frameon=False)
-    fig.suptitle(title or "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep", fontsize=11)
+    default_title = "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep, dash-dot = FMU via fmpy"
+    fig.suptitle(title or default_title, fontsize=11)
     fig.tight_layout(rect=(0, 0.06 if nrow > 1 else 0.1, 1, 0.97))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -36,7 +36,11 @@ def _work_precision(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     rows = wp.run_work_precision(args.cases, args.methods, quick=args.quick, repeats=args.repeats, progress=_Bar())
-    csv_path = wp.write_csv(rows, out / "work_precision.csv")
+    csv_path = out / "work_precision.csv"
+    if args.merge and csv_path.exists():
+        # Charts and tables below are regenerated from the complete, merged CSV.
+        rows = wp.merge_rows(wp.read_csv(csv_path), rows)
+    wp.write_csv(rows, csv_path)
     figs = [
         wp.plot_work_precision(rows, out / f"work_precision_{metric}.png", metric)
         for metric in ("grid_error", "final_error", "energy_drift")
@@ -169,6 +173,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     wp.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory for CSV and charts (default {_DEFAULT_OUT})")
     wp.add_argument("--quick", action="store_true", help="short sweeps (CI smoke run)")
     wp.add_argument("--repeats", type=int, default=3, help="timed runs per point; the median is reported (default 3)")
+    wp.add_argument(
+        "--merge",
+        action="store_true",
+        help="replace only the re-measured (case, method) rows of an existing OUT/work_precision.csv; charts and tables "
+        "are redrawn from the merged CSV",
+    )
     wp.set_defaults(func=_work_precision)
 
     st = sub.add_parser("stability", help="stable/inaccurate/unstable map over stiffness and step, step counts, energy")

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
+import time
 from typing import Any
 
 from ..cli import CLIError
@@ -28,7 +30,13 @@ def register(subparsers: Any) -> None:
     )
     src = p.add_argument_group("what to simulate (exactly one)")
     src.add_argument("--scene", metavar="FILE|NAME", help="scene file or shipped scene name (e.g. seed_paper)")
-    src.add_argument("--model", metavar="KIND", help="model with default parameters, at rest: rigid | elastic")
+    src.add_argument(
+        "--model",
+        metavar="KIND",
+        help="model with default parameters, at rest: rigid | elastic; or 'auto' with --scene: the cheapest model of "
+        "the hierarchy (linearized, rigid, rigid+quasi-static, elastic) within the scene's [outputs] tolerance "
+        "(pendulab scene check; its report goes to stderr)",
+    )
     p.add_argument(
         "--set",
         metavar="NAME=VALUE",
@@ -51,10 +59,13 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``pendulab simulate``; return the exit status."""
     from ..scenes import default_scene, load_scene
 
-    if (args.scene is None) == (args.model is None):
-        raise CLIError("give exactly one of --scene FILE|NAME or --model rigid|elastic")
-    if args.model is not None and args.model not in _KINDS:
-        raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
+    auto = args.model == "auto"
+    if auto and args.scene is None:
+        raise CLIError("--model auto needs --scene FILE|NAME (the scene states the outputs and tolerance to meet)")
+    if not auto and (args.scene is None) == (args.model is None):
+        raise CLIError("give exactly one of --scene FILE|NAME or --model rigid|elastic (or --scene with --model auto)")
+    if args.model is not None and args.model not in (*_KINDS, "auto"):
+        raise CLIError(f"--model {args.model!r}: expected one of {[*_KINDS, 'auto']}")
     settings = parse_settings(args.set)
     overrides = {
         "t_final": parse_number("--t-final", args.t_final, positive=True),
@@ -69,10 +80,16 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene) if args.scene is not None else default_scene(args.model)
     if settings:
         scene = scene.with_settings(**settings)
+    given = {k: v for k, v in overrides.items() if v is not None}
     print(f"pendulab simulate: {scene.name} ({scene.model.kind}) ...", file=sys.stderr)
-    traj = scene.simulate(**{k: v for k, v in overrides.items() if v is not None})
+    if auto:
+        traj, level = _simulate_auto(dataclasses.replace(scene, **given))
+    else:
+        traj, level = scene.simulate(**given), None
     summary = summarize(scene.name, scene.model, traj)
     summary["scene"] = scene.name
+    if level is not None:
+        summary["model_level"] = level
 
     if args.out is not None:
         summary["out"] = str(write_trajectory(traj, args.out))
@@ -88,3 +105,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(format_summary([summary]))
     return 0
+
+
+def _simulate_auto(scene: Any) -> tuple[Any, str]:
+    """Trajectory of ``scene`` with the cheapest model level within its tolerance, and that level's name."""
+    from ..bench.hierarchy import choose_model
+
+    print("pendulab simulate: --model auto: running the model hierarchy ...", file=sys.stderr)
+    level, report = choose_model(scene)
+    print(report.table(), file=sys.stderr)
+    start = time.perf_counter()
+    traj = level.simulate(scene)
+    # The summary reports the chosen model's own run time (the hierarchy's trajectories carry no solver stats).
+    traj = dataclasses.replace(traj, stats={**traj.stats, "wall_time": time.perf_counter() - start})
+    return traj, level.name

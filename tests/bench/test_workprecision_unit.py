@@ -4,7 +4,16 @@ import math
 
 import pytest
 
-from pendulab.bench.workprecision import BENCH_METHODS, BenchMethod, Row, fastest_table, read_csv, register_method, write_csv
+from pendulab.bench.workprecision import (
+    BENCH_METHODS,
+    BenchMethod,
+    Row,
+    fastest_table,
+    merge_rows,
+    read_csv,
+    register_method,
+    write_csv,
+)
 
 
 def _row(method, err, wall, setting=1e-6):
@@ -37,3 +46,19 @@ def test_csv_round_trip(tmp_path):
     back = read_csv(write_csv(rows, tmp_path / "r.csv"))
     assert back[0].grid_error == pytest.approx(1.5e-7) and back[0].wall_median == pytest.approx(0.25)
     assert back[1].status == "unstable" and math.isnan(back[1].grid_error)
+
+
+def test_merge_rows_replaces_only_remeasured_case_method_pairs():
+    old = [
+        Row("elastic_soft", "DOP853", "tol", 1e-3, "ok", grid_error=1.0),
+        Row("rigid_regular", "DOP853", "tol", 1e-3, "ok", grid_error=2.0),
+        Row("rigid_regular", "rk4", "step", 1e-2, "ok", grid_error=3.0),
+    ]
+    new = [Row("rigid_regular", "DOP853", "tol", 1e-5, "ok", grid_error=4.0)]
+    merged = merge_rows(old, new)
+    # The old DOP853 sweep of rigid_regular is replaced as a whole; other pairs stay; CASES / BENCH_METHODS order.
+    assert [(r.case, r.method, r.grid_error) for r in merged] == [
+        ("rigid_regular", "DOP853", 4.0),
+        ("rigid_regular", "rk4", 3.0),
+        ("elastic_soft", "DOP853", 1.0),
+    ]
