@@ -16,6 +16,7 @@ import numpy as np
 
 from ..model.model import ACTUATIONS, Model
 from .sampled import upright_state
+from .._checks import positive_float
 
 __all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
 
@@ -24,14 +25,6 @@ __all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
 
 
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 @dataclass(frozen=True)
@@ -99,12 +92,12 @@ class SwingUpProblem:
         if self.objective not in OBJECTIVES:
             raise ValueError(f"objective must be one of {list(OBJECTIVES)}, got {self.objective!r}")
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalisation
-        set_("torque_limit", _positive("torque_limit", self.torque_limit))
+        set_("torque_limit", positive_float("torque_limit", self.torque_limit))
         if self.velocity_limit is not None:
-            set_("velocity_limit", _positive("velocity_limit", self.velocity_limit))
-        set_("horizon", _positive("horizon", self.horizon))
-        set_("time_weight", _positive("time_weight", self.time_weight))
-        lo, hi = (_positive("horizon_bounds[0]", self.horizon_bounds[0]), _positive("horizon_bounds[1]", self.horizon_bounds[1]))
+            set_("velocity_limit", positive_float("velocity_limit", self.velocity_limit))
+        set_("horizon", positive_float("horizon", self.horizon))
+        set_("time_weight", positive_float("time_weight", self.time_weight))
+        lo, hi = (positive_float("horizon_bounds[0]", self.horizon_bounds[0]), positive_float("horizon_bounds[1]", self.horizon_bounds[1]))
         if lo >= hi:
             raise ValueError(f"horizon_bounds must satisfy min < max, got {self.horizon_bounds!r}")
         set_("horizon_bounds", (lo, hi))

@@ -33,6 +33,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
+from .._checks import positive_float
 
 __all__ = [
     "SampledController",
@@ -77,14 +78,6 @@ class SampledController(Protocol):
 # -- linear algebra helpers ----------------------------------------------------
 
 
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 def _angle_mask(model: Model) -> np.ndarray:
@@ -261,7 +254,7 @@ def lqr_balance(
     -------
     LinearStateFeedback
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     if design not in ("continuous", "discrete"):
         raise ValueError(f"design must be 'continuous' or 'discrete', got {design!r}")
     names = _actuated(actuation)
@@ -295,7 +288,7 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
     cols = [INPUT_NAMES.index(n) for n in input_names]
     A, B = linearize(model, upright_state(model))
     sel = _design_states(model)
-    Ad, Bd = zoh(A[np.ix_(sel, sel)], B[np.ix_(sel, cols)], _positive("h", h))
+    Ad, Bd = zoh(A[np.ix_(sel, sel)], B[np.ix_(sel, cols)], positive_float("h", h))
     return float(np.max(np.abs(np.linalg.eigvals(Ad - Bd @ np.asarray(K)[:, sel]))))
 
 
@@ -366,9 +359,9 @@ def energy_swingup(
     catch_cost : float
         Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this.
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     balance = lqr_balance(model, h, u_max=u_max)
-    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=_positive("u_max", u_max), catch_cost=catch_cost)
+    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=positive_float("u_max", u_max), catch_cost=catch_cost)
 
 
 # -- glue -----------------------------------------------------------------------------
@@ -439,7 +432,7 @@ def make_controller(
     controller : SampledController
     x0 : ndarray, shape (nx,)
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     if name == "lqr":
         x0 = upright_state(model)
         x0[0] += 0.1
@@ -452,7 +445,7 @@ def make_controller(
         from .tracking_sampled import swingup_reference, tvlqr_tracker
 
         if reference is None:
-            reference = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
+            reference = swingup_reference(model, h, round(positive_float("t_ref", t_ref) / h) * h, u_max=u_max)
         tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
