@@ -239,7 +239,7 @@ def lqr_balance(
     Rm = _weight(R, m, "R", definite=True)
     Qc, Qu = controllable_subspace(lin.A, lin.B)
     unc = np.linalg.eigvals(Qu.T @ lin.A @ Qu) if Qu.shape[1] else np.zeros(0, dtype=complex)
-    scale = max(1.0, float(np.max(np.abs(np.linalg.eigvals(lin.A)))))
+    scale = max(1.0, float(np.max(np.abs(lin.eigenvalues))))
     bad = unc[(unc.real > 1e-7 * scale) | (np.abs(unc) <= 1e-7 * scale)]
     if bad.size:
         raise UncontrollableError(
@@ -249,6 +249,7 @@ def lqr_balance(
             f"(try another actuation or equilibrium)"
         )
     Ar, Br, Qr = Qc.T @ lin.A @ Qc, Qc.T @ lin.B, Qc.T @ Qm @ Qc
+    Qr = 0.5 * (Qr + Qr.T)  # exact symmetry for the Riccati solvers
     if dt is None:
         Kr, Sr, _ = ct.lqr(Ar, Br, Qr, Rm)
         K = np.asarray(Kr) @ Qc.T
