@@ -8,23 +8,20 @@ of rockit.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..model.model import ACTUATIONS, Model
 from .sampled import upright_state
-from .._checks import positive_float
 
-__all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
+__all__ = ["SwingUpProblem", "OBJECTIVES"]
 
 #: Objectives: ``effort`` = integral of tau^2; ``time`` = horizon T (free horizon);
 #: ``mix`` = time_weight * T + integral of tau^2.
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
-
-
 
 
 @dataclass(frozen=True)
@@ -97,7 +94,10 @@ class SwingUpProblem:
             set_("velocity_limit", positive_float("velocity_limit", self.velocity_limit))
         set_("horizon", positive_float("horizon", self.horizon))
         set_("time_weight", positive_float("time_weight", self.time_weight))
-        lo, hi = (positive_float("horizon_bounds[0]", self.horizon_bounds[0]), positive_float("horizon_bounds[1]", self.horizon_bounds[1]))
+        lo, hi = (
+            positive_float("horizon_bounds[0]", self.horizon_bounds[0]),
+            positive_float("horizon_bounds[1]", self.horizon_bounds[1]),
+        )
         if lo >= hi:
             raise ValueError(f"horizon_bounds must satisfy min < max, got {self.horizon_bounds!r}")
         set_("horizon_bounds", (lo, hi))

@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from ..model.model import INPUT_NAMES, Model
 from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, wrap_state_error
 from .swingup import SwingUpResult

@@ -17,10 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from ..model.model import INPUT_NAMES, Model
 from .._checks import positive_float
-from .lqr import discrete_tvlqr
-from .lqr import wrap_state_error
+from ..model.model import INPUT_NAMES, Model
+from .lqr import discrete_tvlqr, wrap_state_error
 from .sampled import _actuated, as_feedback, energy_swingup, lqr_balance
 
 __all__ = [

@@ -15,7 +15,6 @@ The instance is always freed (``terminate`` when legal, then
 
 from __future__ import annotations
 
-import math
 import shutil
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -25,11 +24,11 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..control.sampled import SampledController
 from ..model.model import INPUT_NAMES, Model, make_model
 from ..model.params import ElasticParams, RigidParams
 from ..model.trajectory import Trajectory
-from .._checks import positive_float
 
 __all__ = ["cosim", "cosim_many", "FmuInfo", "FmuPlant", "StepRejectedError", "inspect_fmu", "StepCheck"]
 
@@ -136,8 +135,6 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInfo:
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip()
     return text.splitlines()[0] if text else type(exc).__name__
-
-
 
 
 class FmuPlant:

@@ -34,11 +34,11 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .._checks import positive_float
 from .fixed_step import FIXED_METHODS, run_fixed
 from .model import Model
 from .pycode import to_python
 from .trajectory import Trajectory
-from .._checks import positive_float
 
 __all__ = ["simulate", "METHODS", "SimulationError", "InputSpec"]
 
@@ -106,8 +106,6 @@ def _resolve_method(method: str) -> MethodSpec:
     if method.lower() in by_lower:
         return by_lower[method.lower()]
     raise ValueError(f"unknown method {method!r}; expected one of {list(METHODS)}")
-
-
 
 
 def time_grid(t_final: float, dt: float) -> np.ndarray:
