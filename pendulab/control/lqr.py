@@ -32,6 +32,7 @@ __all__ = [
     "wrap_state_error",
     "zoh",
     "actuation_name",
+    "weight_matrix",
 ]
 
 
@@ -117,7 +118,8 @@ def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray
     return dx
 
 
-def _weight(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
+def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
+    """A validated symmetric (n, n) weight from ``W`` (None: identity; 1-D: diagonal); positive (semi-)definite."""
     if W is None:
         return np.eye(n)
     W = np.atleast_2d(np.asarray(W, dtype=float))
@@ -235,8 +237,8 @@ def lqr_balance(
         raise ValueError(f"dt must be a positive sample time in seconds or None, got {dt!r}")
     lin = linearize(model, x_eq, u_eq, inputs=actuation)
     n, m = lin.B.shape
-    Qm = _weight(Q, n, "Q", definite=False)
-    Rm = _weight(R, m, "R", definite=True)
+    Qm = weight_matrix(Q, n, "Q", definite=False)
+    Rm = weight_matrix(R, m, "R", definite=True)
     Qc, Qu = controllable_subspace(lin.A, lin.B)
     unc = np.linalg.eigvals(Qu.T @ lin.A @ Qu) if Qu.shape[1] else np.zeros(0, dtype=complex)
     scale = max(1.0, float(np.max(np.abs(lin.eigenvalues))))

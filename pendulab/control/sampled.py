@@ -92,6 +92,11 @@ def _actuated(actuation: str | Sequence[str]) -> tuple[str, ...]:
     return tuple(INPUT_NAMES[i] for i in ACTUATIONS[actuation_name(actuation)])
 
 
+def _angular_states(model: Model) -> np.ndarray:
+    """Mask of the angles and link rates (the states an upright balance gain acts on), shape (nx,)."""
+    return np.array([n.startswith(("theta", "omega")) for n in model.state_names])
+
+
 def _angular_weight(model: Model, Q: Any) -> np.ndarray:
     """Embed a weight on (theta1, theta2, omega1, omega2), shape (4, 4) or (4,), into the full state (zero on r, v).
 
@@ -99,7 +104,7 @@ def _angular_weight(model: Model, Q: Any) -> np.ndarray:
     elastic model decouple from the angles to first order, so their modes are
     uncontrollable by the torques and get no weight (and no gain).
     """
-    sel = np.flatnonzero([n.startswith(("theta", "omega")) for n in model.state_names])
+    sel = np.flatnonzero(_angular_states(model))
     Qa = np.diag([10.0, 10.0, 1.0, 1.0]) if Q is None else np.atleast_2d(np.asarray(Q, dtype=float))
     if Qa.shape == (1, len(sel)):
         Qa = np.diag(Qa[0])
@@ -215,7 +220,7 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
     """
     cols = [INPUT_NAMES.index(n) for n in input_names]
     lin = linearize(model, equilibrium(model, "up-up"))
-    sel = np.array([n.startswith(("theta", "omega")) for n in model.state_names])
+    sel = _angular_states(model)
     Ad, Bd = zoh(lin.A[np.ix_(sel, sel)], lin.B[np.ix_(sel, cols)], positive_float("h", h))
     return float(np.max(np.abs(np.linalg.eigvals(Ad - Bd @ np.asarray(K)[:, sel]))))
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from .._checks import positive_float
 from ..model.model import INPUT_NAMES, Model
-from .lqr import discrete_tvlqr, wrap_state_error
+from .lqr import discrete_tvlqr, weight_matrix, wrap_state_error
 from .sampled import _actuated, as_feedback, energy_swingup, lqr_balance
 
 __all__ = [
@@ -117,7 +117,7 @@ def tvlqr_gains(
 
     Each interval is linearized at ``(x_ref[k], u_ref[k])`` and discretized
     exactly with a zero-order hold of the grid step, then the discrete Riccati
-    recursion runs backwards from ``Qf``.
+    recursion (:func:`pendulab.control.lqr.discrete_tvlqr`) runs backwards from ``Qf``.
 
     Parameters
     ----------
@@ -146,15 +146,9 @@ def tvlqr_gains(
     if len(t_ref) < 2 or np.ptp(h) > 1e-9 * max(h.max(), 1e-300) + 1e-12 or h.min() <= 0:
         raise ValueError("t_ref must be a uniform increasing grid with at least 2 samples")
     n, m = model.nx, len(cols)
-    Qm = np.diag(np.where([s.startswith("theta") for s in model.state_names], 10.0, 1.0)) if Q is None else Q
-    Qm = np.atleast_2d(np.asarray(Qm, dtype=float))
-    Qm = np.diag(Qm[0]) if Qm.shape == (1, n) else Qm
-    Rm = np.eye(m) if R is None else np.atleast_2d(np.asarray(R, dtype=float))
-    Rm = np.diag(Rm[0]) if Rm.shape == (1, m) and m > 1 else Rm
-    if Qm.shape != (n, n):
-        raise ValueError(f"Q must have shape ({n}, {n}) or ({n},), got {np.shape(Q)}")
-    if Rm.shape != (m, m):
-        raise ValueError(f"R must have shape ({m}, {m}) or ({m},), got {np.shape(R)}")
+    q_default = np.diag(np.where([s.startswith("theta") for s in model.state_names], 10.0, 1.0))
+    Qm = weight_matrix(q_default if Q is None else Q, n, "Q", definite=False)
+    Rm = weight_matrix(R, m, "R", definite=True)
     if Qf is None:
         Qfm = lqr_balance(model, float(h[0]), design="discrete", actuation=actuation).P + 1e-6 * np.eye(n)
     else:
