@@ -353,11 +353,9 @@ def plot_work_precision(
     fig.legend(handles, labels, loc="lower center", ncol=min(7, len(labels)), fontsize=8, frameon=False)
     fig.suptitle(title or "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep", fontsize=11)
     fig.tight_layout(rect=(0, 0.06 if nrow > 1 else 0.1, 1, 0.97))
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)
 
 
 def fastest_table(rows: Sequence[Row], case: str, levels: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) -> list[dict]:

@@ -328,8 +328,6 @@ def plot_sweep(results: Sequence[SweepResult], path: str | Path) -> Path:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=120)
