@@ -20,7 +20,7 @@ import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov, solve_discrete_lyapunov
 
 from ..model.equilibria import Equilibrium, equilibrium
-from ..model.linearize import linearize, linearize_along
+from ..model.linearize import check_actuation, linearize, linearize_along
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
 from .analysis import controllable_subspace
 
@@ -158,8 +158,7 @@ def actuation_name(actuation: str | Sequence[str]) -> str:
         Unknown name or not a non-empty set of ("tau1", "tau2").
     """
     if isinstance(actuation, str):
-        if actuation not in ACTUATIONS:
-            raise ValueError(f"actuation must be one of {list(ACTUATIONS)} or input names, got {actuation!r}")
+        check_actuation(actuation)
         return actuation
     names = tuple(actuation)
     idx = tuple(sorted({INPUT_NAMES.index(n) for n in names if n in INPUT_NAMES}))
