@@ -36,7 +36,6 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
-from scipy.linalg import expm
 
 from ..model.counterpart import rigid_counterpart
 from ..model.model import Model, elastic
@@ -185,11 +184,10 @@ def _zoh(A: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
         phi = np.where(np.abs(z) > 1e-8, np.expm1(z) / np.where(z == 0, 1, z), 1.0 + z / 2)
         Vi = np.linalg.inv(V)
         return np.real(V @ np.diag(np.exp(z)) @ Vi), np.real(V @ (phi * dt * (Vi @ b)))
-    n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n] = A, b
-    E = expm(M * dt)
-    return E[:n, :n], E[:n, n]
+    from ..control.lqr import zoh
+
+    Ad, Bd = zoh(A, b[:, None], dt)
+    return Ad, Bd[:, 0]
 
 
 def _run_linearized(scene: SceneLike) -> np.ndarray:

@@ -319,9 +319,9 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
     )
     fig.suptitle("Fixed-step methods on the elastic pendulum (theta = 0.3 rad, springs at rest length, 1 s)", fontsize=11)
     fig.tight_layout(rect=(0, 0.05, 1, 0.96))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)
 
 
 def _plot_steps(res: StabilityResult, path: Path) -> Path:
@@ -345,9 +345,9 @@ def _plot_steps(res: StabilityResult, path: Path) -> Path:
         ax.legend(fontsize=8)
     axes[0].set_ylabel("accepted steps over 1 s")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)
 
 
 def _plot_energy(res: StabilityResult, path: Path) -> Path:
@@ -361,6 +361,6 @@ def _plot_energy(res: StabilityResult, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)

@@ -384,11 +384,9 @@ def plot_work_precision(
     default_title = "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep, dash-dot = FMU via fmpy"
     fig.suptitle(title or default_title, fontsize=11)
     fig.tight_layout(rect=(0, 0.06 if nrow > 1 else 0.1, 1, 0.97))
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)
 
 
 def fastest_table(rows: Sequence[Row], case: str, levels: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) -> list[dict]:

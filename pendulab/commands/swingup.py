@@ -89,13 +89,14 @@ def _fmu_loop(ep, out: Path) -> dict:
     import numpy as np
 
     from ..control.check import height_success
-    from ..control.fmu_loop import closed_loop_fmu
+    from ..fmu.cosim import cosim
     from ..fmu.export import export
 
     print("[swingup] exporting the FMU and running the closed loop through it ...", file=sys.stderr)
     task = ep.task
     fmu = export(task.model, out / f"{task.name}.fmu", 2, x0=ep.x0, stop_time=task.t_final, step_size=task.dt)
-    traj = closed_loop_fmu(fmu, task.model, ep.x0, ep.controller, task.t_final, task.dt)
+    params = dict(zip(task.model.param_names, task.model.p.tolist(), strict=True))
+    traj = cosim(fmu, ep.controller, task.dt, task.t_final, params=params, x0=ep.x0, tolerance=1e-8)
     traj.to_csv(out / "closed_loop_fmu.csv")
     hc = height_success(traj, task.rest_lengths, task.success_fraction)
     dev = float(np.max(np.abs(traj.x - ep.closed_loop.x)))

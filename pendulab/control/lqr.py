@@ -11,20 +11,29 @@ balanced and raises ``UncontrollableError``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import control as ct
 import numpy as np
-from scipy.linalg import expm
+from scipy.linalg import expm, solve_continuous_lyapunov, solve_discrete_lyapunov
 
 from ..model.equilibria import Equilibrium, equilibrium
-from ..model.linearize import linearize
-from ..model.model import Model
+from ..model.linearize import check_actuation, linearize, linearize_along
+from ..model.model import ACTUATIONS, INPUT_NAMES, Model
 from .analysis import controllable_subspace
 
-__all__ = ["LQRDesign", "UncontrollableError", "lqr_balance", "wrap_state_error"]
+__all__ = [
+    "LQRDesign",
+    "UncontrollableError",
+    "lqr_balance",
+    "discrete_tvlqr",
+    "wrap_state_error",
+    "zoh",
+    "actuation_name",
+    "weight_matrix",
+]
 
 
 class UncontrollableError(ValueError):
@@ -56,6 +65,10 @@ class LQRDesign:
     equilibrium : str
     state_names, input_names : tuple of str
     kind : str
+    P : ndarray, shape (nx, nx)
+        Cost-to-go ``dx' P dx`` of the closed loop (Riccati solution on the
+        controllable subspace, plus the free decay of stable uncontrollable
+        modes when that cost is finite).
     """
 
     K: np.ndarray
@@ -72,6 +85,7 @@ class LQRDesign:
     state_names: tuple[str, ...]
     input_names: tuple[str, ...]
     kind: str
+    P: np.ndarray | None = None
 
     def torque(self, x: Any) -> np.ndarray:
         """Full torque vector (tau1, tau2) [N.m] commanded at state ``x`` (angles compared modulo 2 pi)."""
@@ -93,7 +107,10 @@ class LQRDesign:
 
 
 def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray:
-    """Wrap the angle entries of a state difference into (-pi, pi]."""
+    """Wrap the angle entries (names starting with ``theta``) of a state difference into (-pi, pi].
+
+    ``dx`` has shape (..., nx); the result has the same shape.
+    """
     dx = np.array(dx, dtype=float)
     for i, n in enumerate(state_names):
         if n.startswith("theta"):
@@ -101,7 +118,8 @@ def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray
     return dx
 
 
-def _weight(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
+def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
+    """A validated symmetric (n, n) weight from ``W`` (None: identity; 1-D: diagonal); positive (semi-)definite."""
     if W is None:
         return np.eye(n)
     W = np.atleast_2d(np.asarray(W, dtype=float))
@@ -118,7 +136,11 @@ def _weight(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
     return W
 
 
-def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact zero-order-hold discretization: ``Ad = e^{A dt}``, ``Bd = int_0^dt e^{As} ds B``.
+
+    Shapes (n, n), (n, m) in and out; ``dt`` [s].
+    """
     n, m = B.shape
     M = np.zeros((n + m, n + m))
     M[:n, :n] = A
@@ -127,14 +149,45 @@ def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
     return E[:n, :n], E[:n, n:]
 
 
+def actuation_name(actuation: str | Sequence[str]) -> str:
+    """Actuation name from a name (``"full"``, ``"pendubot"``, ``"acrobot"``) or the driven input names.
+
+    Raises
+    ------
+    ValueError
+        Unknown name or not a non-empty set of ("tau1", "tau2").
+    """
+    if isinstance(actuation, str):
+        check_actuation(actuation)
+        return actuation
+    names = tuple(actuation)
+    idx = tuple(sorted({INPUT_NAMES.index(n) for n in names if n in INPUT_NAMES}))
+    if not names or len(idx) != len(names):
+        raise ValueError(f"actuation input names must be a non-empty subset of {list(INPUT_NAMES)}, got {names!r}")
+    return next(a for a, cols in ACTUATIONS.items() if cols == idx)
+
+
+def _cost_to_go(Acl: np.ndarray, Qcl: np.ndarray, dt: float | None, P_ctrl: np.ndarray) -> np.ndarray:
+    """Closed-loop cost-to-go (Lyapunov); ``P_ctrl`` (controllable part) when an undamped mode makes it infinite."""
+    ev = np.linalg.eigvals(Acl)
+    finite = np.all(np.abs(ev) < 1 - 1e-9) if dt is not None else np.all(ev.real < -1e-9 * max(1.0, np.abs(ev).max()))
+    if not finite:
+        return P_ctrl
+    if dt is None:
+        P = solve_continuous_lyapunov(Acl.T, -Qcl)
+    else:
+        P = solve_discrete_lyapunov(Acl.T, Qcl)
+    return 0.5 * (P + P.T)
+
+
 def lqr_balance(
     model: Model,
-    actuation: str = "full",
+    actuation: str | Sequence[str] = "full",
     Q: Any = None,
     R: Any = None,
     dt: float | None = None,
     *,
-    at: str | Equilibrium = "up-up",
+    at: str | Equilibrium | np.ndarray = "up-up",
 ) -> LQRDesign:
     """Linear-quadratic regulator about an equilibrium (default: balancing upright).
 
@@ -145,15 +198,16 @@ def lqr_balance(
     Parameters
     ----------
     model : Model
-    actuation : {"full", "pendubot", "acrobot"}
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
     Q : array_like, shape (nx, nx) or (nx,), optional
         State weight (diagonal if 1-D); default identity.
     R : array_like, shape (m, m) or (m,), optional
         Input weight [1/(N.m)^2]; default identity.
     dt : float, optional
         Sample time [s] for a discrete gain (co-simulation); ``None`` for continuous.
-    at : str or Equilibrium
-        Equilibrium name (zero torque) or a solved :class:`Equilibrium`.
+    at : str, Equilibrium or array_like of shape (nx,)
+        Equilibrium name (zero torque), a solved :class:`Equilibrium`, or a
+        state held with zero torque (e.g. a swing-up goal).
 
     Returns
     -------
@@ -166,50 +220,114 @@ def lqr_balance(
     UncontrollableError
         An uncontrollable mode is unstable or a drift (the configuration cannot be balanced).
     """
-    eq = equilibrium(model, at) if isinstance(at, str) else at
-    if not isinstance(eq, Equilibrium):
-        raise ValueError(f"at must be an equilibrium name or an Equilibrium, got {at!r}")
+    actuation = actuation_name(actuation)
+    if isinstance(at, str):
+        eq: Equilibrium | np.ndarray = equilibrium(model, at)
+    elif isinstance(at, Equilibrium):
+        eq = at
+    elif isinstance(at, (np.ndarray, list, tuple)):
+        eq = model.check_state(at, "at")
+        if eq.ndim != 1:
+            raise ValueError(f"at must be a single state of shape ({model.nx},), got shape {eq.shape}")
+    else:
+        raise ValueError(f"at must be an equilibrium name, an Equilibrium or a state, got {at!r}")
+    x_eq, u_eq, eq_name = (eq.x, eq.u, eq.name) if isinstance(eq, Equilibrium) else (eq, np.zeros(model.nu), "goal")
     if dt is not None and not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive sample time in seconds or None, got {dt!r}")
-    lin = linearize(model, eq, inputs=actuation)
+    lin = linearize(model, x_eq, u_eq, inputs=actuation)
     n, m = lin.B.shape
-    Qm = _weight(Q, n, "Q", definite=False)
-    Rm = _weight(R, m, "R", definite=True)
+    Qm = weight_matrix(Q, n, "Q", definite=False)
+    Rm = weight_matrix(R, m, "R", definite=True)
     Qc, Qu = controllable_subspace(lin.A, lin.B)
     unc = np.linalg.eigvals(Qu.T @ lin.A @ Qu) if Qu.shape[1] else np.zeros(0, dtype=complex)
     scale = max(1.0, float(np.max(np.abs(lin.eigenvalues))))
     bad = unc[(unc.real > 1e-7 * scale) | (np.abs(unc) <= 1e-7 * scale)]
     if bad.size:
         raise UncontrollableError(
-            f"uncontrollable configuration: {model.kind} model with actuation {actuation!r} at {eq.name!r} has "
+            f"uncontrollable configuration: {model.kind} model with actuation {actuation!r} at {eq_name!r} has "
             f"controllability rank {Qc.shape[1]} of {n}, and the uncontrollable eigenvalue(s) "
             f"{np.round(bad, 6).tolist()} [1/s] are unstable or a drift; LQR cannot stabilize them "
             f"(try another actuation or equilibrium)"
         )
     Ar, Br, Qr = Qc.T @ lin.A @ Qc, Qc.T @ lin.B, Qc.T @ Qm @ Qc
+    Qr = 0.5 * (Qr + Qr.T)  # exact symmetry for the Riccati solvers
     if dt is None:
-        Kr, _, _ = ct.lqr(Ar, Br, Qr, Rm)
+        Kr, Sr, _ = ct.lqr(Ar, Br, Qr, Rm)
         K = np.asarray(Kr) @ Qc.T
-        cl = np.linalg.eigvals(lin.A - lin.B @ K)
+        Acl = lin.A - lin.B @ K
     else:
-        Ad, Bd = _zoh(Ar, Br, float(dt))
-        Kr, _, _ = ct.dlqr(Ad, Bd, Qr, Rm)
+        Ad, Bd = zoh(Ar, Br, float(dt))
+        Kr, Sr, _ = ct.dlqr(Ad, Bd, Qr, Rm)
         K = np.asarray(Kr) @ Qc.T
-        Afd, Bfd = _zoh(lin.A, lin.B, float(dt))
-        cl = np.linalg.eigvals(Afd - Bfd @ K)
+        Afd, Bfd = zoh(lin.A, lin.B, float(dt))
+        Acl = Afd - Bfd @ K
+    P = _cost_to_go(Acl, Qm + K.T @ Rm @ K, dt, Qc @ np.asarray(Sr) @ Qc.T)
     return LQRDesign(
         K=K,
-        x_eq=eq.x.copy(),
-        u_eq=eq.u.copy(),
+        x_eq=np.array(x_eq, dtype=float),
+        u_eq=np.array(u_eq, dtype=float),
         actuation=actuation,
         input_indices=lin.input_indices,
         Q=Qm,
         R=Rm,
         dt=None if dt is None else float(dt),
-        closed_loop_eigenvalues=cl,
+        closed_loop_eigenvalues=np.linalg.eigvals(Acl),
         uncontrollable_eigenvalues=unc,
-        equilibrium=eq.name,
+        equilibrium=eq_name,
         state_names=lin.state_names,
         input_names=lin.input_names,
         kind=model.kind,
+        P=P,
     )
+
+
+def discrete_tvlqr(
+    model: Model,
+    x_lin: Any,
+    u_lin: Any,
+    dt: float,
+    Q: np.ndarray,
+    R: np.ndarray,
+    P_final: np.ndarray,
+    actuation: str | Sequence[str] = "full",
+) -> np.ndarray:
+    """Time-varying discrete LQR gains by the backward Riccati recursion on exact ZOH linearizations.
+
+    Interval ``k`` (length ``dt``) is linearized at ``(x_lin[k], u_lin[k])``
+    with the exact Jacobians and discretized for the hold (:func:`zoh`); the
+    recursion starts from the terminal cost-to-go ``P_final``.
+
+    Parameters
+    ----------
+    model : Model
+    x_lin : array_like, shape (M, nx)
+        Linearization states, one per interval.
+    u_lin : array_like, shape (M, 2)
+        Held torques (tau1, tau2) [N.m], one per interval.
+    dt : float
+        Interval length [s].
+    Q : ndarray, shape (nx, nx)
+        Stage state weight.
+    R : ndarray, shape (m, m)
+        Stage weight on the driven torques.
+    P_final : ndarray, shape (nx, nx)
+        Terminal cost-to-go (e.g. :attr:`LQRDesign.P` of the hand-over LQR).
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        Driven torques (m of them).
+
+    Returns
+    -------
+    ndarray, shape (M, m, nx)
+        Gains: ``u_k = u_lin[k] - K[k] (x_k - x_ref_k)`` on the driven torques.
+    """
+    As, Bs = linearize_along(model, x_lin, u_lin, inputs=actuation_name(actuation))
+    M, nx, m = Bs.shape
+    P = np.asarray(P_final, dtype=float)
+    K = np.empty((M, m, nx))
+    for k in range(M - 1, -1, -1):
+        Ad, Bd = zoh(As[k], Bs[k], dt)
+        BtP = Bd.T @ P
+        K[k] = np.linalg.solve(R + BtP @ Bd, BtP @ Ad)
+        P = Q + Ad.T @ P @ (Ad - Bd @ K[k])
+        P = 0.5 * (P + P.T)
+    return K

@@ -8,30 +8,20 @@ of rockit.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..model.model import ACTUATIONS, Model
 from .sampled import upright_state
 
-__all__ = ["SwingUpProblem", "OBJECTIVES", "upright_state"]
+__all__ = ["SwingUpProblem", "OBJECTIVES"]
 
 #: Objectives: ``effort`` = integral of tau^2; ``time`` = horizon T (free horizon);
 #: ``mix`` = time_weight * T + integral of tau^2.
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
-
-
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 @dataclass(frozen=True)
@@ -99,12 +89,15 @@ class SwingUpProblem:
         if self.objective not in OBJECTIVES:
             raise ValueError(f"objective must be one of {list(OBJECTIVES)}, got {self.objective!r}")
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalisation
-        set_("torque_limit", _positive("torque_limit", self.torque_limit))
+        set_("torque_limit", positive_float("torque_limit", self.torque_limit))
         if self.velocity_limit is not None:
-            set_("velocity_limit", _positive("velocity_limit", self.velocity_limit))
-        set_("horizon", _positive("horizon", self.horizon))
-        set_("time_weight", _positive("time_weight", self.time_weight))
-        lo, hi = (_positive("horizon_bounds[0]", self.horizon_bounds[0]), _positive("horizon_bounds[1]", self.horizon_bounds[1]))
+            set_("velocity_limit", positive_float("velocity_limit", self.velocity_limit))
+        set_("horizon", positive_float("horizon", self.horizon))
+        set_("time_weight", positive_float("time_weight", self.time_weight))
+        lo, hi = (
+            positive_float("horizon_bounds[0]", self.horizon_bounds[0]),
+            positive_float("horizon_bounds[1]", self.horizon_bounds[1]),
+        )
         if lo >= hi:
             raise ValueError(f"horizon_bounds must satisfy min < max, got {self.horizon_bounds!r}")
         set_("horizon_bounds", (lo, hi))

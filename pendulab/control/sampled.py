@@ -19,20 +19,24 @@ Three controllers are provided:
   ``(t, x_ref, u_ref)`` with time-varying gains, then hands over to a final
   controller.
 
-The linear algebra uses the exact Jacobians ``model.functions["jac_rhs"]``.
+The gains are designed by :func:`pendulab.control.lqr.lqr_balance` and
+:func:`pendulab.control.lqr.discrete_tvlqr` on the exact Jacobians.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
-import scipy.linalg as sla
 
+from .._checks import positive_float
+from ..model.equilibria import equilibrium
+from ..model.linearize import linearize
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
+from .lqr import actuation_name, wrap_state_error, zoh
+from .lqr import lqr_balance as lqr_design
 
 __all__ = [
     "SampledController",
@@ -41,10 +45,7 @@ __all__ = [
     "lqr_balance",
     "energy_swingup",
     "upright_state",
-    "linearize",
-    "zoh",
     "closed_loop_spectral_radius",
-    "angle_error",
     "as_feedback",
     "full_input",
     "make_controller",
@@ -74,103 +75,44 @@ class SampledController(Protocol):
         """Torques [N.m], shape (len(input_names),), from time ``t`` [s] and the plant state ``x``, shape (nx,)."""
 
 
-# -- linear algebra helpers ----------------------------------------------------
-
-
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
-
-
-def _angle_mask(model: Model) -> np.ndarray:
-    return np.array([n.startswith("theta") for n in model.state_names])
-
-
-def angle_error(model: Model, x: np.ndarray, x_ref: np.ndarray) -> np.ndarray:
-    """``x - x_ref`` with the angle entries wrapped to [-pi, pi), shape like ``x``."""
-    e = np.asarray(x, dtype=float) - np.asarray(x_ref, dtype=float)
-    mask = _angle_mask(model)
-    e[..., mask] = (e[..., mask] + np.pi) % (2.0 * np.pi) - np.pi
-    return e
+# -- helpers -------------------------------------------------------------------------
 
 
 def upright_state(model: Model) -> np.ndarray:
     """The up-up equilibrium (theta1 = theta2 = pi, at rest), shape (nx,).
 
-    For the elastic model the springs carry the weight above them, so they are
-    compressed: r1 = L1 - (m1 + m2) g / k1, r2 = L2 - m2 g / k2 (checked: the
-    state derivative vanishes there).
+    A thin wrapper of ``pendulab.model.equilibria.equilibrium(model, "up-up").x``:
+    for the elastic model the springs carry the weight above them, so they are
+    compressed (r1 = L1 - (m1 + m2) g / k1, r2 = L2 - m2 g / k2).
     """
-    x = np.zeros(model.nx)
-    x[:2] = np.pi
-    if model.kind == "elastic":
-        pr = model.params
-        x[2] = pr.L1 - (pr.m1 + pr.m2) * pr.g / pr.k1
-        x[3] = pr.L2 - pr.m2 * pr.g / pr.k2
-        if min(x[2], x[3]) <= 0.0:
-            raise ValueError(
-                f"model: springs too soft to hold the upright position (k1={pr.k1}, k2={pr.k2} N/m give "
-                f"r1={x[2]:.3g}, r2={x[3]:.3g} m); expected positive upright spring lengths"
-            )
-    return x
-
-
-def linearize(model: Model, x: np.ndarray, u: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Exact Jacobians (A, B) of the state derivative at (x, u): shapes (nx, nx), (nx, 2)."""
-    u = np.zeros(model.nu) if u is None else np.asarray(u, dtype=float)
-    A, B = model.functions["jac_rhs"](x, u, model.p)
-    return np.asarray(A), np.asarray(B)
-
-
-def zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact zero-order-hold discretization: ``Ad = e^{Ah}``, ``Bd = int_0^h e^{As} ds B``."""
-    n, m = B.shape
-    M = np.zeros((n + m, n + m))
-    M[:n, :n] = A
-    M[:n, n:] = B
-    E = sla.expm(M * h)
-    return E[:n, :n], E[:n, n:]
-
-
-def _design_states(model: Model) -> np.ndarray:
-    """States the balance gain acts on.
-
-    At the aligned upright equilibrium the spring (radial) coordinates of the
-    elastic model decouple from the angles to first order, so their modes are
-    uncontrollable by the torques; the design then uses the angular block only
-    (zero gain on r, v).
-    """
-    return np.array([n.startswith(("theta", "omega")) for n in model.state_names])
+    return equilibrium(model, "up-up").x.copy()
 
 
 def _actuated(actuation: str | Sequence[str]) -> tuple[str, ...]:
-    if isinstance(actuation, str):
-        if actuation not in ACTUATIONS:
-            raise ValueError(f"actuation must be one of {list(ACTUATIONS)} or input names, got {actuation!r}")
-        return tuple(INPUT_NAMES[i] for i in ACTUATIONS[actuation])
-    names = tuple(actuation)
-    if not names or any(n not in INPUT_NAMES for n in names):
-        raise ValueError(f"actuation input names must be a non-empty subset of {list(INPUT_NAMES)}, got {names!r}")
-    return names
+    return tuple(INPUT_NAMES[i] for i in ACTUATIONS[actuation_name(actuation)])
 
 
-def _weights(Q: Any, R: Any, n: int, m: int) -> tuple[np.ndarray, np.ndarray]:
-    Qm = np.eye(n) if Q is None else np.atleast_2d(np.asarray(Q, dtype=float))
-    Rm = np.eye(m) if R is None else np.atleast_2d(np.asarray(R, dtype=float))
-    if Qm.shape == (1, n):
-        Qm = np.diag(Qm[0])
-    if Rm.shape == (1, m) and m > 1:
-        Rm = np.diag(Rm[0])
-    if Qm.shape != (n, n):
-        raise ValueError(f"Q must have shape ({n}, {n}) or ({n},), got {np.shape(Q)}")
-    if Rm.shape != (m, m):
-        raise ValueError(f"R must have shape ({m}, {m}) or ({m},), got {np.shape(R)}")
-    return Qm, Rm
+def _angular_states(model: Model) -> np.ndarray:
+    """Mask of the angles and link rates (the states an upright balance gain acts on), shape (nx,)."""
+    return np.array([n.startswith(("theta", "omega")) for n in model.state_names])
+
+
+def _angular_weight(model: Model, Q: Any) -> np.ndarray:
+    """Embed a weight on (theta1, theta2, omega1, omega2), shape (4, 4) or (4,), into the full state (zero on r, v).
+
+    At the aligned upright equilibrium the spring (radial) coordinates of the
+    elastic model decouple from the angles to first order, so their modes are
+    uncontrollable by the torques and get no weight (and no gain).
+    """
+    sel = np.flatnonzero(_angular_states(model))
+    Qa = np.diag([10.0, 10.0, 1.0, 1.0]) if Q is None else np.atleast_2d(np.asarray(Q, dtype=float))
+    if Qa.shape == (1, len(sel)):
+        Qa = np.diag(Qa[0])
+    if Qa.shape != (len(sel), len(sel)):
+        raise ValueError(f"Q must have shape ({len(sel)}, {len(sel)}) or ({len(sel)},), got {np.shape(Q)}")
+    Qf = np.zeros((model.nx, model.nx))
+    Qf[np.ix_(sel, sel)] = Qa
+    return Qf
 
 
 # -- controllers -----------------------------------------------------------------
@@ -215,12 +157,12 @@ class LinearStateFeedback:
         """Stateless: nothing to forget."""
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
-        u = self.u_eq - self.K @ angle_error(self.model, x, self.x_eq)
+        u = self.u_eq - self.K @ wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.model.state_names)
         return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
 
     def cost(self, x: np.ndarray) -> float:
         """Quadratic cost-to-go ``e' P e`` of the deviation from ``x_eq``."""
-        e = angle_error(self.model, x, self.x_eq)
+        e = wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.model.state_names)
         return float(e @ self.P @ e) if self.P is not None else float(e @ e)
 
 
@@ -261,28 +203,12 @@ def lqr_balance(
     -------
     LinearStateFeedback
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     if design not in ("continuous", "discrete"):
         raise ValueError(f"design must be 'continuous' or 'discrete', got {design!r}")
     names = _actuated(actuation)
-    cols = [INPUT_NAMES.index(n) for n in names]
-    x_eq = upright_state(model)
-    A, B = linearize(model, x_eq)
-    sel = _design_states(model)
-    Ar, Br = A[np.ix_(sel, sel)], B[np.ix_(sel, cols)]
-    Qr, Rr = _weights(np.diag([10.0, 10.0, 1.0, 1.0]) if Q is None else Q, R, int(sel.sum()), len(cols))
-    if design == "continuous":
-        Pr = sla.solve_continuous_are(Ar, Br, Qr, Rr)
-        Kr = np.linalg.solve(Rr, Br.T @ Pr)
-    else:
-        Ad, Bd = zoh(Ar, Br, h)
-        Pr = sla.solve_discrete_are(Ad, Bd, Qr, Rr)
-        Kr = np.linalg.solve(Rr + Bd.T @ Pr @ Bd, Bd.T @ Pr @ Ad)
-    K = np.zeros((len(cols), model.nx))
-    K[:, sel] = Kr
-    P = np.zeros((model.nx, model.nx))
-    P[np.ix_(sel, sel)] = Pr
-    return LinearStateFeedback(model, K, x_eq, np.zeros(len(cols)), h, names, u_max, P, design)
+    lq = lqr_design(model, names, _angular_weight(model, Q), R, None if design == "continuous" else h)
+    return LinearStateFeedback(model, lq.K, lq.x_eq, np.zeros(len(names)), h, names, u_max, lq.P, design)
 
 
 def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_names: Sequence[str] = INPUT_NAMES) -> float:
@@ -293,9 +219,9 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
     decoupled (and uncontrollable) at the upright equilibrium.
     """
     cols = [INPUT_NAMES.index(n) for n in input_names]
-    A, B = linearize(model, upright_state(model))
-    sel = _design_states(model)
-    Ad, Bd = zoh(A[np.ix_(sel, sel)], B[np.ix_(sel, cols)], _positive("h", h))
+    lin = linearize(model, equilibrium(model, "up-up"))
+    sel = _angular_states(model)
+    Ad, Bd = zoh(lin.A[np.ix_(sel, sel)], lin.B[np.ix_(sel, cols)], positive_float("h", h))
     return float(np.max(np.abs(np.linalg.eigvals(Ad - Bd @ np.asarray(K)[:, sel]))))
 
 
@@ -366,9 +292,9 @@ def energy_swingup(
     catch_cost : float
         Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this.
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     balance = lqr_balance(model, h, u_max=u_max)
-    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=_positive("u_max", u_max), catch_cost=catch_cost)
+    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=positive_float("u_max", u_max), catch_cost=catch_cost)
 
 
 # -- glue -----------------------------------------------------------------------------
@@ -439,7 +365,7 @@ def make_controller(
     controller : SampledController
     x0 : ndarray, shape (nx,)
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     if name == "lqr":
         x0 = upright_state(model)
         x0[0] += 0.1
@@ -452,7 +378,7 @@ def make_controller(
         from .tracking_sampled import swingup_reference, tvlqr_tracker
 
         if reference is None:
-            reference = swingup_reference(model, h, round(_positive("t_ref", t_ref) / h) * h, u_max=u_max)
+            reference = swingup_reference(model, h, round(positive_float("t_ref", t_ref) / h) * h, u_max=u_max)
         tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")

@@ -31,7 +31,8 @@ from pathlib import Path
 
 from ..model.model import Model
 from ..scenes import SCENE_DIR, load_scene
-from .problem import SwingUpProblem, upright_state
+from .problem import SwingUpProblem
+from .sampled import upright_state
 
 __all__ = ["Task", "load_task", "task_names"]
 

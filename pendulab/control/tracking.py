@@ -17,11 +17,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import solve_discrete_are
 
-from ..model.model import Model
-from .lqr import wrap_state_error
-from .sampled import zoh
+from ..model.model import INPUT_NAMES, Model
+from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, wrap_state_error
 from .swingup import SwingUpResult
 
 __all__ = ["TrackingController", "tvlqr", "default_weights"]
@@ -44,6 +42,9 @@ def default_weights(model: Model, torque_limit: float) -> tuple[np.ndarray, np.n
 @dataclass(frozen=True)
 class TrackingController:
     """Sampled-data feedback ``u(t, x)`` -> (tau1, tau2) [N.m]; call it like a function.
+
+    It is a :class:`pendulab.control.sampled.SampledController`, so
+    :func:`pendulab.fmu.cosim` drives it through an FMU as well.
 
     Attributes
     ----------
@@ -75,6 +76,19 @@ class TrackingController:
     torque_limit: float
     state_names: tuple[str, ...]
     u_goal: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    @property
+    def sample_time(self) -> float:
+        """Sample time [s] (:class:`pendulab.control.sampled.SampledController` protocol)."""
+        return self.dt
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """Both torques: a passive joint gets zero (SampledController protocol)."""
+        return INPUT_NAMES
+
+    def reset(self) -> None:
+        """Stateless: nothing to forget (SampledController protocol)."""
 
     @property
     def horizon(self) -> float:
@@ -131,30 +145,16 @@ def tvlqr(
         raise ValueError(f"Q must have shape ({model.nx}, {model.nx}), got {Q.shape}")
     if R.shape != (len(act), len(act)):
         raise ValueError(f"R must have shape ({len(act)}, {len(act)}) for actuation {pb.actuation!r}, got {R.shape}")
-    jac = model.functions["jac_rhs"]
     goal = pb.target
-    A, B = (np.asarray(m) for m in jac(goal, np.zeros(2), model.p))
-    Ad, Bd = zoh(A, B[:, act], dt)
     try:
-        P = solve_discrete_are(Ad, Bd, Q, R)
-    except (np.linalg.LinAlgError, ValueError) as exc:
+        top = lqr_balance(model, pb.actuation, Q, R, dt, at=goal)
+    except UncontrollableError as exc:
         raise ValueError(f"the goal is not stabilisable with actuation {pb.actuation!r}: {exc}") from exc
-    K_top = np.linalg.solve(R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
 
     M = max(1, int(round(result.horizon / dt)))
     t_nom = np.arange(M) * dt
     x_nom = result.x_at(t_nom)
     # The nominal torque of a sample is the one held at its middle (robust to grid round-off).
     u_nom = result.u_at(t_nom + 0.5 * dt)
-    x_mid = result.x_at(t_nom + 0.5 * dt)
-    As, Bs = jac.map(M)(x_mid.T, u_nom.T, model.p)
-    As, Bs = np.asarray(As), np.asarray(Bs)
-    nx = model.nx
-    K = np.empty((M, len(act), nx))
-    for k in range(M - 1, -1, -1):
-        Ak, Bk = zoh(As[:, k * nx : (k + 1) * nx], Bs[:, 2 * k : 2 * k + 2][:, act], dt)
-        BtP = Bk.T @ P
-        K[k] = np.linalg.solve(R + BtP @ Bk, BtP @ Ak)
-        P = Q + Ak.T @ P @ (Ak - Bk @ K[k])
-        P = 0.5 * (P + P.T)
-    return TrackingController(dt, t_nom, x_nom, u_nom, K, K_top, goal, tuple(act), pb.torque_limit, model.state_names)
+    K = discrete_tvlqr(model, result.x_at(t_nom + 0.5 * dt), u_nom, dt, Q, R, top.P, actuation=pb.actuation)
+    return TrackingController(dt, t_nom, x_nom, u_nom, K, top.K, goal, tuple(act), pb.torque_limit, model.state_names)

@@ -2,7 +2,7 @@
 
 :class:`TVLQRTracker` follows any reference ``(t, x_ref, u_ref)`` on its sample
 grid with time-varying gains and then hands over to a final controller (LQR
-balance). :func:`discrete_tvlqr` computes the gains by the backward discrete
+balance). :func:`tvlqr_gains` computes the gains by the backward discrete
 Riccati recursion on exact ZOH discretizations along the reference;
 :func:`resample_reference` puts a reference from any grid (e.g. an optimized
 swing-up's collocation knots) on the sample grid; :func:`tvlqr_tracker` does
@@ -17,23 +17,14 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..model.model import INPUT_NAMES, Model
-from .sampled import (
-    _actuated,
-    _angle_mask,
-    _positive,
-    _weights,
-    angle_error,
-    as_feedback,
-    energy_swingup,
-    linearize,
-    lqr_balance,
-    zoh,
-)
+from .lqr import discrete_tvlqr, weight_matrix, wrap_state_error
+from .sampled import _actuated, as_feedback, energy_swingup, lqr_balance
 
 __all__ = [
     "TVLQRTracker",
-    "discrete_tvlqr",
+    "tvlqr_gains",
     "resample_reference",
     "tvlqr_tracker",
     "load_reference_csv",
@@ -90,7 +81,7 @@ class TVLQRTracker:
             raise ValueError(f"u_ref must have shape ({n}, {m}) or ({n - 1}, {m}), got {self.u_ref.shape}")
         if self.K.ndim != 3 or self.K.shape[0] not in (n - 1, n) or self.K.shape[1:] != (m, self.model.nx):
             raise ValueError(f"K must have shape ({n - 1}, {m}, {self.model.nx}), got {self.K.shape}")
-        self.sample_time = _positive("sample_time", self.sample_time)
+        self.sample_time = positive_float("sample_time", self.sample_time)
 
     def reset(self) -> None:
         """Reset the final controller."""
@@ -107,11 +98,11 @@ class TVLQRTracker:
                 u = self.u_ref[-1].copy()
         else:
             k = max(k, 0)
-            u = self.u_ref[k] - self.K[k] @ angle_error(self.model, x, self.x_ref[k])
+            u = self.u_ref[k] - self.K[k] @ wrap_state_error(np.asarray(x, dtype=float) - self.x_ref[k], self.model.state_names)
         return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
 
 
-def discrete_tvlqr(
+def tvlqr_gains(
     model: Model,
     t_ref: np.ndarray,
     x_ref: np.ndarray,
@@ -126,7 +117,7 @@ def discrete_tvlqr(
 
     Each interval is linearized at ``(x_ref[k], u_ref[k])`` and discretized
     exactly with a zero-order hold of the grid step, then the discrete Riccati
-    recursion runs backwards from ``Qf``.
+    recursion (:func:`pendulab.control.lqr.discrete_tvlqr`) runs backwards from ``Qf``.
 
     Parameters
     ----------
@@ -154,23 +145,17 @@ def discrete_tvlqr(
     h = np.diff(t_ref)
     if len(t_ref) < 2 or np.ptp(h) > 1e-9 * max(h.max(), 1e-300) + 1e-12 or h.min() <= 0:
         raise ValueError("t_ref must be a uniform increasing grid with at least 2 samples")
-    n = model.nx
-    q_diag = np.where(_angle_mask(model), 10.0, 1.0)
-    Qm, Rm = _weights(np.diag(q_diag) if Q is None else Q, R, n, len(cols))
+    n, m = model.nx, len(cols)
+    q_default = np.diag(np.where([s.startswith("theta") for s in model.state_names], 10.0, 1.0))
+    Qm = weight_matrix(q_default if Q is None else Q, n, "Q", definite=False)
+    Rm = weight_matrix(R, m, "R", definite=True)
     if Qf is None:
         Qfm = lqr_balance(model, float(h[0]), design="discrete", actuation=actuation).P + 1e-6 * np.eye(n)
     else:
         Qfm = np.atleast_2d(np.asarray(Qf, dtype=float))
-    P = Qfm
-    K = np.empty((len(t_ref) - 1, len(cols), n))
-    for k in range(len(t_ref) - 2, -1, -1):
-        A, B = linearize(model, x_ref[k], u_ref[min(k, len(u_ref) - 1)])
-        Ad, Bd = zoh(A, B[:, cols], float(h[k]))
-        S = Rm + Bd.T @ P @ Bd
-        K[k] = np.linalg.solve(S, Bd.T @ P @ Ad)
-        P = Qm + Ad.T @ P @ (Ad - Bd @ K[k])
-        P = 0.5 * (P + P.T)
-    return K
+    M = len(t_ref) - 1
+    u_lin = u_ref[np.minimum(np.arange(M), len(u_ref) - 1)]
+    return discrete_tvlqr(model, x_ref[:M], u_lin, float(h[0]), Qm, Rm, Qfm, actuation=_actuated(actuation))
 
 
 def swingup_reference(
@@ -217,7 +202,7 @@ def resample_reference(
     -------
     t_s, x_s, u_s : ndarrays, shapes (M,), (M, nx), (M, 2)
     """
-    h = _positive("sample_time", sample_time)
+    h = positive_float("sample_time", sample_time)
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     u = np.asarray(u, dtype=float)
@@ -258,14 +243,14 @@ def tvlqr_tracker(
 
     The reference ``(t, x, u)`` (u: full torques (tau1, tau2), any grid) is
     resampled to the sample grid (:func:`resample_reference`); the gains come from
-    :func:`discrete_tvlqr` for the torques named by ``actuation`` (a passive
+    :func:`tvlqr_gains` for the torques named by ``actuation`` (a passive
     joint gets none); ``Q``, ``R`` as there.
     """
     ts, xs, us = resample_reference(t, x, u, sample_time, model)
     xs = model.check_state(xs, "x_ref")
     names = _actuated(actuation)
     cols = [INPUT_NAMES.index(n) for n in names]
-    K = discrete_tvlqr(model, ts, xs, us, actuation=names, Q=Q, R=R)
+    K = tvlqr_gains(model, ts, xs, us, actuation=names, Q=Q, R=R)
     final = lqr_balance(model, sample_time, design="discrete", u_max=u_max, actuation=names, R=R)
     return TVLQRTracker(model, ts, xs, us[:, cols], K, sample_time, names, final=final, u_max=u_max)
 

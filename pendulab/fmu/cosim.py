@@ -15,7 +15,6 @@ The instance is always freed (``terminate`` when legal, then
 
 from __future__ import annotations
 
-import math
 import shutil
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -25,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..control.sampled import SampledController
 from ..model.model import INPUT_NAMES, Model, make_model
 from ..model.params import ElasticParams, RigidParams
@@ -137,16 +137,6 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number [s], got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number [s], got {value!r}")
-    return v
-
-
 class FmuPlant:
     """One Co-Simulation instance of a pendulab FMU (a context manager that always frees it).
 
@@ -181,7 +171,7 @@ class FmuPlant:
         info = self.info
         self._values = self._start_values(params, x0, solver)
         if tolerance is not None:
-            tolerance = _positive("tolerance", tolerance)
+            tolerance = positive_float("tolerance", tolerance)
         self.tolerance = tolerance
         self.time = float(start_time)
         self.time_in_do_step = 0.0
@@ -400,7 +390,7 @@ def _check_controller(controller: SampledController, info: FmuInfo, comm_step: f
             f"controller input_names {list(names)} do not match the FMU {info.path.name!r}: expected distinct names "
             f"among its inputs {list(info.input_names)}"
         )
-    ts = _positive("controller.sample_time", controller.sample_time)
+    ts = positive_float("controller.sample_time", controller.sample_time, "[s]")
     ratio = ts / comm_step
     m = round(ratio)
     if m < 1 or abs(ratio - m) > 1e-9 * ratio:
@@ -495,8 +485,8 @@ def cosim(
     RuntimeError
         The FMU reported an error.
     """
-    h = _positive("comm_step", comm_step)
-    n = _n_steps(_positive("t_final", t_final), h)
+    h = positive_float("comm_step", comm_step, "[s]")
+    n = _n_steps(positive_float("t_final", t_final, "[s]"), h)
     info = inspect_fmu(fmu_path)
     every = _check_controller(controller, info, h)
     cols = [INPUT_NAMES.index(name) for name in controller.input_names]
@@ -579,8 +569,8 @@ def cosim_many(
     list of Trajectory
         One per FMU, on the same time grid with identical ``u``.
     """
-    h = _positive("comm_step", comm_step)
-    n = _n_steps(_positive("t_final", t_final), h)
+    h = positive_float("comm_step", comm_step, "[s]")
+    n = _n_steps(positive_float("t_final", t_final, "[s]"), h)
     infos = [inspect_fmu(p) for p in fmu_paths]
     if not infos:
         raise ValueError("fmu_paths must name at least one FMU, got an empty sequence")

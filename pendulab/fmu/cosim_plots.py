@@ -45,11 +45,9 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_title(title or traj.message)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)
 
 
 def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_frames: int = 160, title: str = "") -> Path:
@@ -110,8 +108,6 @@ def plot_side_by_side(trajs: list[Trajectory], labels: list[str], path: str | Pa
         ax.legend(fontsize=8)
     axes[0].set_title(title)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=110)

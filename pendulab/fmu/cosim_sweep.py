@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
+from ..control.lqr import wrap_state_error
 from ..control.sampled import (
     LinearStateFeedback,
-    angle_error,
     as_feedback,
     closed_loop_spectral_radius,
     lqr_balance,
@@ -130,7 +130,7 @@ def predicted_critical_step(model: Model, K: np.ndarray, input_names: Sequence[s
 
 def _angular_error(model: Model, traj: Trajectory, x_eq: np.ndarray) -> np.ndarray:
     sel = np.array([n.startswith(("theta", "omega")) for n in model.state_names])
-    e = angle_error(model, traj.x, x_eq)[:, sel]
+    e = wrap_state_error(traj.x - x_eq, model.state_names)[:, sel]
     return np.linalg.norm(e, axis=1)
 
 
@@ -161,7 +161,7 @@ def _run_point(model, ctrl, run, h, amplitude, n_min, t_min):
     except (RuntimeError, ValueError):
         return np.array([np.linalg.norm([amplitude, amplitude]), math.inf])
     err = _angular_error(model, traj, x_eq)
-    angles = np.abs(angle_error(model, traj.x, x_eq)[:, :2]).max(axis=1)
+    angles = np.abs(wrap_state_error(traj.x - x_eq, model.state_names)[:, :2]).max(axis=1)
     bad = ~np.isfinite(err) | (angles > _DIVERGED)
     if bad.any():
         err = err.copy()
@@ -328,8 +328,6 @@ def plot_sweep(results: Sequence[SweepResult], path: str | Path) -> Path:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=120)

@@ -382,6 +382,6 @@ def _plot(report: ValidationReport, scenes, curves, signals, out_dir: Path) -> P
     fig.suptitle(f"{report.fmu.name}: FMU vs native CasADi {REFERENCE_METHOD} (tol {REFERENCE_TOL:g})")
     fig.tight_layout()
     path = out_dir / f"{report.fmu.stem}_validation.png"
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
+    from ..viz.save import save_figure
+
+    return save_figure(fig, path, dpi=90)

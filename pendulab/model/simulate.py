@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .._checks import positive_float
 from .fixed_step import FIXED_METHODS, run_fixed
 from .model import Model
 from .pycode import to_python
@@ -105,16 +106,6 @@ def _resolve_method(method: str) -> MethodSpec:
     if method.lower() in by_lower:
         return by_lower[method.lower()]
     raise ValueError(f"unknown method {method!r}; expected one of {list(METHODS)}")
-
-
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 def time_grid(t_final: float, dt: float) -> np.ndarray:
@@ -386,12 +377,12 @@ def simulate(
     x0 = model.check_state(x0, "x0")
     if x0.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got {x0.shape}")
-    t_final = _positive("t_final", t_final)
-    dt = _positive("dt", dt)
-    rtol = _positive("rtol", rtol)
-    atol = _positive("atol", atol)
+    t_final = positive_float("t_final", t_final)
+    dt = positive_float("dt", dt)
+    rtol = positive_float("rtol", rtol)
+    atol = positive_float("atol", atol)
     if max_step is not None:
-        max_step = _positive("max_step", max_step)
+        max_step = positive_float("max_step", max_step)
     if model.kind == "elastic" and np.any(x0[2:4] <= 0):
         raise ValueError(f"x0: spring lengths r1, r2 must be > 0 m, got {x0[2:4].tolist()}")
     t = time_grid(t_final, dt)

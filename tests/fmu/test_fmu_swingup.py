@@ -5,9 +5,9 @@ import numpy as np
 import pendulab as pl
 from pendulab.control import swing_up
 from pendulab.control.check import height_success
-from pendulab.control.fmu_loop import closed_loop_fmu
 from pendulab.control.tasks import load_task
 from pendulab.control.tracking import tvlqr
+from pendulab.fmu import cosim
 
 
 def test_tracked_swingup_through_fmu_matches_native(fmu_builds):
@@ -16,7 +16,8 @@ def test_tracked_swingup_through_fmu_matches_native(fmu_builds):
     ctrl = tvlqr(res, dt=task.dt)
     x0 = task.problem.start + np.array([0.05, -0.05, 0.1, 0.0])
     # The session FMU was built for the default rigid model; the task's parameters are set as start values.
-    fmu = closed_loop_fmu(fmu_builds[("rigid", 2)].path, task.model, x0, ctrl, task.t_final, task.dt, tolerance=1e-10)
+    params = dict(zip(task.model.param_names, task.model.p.tolist(), strict=True))
+    fmu = cosim(fmu_builds[("rigid", 2)].path, ctrl, task.dt, task.t_final, params=params, x0=x0, tolerance=1e-10)
     native = pl.simulate(task.model, x0, task.t_final, dt=task.dt, u=ctrl, rtol=1e-10, atol=1e-10)
     assert height_success(fmu, task.rest_lengths).success
     assert np.max(np.abs(fmu.u)) <= task.problem.torque_limit
