@@ -45,9 +45,7 @@ class LagrangeSystem:
     bias: ca.SX
 
 
-def lagrange_equations(
-    q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.SX
-) -> LagrangeSystem:
+def lagrange_equations(q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.SX) -> LagrangeSystem:
     """Derive the equations of motion from energies and generalized forces.
 
     Parameters

@@ -81,20 +81,15 @@ class _ParamsBase:
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
                 raise TypeError(
-                    f"parameter {info.name!r} must be a real number [{info.unit}], "
-                    f"got {value!r} of type {type(value).__name__}"
+                    f"parameter {info.name!r} must be a real number [{info.unit}], got {value!r} of type {type(value).__name__}"
                 )
             value = float(value)
             if not math.isfinite(value):
                 raise ValueError(f"parameter {info.name!r} must be finite, got {value!r}")
             if info.positive and value <= 0.0:
-                raise ValueError(
-                    f"parameter {info.name!r} must be > 0 [{info.unit}] ({info.description}), got {value!r}"
-                )
+                raise ValueError(f"parameter {info.name!r} must be > 0 [{info.unit}] ({info.description}), got {value!r}")
             if not info.positive and value < 0.0:
-                raise ValueError(
-                    f"parameter {info.name!r} must be >= 0 [{info.unit}] ({info.description}), got {value!r}"
-                )
+                raise ValueError(f"parameter {info.name!r} must be >= 0 [{info.unit}] ({info.description}), got {value!r}")
             object.__setattr__(self, info.name, value)
 
     @classmethod
@@ -125,8 +120,7 @@ class _ParamsBase:
         unknown = sorted(set(changes) - set(self.names()))
         if unknown:
             raise ValueError(
-                f"unknown parameter name(s) {unknown} for {type(self).__name__}; "
-                f"expected one of {list(self.names())}"
+                f"unknown parameter name(s) {unknown} for {type(self).__name__}; expected one of {list(self.names())}"
             )
         return dataclasses.replace(self, **changes)
 
