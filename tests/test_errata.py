@@ -59,6 +59,7 @@ def test_exhibit_is_the_described_reconstruction():
     printed = em.printed_equations(em.derived_equations())
     acc = em.sp.lambdify([em.X, [em.m1, em.m2, em.L1, em.L2, em.g]], list(printed.qdd), "math")
     for x, values in _random_states(30, 2):
+        # Two float evaluations of the same closed form: only rounding (~1e-14) separates them.
         np.testing.assert_allclose(acc(x, list(values.values())), _textbook(x, **values, printed=True), rtol=1e-11, atol=1e-11)
         # Only the velocity terms differ: at rest the printed and correct equations coincide.
         x_rest = np.array([x[0], x[1], 0.0, 0.0])

@@ -34,6 +34,7 @@ def test_simulate_seed_paper_result(tmp_path):
     )
     assert len(list(tmp_path.glob("*.png"))) == 7
     (rigid, tr), (elastic, te) = result["rigid"], result["elastic"]
+    # Identical start by construction (springs at rest length): positions agree to rounding.
     np.testing.assert_allclose(rigid.positions(tr.x[0]), elastic.positions(te.x[0]), rtol=0, atol=1e-14)
     assert result["energy_drift"] < 1e-7  # rtol = atol = 1e-10 over 2 s
     assert result["max_angle_gap"] > 1e-3  # the springs change the motion

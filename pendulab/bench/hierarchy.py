@@ -33,7 +33,8 @@ import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -42,9 +43,9 @@ from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
 from ..model.simulate import simulate, time_grid
 from ..model.trajectory import Trajectory
+from ..scenes import Scene
 
 __all__ = [
-    "SceneLike",
     "LevelResult",
     "HierarchyReport",
     "ModelLevel",
@@ -59,22 +60,6 @@ __all__ = [
 LEVELS: tuple[str, ...] = ("linearized", "rigid", "rigid+quasi-static", "elastic")
 #: Measured costs within this factor of the cheapest count as a tie (simpler model wins).
 TIE_RATIO = 1.5
-
-
-class SceneLike(Protocol):
-    """What the hierarchy reads from a scene (``pendulab.scenes.Scene`` has it)."""
-
-    name: str
-    model: Model
-    x0: np.ndarray
-    t_final: float
-    dt: float
-    method: str
-    rtol: float
-    atol: float
-    outputs: tuple[str, ...]
-    tolerance: float | None
-    u: np.ndarray | None
 
 
 @dataclass(frozen=True)
@@ -95,7 +80,7 @@ class ModelLevel:
     model: Model
     run: Callable[[Any], np.ndarray] = field(repr=False)
 
-    def simulate(self, scene: SceneLike) -> Trajectory:
+    def simulate(self, scene: Scene) -> Trajectory:
         """Trajectory of the scene with this level, in the scene model's signals."""
         return _as_trajectory(scene, self.run(scene), self.name)
 
@@ -190,7 +175,7 @@ def _zoh(A: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
     return Ad, Bd[:, 0]
 
 
-def _run_linearized(scene: SceneLike) -> np.ndarray:
+def _run_linearized(scene: Scene) -> np.ndarray:
     model = scene.model
     x_eq = _nearest_equilibrium(model, np.asarray(scene.x0))
     u0 = np.zeros(model.nu)
@@ -209,7 +194,7 @@ def _run_linearized(scene: SceneLike) -> np.ndarray:
     return X + x_eq
 
 
-def _run_rigid_states(scene: SceneLike) -> np.ndarray:
+def _run_rigid_states(scene: Scene) -> np.ndarray:
     """The rigid counterpart's states (theta1, theta2, omega1, omega2) on the scene grid."""
     th, om = _angles_rates(scene.model, np.asarray(scene.x0))
     rm = rigid_counterpart(scene.model)
@@ -225,18 +210,18 @@ def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -
     return np.hstack([th, r, om, np.zeros_like(r)])
 
 
-def _run_rigid(scene: SceneLike) -> np.ndarray:
+def _run_rigid(scene: Scene) -> np.ndarray:
     X = _run_rigid_states(scene)
     return _embed(scene.model, X[:, :2], X[:, 2:], None)
 
 
-def _run_rigid_qs(scene: SceneLike) -> np.ndarray:
+def _run_rigid_qs(scene: Scene) -> np.ndarray:
     X = _run_rigid_states(scene)
     r = quasi_static_lengths(scene.model, X[:, :2], X[:, 2:], scene.u)
     return _embed(scene.model, X[:, :2], X[:, 2:], r)
 
 
-def _run_full(scene: SceneLike) -> np.ndarray:
+def _run_full(scene: Scene) -> np.ndarray:
     return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
 
 
@@ -254,11 +239,11 @@ def levels_for(model: Model) -> tuple[ModelLevel, ...]:
 
 
 # -- evaluation ---------------------------------------------------------------
-def _grid(scene: SceneLike) -> np.ndarray:
+def _grid(scene: Scene) -> np.ndarray:
     return time_grid(scene.t_final, scene.dt)
 
 
-def _signals(scene: SceneLike, X: np.ndarray) -> dict[str, np.ndarray]:
+def _signals(scene: Scene, X: np.ndarray) -> dict[str, np.ndarray]:
     model = scene.model
     u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
     Y = None
@@ -276,7 +261,7 @@ def _signals(scene: SceneLike, X: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def _as_trajectory(scene: SceneLike, X: np.ndarray, level: str) -> Trajectory:
+def _as_trajectory(scene: Scene, X: np.ndarray, level: str) -> Trajectory:
     model = scene.model
     u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
     U = np.tile(u, (X.shape[0], 1))
@@ -304,14 +289,14 @@ def _timed(fn: Callable[[], np.ndarray], repeats: int) -> tuple[np.ndarray, floa
     return X, statistics.median(times)
 
 
-def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None = None) -> HierarchyReport:
+def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = None) -> HierarchyReport:
     """Run the model hierarchy on a scene and pick the cheapest model within tolerance.
 
     Parameters
     ----------
     scene : Scene
         A loaded scene (``pendulab.scenes.load_scene``) or any object with the
-        attributes of :class:`SceneLike`.
+        attributes of :class:`Scene`.
     repeats : int
         Timed runs per level; the cost is the median wall time [s].
     tolerance : float, optional
@@ -362,7 +347,7 @@ def check_scene(scene: SceneLike, *, repeats: int = 3, tolerance: float | None =
     )
 
 
-def choose_model(scene: SceneLike, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
+def choose_model(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
     """The cheapest model level within the scene's tolerance, and the report.
 
     Returns
@@ -378,23 +363,6 @@ def choose_model(scene: SceneLike, *, repeats: int = 3) -> tuple[ModelLevel, Hie
 
 
 # -- stiffness x amplitude study ----------------------------------------------
-@dataclass(frozen=True)
-class _GridScene:
-    """A scene built in code for the stiffness x amplitude table."""
-
-    name: str
-    model: Model
-    x0: np.ndarray
-    t_final: float
-    dt: float
-    method: str
-    rtol: float
-    atol: float
-    outputs: tuple[str, ...]
-    tolerance: float | None
-    u: np.ndarray | None = None
-
-
 def stiffness_amplitude_study(
     ks: tuple[float, ...] = (1e2, 1e3, 1e4, 1e5, 1e6),
     amplitudes: tuple[float, ...] = (0.05, 0.3, 1.0, 2.0),
@@ -419,17 +387,19 @@ def stiffness_amplitude_study(
     for k in ks:
         model = elastic(k1=k, k2=k)
         for a in amplitudes:
-            sc = _GridScene(
-                f"k={k:g}, theta={a:g}",
-                model,
-                model.state(theta1=a, theta2=a),
-                t_final,
-                0.01,
-                "cvodes",
-                1e-10,
-                1e-10,
-                ("theta1", "theta2", "x2", "y2"),
-                tolerance,
+            sc = Scene(
+                name=f"k={k:g}, theta={a:g}",
+                description="stiffness x amplitude study",
+                model=model,
+                initial=MappingProxyType({"theta1": a, "theta2": a}),
+                x0=model.state(theta1=a, theta2=a),
+                t_final=t_final,
+                dt=0.01,
+                method="cvodes",
+                rtol=1e-10,
+                atol=1e-10,
+                outputs=("theta1", "theta2", "x2", "y2"),
+                tolerance=tolerance,
             )
             rep = check_scene(sc, repeats=repeats)
             row: dict[str, Any] = {"k": k, "amplitude": a, "chosen": rep.chosen}

@@ -25,11 +25,19 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
     plt = _plt()
     elastic = "stretch1" in traj.output_names
     fig, axes = plt.subplots(4 if elastic else 3, 1, figsize=(8, 9 if elastic else 7.5), sharex=True)
+    # A balancing run never leaves the upright neighbourhood: on a -pi..pi axis it would be a
+    # flat line, so show the deviation from upright instead.
+    from_up = {n: (traj[n] % (2 * np.pi)) - np.pi for n in ("theta1", "theta2")}
+    near_up = all(np.max(np.abs(v)) < 0.5 for v in from_up.values())
     for name in ("theta1", "theta2"):
-        axes[0].plot(traj.t, traj[name], label=name)
-    for up in (-np.pi, np.pi):  # upright, reached either way round
-        axes[0].axhline(up, color="k", lw=0.6, ls=":")
-    axes[0].set_ylabel("angle from hanging [rad]")
+        axes[0].plot(traj.t, from_up[name] if near_up else traj[name], label=name)
+    if near_up:
+        axes[0].axhline(0.0, color="k", lw=0.6, ls=":")
+        axes[0].set_ylabel("angle - pi (from upright) [rad]")
+    else:
+        for up in (-np.pi, np.pi):  # upright, reached either way round
+            axes[0].axhline(up, color="k", lw=0.6, ls=":")
+        axes[0].set_ylabel("angle from hanging [rad]")
     for name in traj.input_names:
         axes[1].step(traj.t, traj[name], where="post", label=name)
     axes[1].set_ylabel("torque [N.m]")

@@ -35,6 +35,7 @@ def test_lqr_balance_matches_native_loop(cosim_fmu, kind, version, solver):
     x0 = _perturbed_upright(model)
     fmu = cosim(cosim_fmu(kind, version), ctrl, 0.01, 3.0, x0=x0, tolerance=1e-10, solver=solver)
     nat = _native(model, ctrl, x0, 3.0)
+    # Both grids are k * h computed in floating point (never summed): equal up to rounding.
     np.testing.assert_allclose(fmu.t, nat.t, rtol=0, atol=1e-12)
     # Bound: both loops integrate the same ODE with identical held torques; the embedded solver at
     # tolerance 1e-10 and CVODES at 1e-11 each err ~1e-9 per step and the stable loop contracts
