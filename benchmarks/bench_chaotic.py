@@ -36,8 +36,8 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import pendulab as pl
+from pendulab.integrate import time_grid
 from pendulab.model.pycode import to_python
-from pendulab.model.simulate import time_grid
 
 X0 = np.array([2.0, 2.0, 0.0, 0.0])
 T_FINAL = 10.0

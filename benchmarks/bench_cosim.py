@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pendulab as pl
 from pendulab.control.sampled import LinearStateFeedback, as_feedback, lqr_balance, upright_state
-from pendulab.fmu.cosim import cosim
+from pendulab.cosim.master import cosim
 from pendulab.fmu.export import export
 
 

@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from pendulab.control import swing_up
-from pendulab.control.episode import run_episode
-from pendulab.control.tasks import load_task, task_names
+from pendulab.control.swingup.episode import run_episode
+from pendulab.control.swingup.tasks import load_task, task_names
 
 OUT = Path(__file__).resolve().parent / "results" / "swingup.md"
 

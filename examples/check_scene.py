@@ -13,7 +13,7 @@ import sys
 from typing import Any
 
 from pendulab.bench.hierarchy import choose_model
-from pendulab.scenes import load_scene
+from pendulab.scene import load_scene
 
 TEST_KWARGS = {"repeats": 1}
 

@@ -19,8 +19,8 @@ import numpy as np
 
 import pendulab as pl
 from pendulab.control.sampled import as_feedback, energy_swingup, lqr_balance, upright_state
-from pendulab.fmu.cosim import cosim, cosim_many
-from pendulab.fmu.cosim_plots import plot_side_by_side
+from pendulab.cosim.master import cosim, cosim_many
+from pendulab.cosim.plots import plot_side_by_side
 from pendulab.fmu.export import export
 
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import pendulab as pl
-from pendulab.model.modes import mode_table
+from pendulab.analysis.modes import mode_table
 from pendulab.viz.modes import save_mode_figures
 
 #: Brief run for tests/test_examples.py.

@@ -17,7 +17,7 @@ import numpy as np
 
 import pendulab as pl
 from pendulab.model.counterpart import rigid_counterpart, rigid_state
-from pendulab.scenes import load_scene
+from pendulab.scene import load_scene
 
 
 def run(*, t_final: float = 10.0, out_dir: str | Path | None = None) -> dict:

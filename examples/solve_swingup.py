@@ -5,8 +5,8 @@ Run:  PYTHONPATH=$PWD python examples/solve_swingup.py
 
 from __future__ import annotations
 
-from pendulab.control.episode import run_episode
-from pendulab.control.tasks import load_task
+from pendulab.control.swingup.episode import run_episode
+from pendulab.control.swingup.tasks import load_task
 
 #: Keyword arguments of the brief run in the test suite.
 TEST_KWARGS = {"N": 40}

@@ -1,12 +1,12 @@
 """pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed."""
 
-from .model.equilibria import Equilibrium, equilibria, equilibrium
-from .model.linearize import Linearization, linearize
+from .analysis.equilibria import Equilibrium, equilibria, equilibrium
+from .analysis.linearize import Linearization, linearize
+from .analysis.modes import Mode, modes
+from .integrate import METHODS, SimulationError, simulate
+from .integrate.trajectory import Trajectory
 from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
-from .model.modes import Mode, modes
 from .model.params import ElasticParams, RigidParams
-from .model.simulate import METHODS, SimulationError, simulate
-from .model.trajectory import Trajectory
 
 __all__ = [
     "ACTUATIONS",

@@ -8,7 +8,7 @@ import pytest
 
 import pendulab as pl
 from pendulab.cli import main
-from pendulab.scenes import load_scene
+from pendulab.scene import load_scene
 
 
 def read_csv(path):

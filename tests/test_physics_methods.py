@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
-from pendulab.model.fixed_step import FIXED_METHODS
+from pendulab.integrate.fixed_step import FIXED_METHODS
 
 START = {"theta1": 0.3, "theta2": 0.3}
 T_FINAL = 2.0

@@ -5,7 +5,7 @@ import pytest
 
 import pendulab as pl
 from pendulab.model.counterpart import rigid_counterpart, rigid_state
-from pendulab.scenes import list_scenes, load_scene
+from pendulab.scene import list_scenes, load_scene
 
 GOOD = """
 [scene]

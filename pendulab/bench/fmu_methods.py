@@ -36,9 +36,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..integrate import SimulationError, time_grid
+from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from ..model.simulate import SimulationError, time_grid
-from ..model.trajectory import Trajectory
 
 if TYPE_CHECKING:
     from .workprecision import BenchMethod

@@ -38,12 +38,12 @@ from typing import Any
 
 import numpy as np
 
+from ..integrate import simulate, time_grid
+from ..integrate.trajectory import Trajectory
 from ..model.counterpart import rigid_counterpart
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
-from ..model.simulate import simulate, time_grid
-from ..model.trajectory import Trajectory
-from ..scenes import Scene
+from ..scene import Scene
 
 __all__ = [
     "LevelResult",
@@ -295,7 +295,7 @@ def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = Non
     Parameters
     ----------
     scene : Scene
-        A loaded scene (``pendulab.scenes.load_scene``) or any object with the
+        A loaded scene (``pendulab.scene.load_scene``) or any object with the
         attributes of :class:`Scene`.
     repeats : int
         Timed runs per level; the cost is the median wall time [s].

@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from ..integrate import simulate
 from ..model.pycode import to_python
-from ..model.simulate import simulate
 from .cases import Case
 
 __all__ = ["Reference", "REFERENCE_DIR", "load_reference", "compute_reference", "gbs_mp", "ReferenceMissingError"]

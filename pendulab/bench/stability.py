@@ -3,7 +3,7 @@
 Four studies (``pendulab bench stability``):
 
 1. **Map** over spring stiffness k and fixed step h for the fixed-step methods
-   of :mod:`pendulab.model.fixed_step`, from theta = 0.3 rad with the springs
+   of :mod:`pendulab.integrate.fixed_step`, from theta = 0.3 rad with the springs
    at rest length (the spring mode is excited), over 1 s: *unstable* (state
    non-finite or the energy above the static equilibrium grew tenfold),
    *stable but inaccurate* (bob positions off by more than ``POSITION_TOL``
@@ -37,10 +37,10 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..model.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
+from ..integrate import simulate
+from ..integrate.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_state
-from ..model.simulate import simulate
 
 __all__ = [
     "omega_max",
@@ -152,9 +152,9 @@ def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
     """Accepted steps over the 1 s horizon."""
     if method.startswith("cvodes"):
         return int(simulate(model, x0, _HORIZON, _HORIZON, method, tol, tol).stats["n_steps"])
-    from ..model.simulate import _python_rhs
+    from ..integrate.scipy_methods import python_rhs
 
-    rhs, p = _python_rhs("elastic"), model.p.tolist()
+    rhs, p = python_rhs("elastic"), model.p.tolist()
     jac_fun = model.functions["jac_rhs"]
     kw: dict[str, Any] = {}
     if method in ("Radau", "BDF"):

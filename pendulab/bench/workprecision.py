@@ -38,9 +38,9 @@ from typing import Any
 
 import numpy as np
 
+from ..integrate import METHODS, SimulationError, simulate
+from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from ..model.simulate import METHODS, SimulationError, simulate
-from ..model.trajectory import Trajectory
 from .cases import Case, get_cases
 from .fmu_methods import register_fmu_methods
 from .reference import Reference, load_reference

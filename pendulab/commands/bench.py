@@ -125,7 +125,7 @@ def _hierarchy(args: argparse.Namespace) -> int:
 def _shipped_scene_table(quick: bool) -> list[str]:
     """Markdown table: the hierarchy's choice for every shipped scene that states a tolerance."""
     from ..bench.hierarchy import check_scene
-    from ..scenes import list_scenes, load_scene
+    from ..scene import list_scenes, load_scene
 
     lines = [
         "| scene | model | tolerance | linearized: error / cost | rigid | rigid+quasi-static"

@@ -108,8 +108,8 @@ def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.
 def run(args: argparse.Namespace) -> int:
     from ..control.sampled import make_controller
     from ..control.tracking_sampled import load_reference_csv
-    from ..fmu.cosim import cosim, inspect_fmu
-    from ..fmu.cosim_plots import animate_cosim, plot_cosim
+    from ..cosim.master import cosim, inspect_fmu
+    from ..cosim.plots import animate_cosim, plot_cosim
 
     out: Path = args.out
     for flag, value in (("--comm-step", args.comm_step), ("--sample-time", args.sample_time), ("--t-final", args.t_final)):
@@ -179,8 +179,8 @@ def _steps(text: str) -> list[float]:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from ..fmu.cosim import inspect_fmu
-    from ..fmu.cosim_sweep import comm_step_sweep, fmu_runner, native_runner, plot_sweep
+    from ..cosim.master import inspect_fmu
+    from ..cosim.sweep import comm_step_sweep, fmu_runner, native_runner, plot_sweep
 
     steps = _steps(args.steps)
     if not steps or min(steps) <= 0:

@@ -40,9 +40,9 @@ def _progress(message: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pendulab demo``; return the exit status."""
+    from ..integrate import simulate
     from ..model.counterpart import rigid_counterpart, rigid_state
-    from ..model.simulate import simulate
-    from ..scenes import load_scene
+    from ..scene import load_scene
     from ..viz.animate import animate
     from ..viz.figures import save_figures
 

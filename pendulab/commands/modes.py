@@ -53,9 +53,9 @@ def _parse_torque(text: str | None) -> list[float] | None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pendulab modes``; return the exit status."""
-    from ..model.equilibria import EQUILIBRIUM_NAMES, equilibria, equilibrium
+    from ..analysis.equilibria import EQUILIBRIUM_NAMES, equilibria, equilibrium
+    from ..analysis.modes import mode_table, modes
     from ..model.model import make_model
-    from ..model.modes import mode_table, modes
 
     if args.model not in _KINDS:
         raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         state = ", ".join(f"{n} = {v:.6g}" for n, v in zip(model.state_names[: model.nq], eq.x[: model.nq], strict=True))
         text.append(f"== {eq.name}: {eq.stability}; {state}\n{mode_table(ms)}\n")
     if args.controllability:
-        from ..control.analysis import controllability_report, format_report
+        from ..control.controllability import controllability_report, format_report
 
         rows = controllability_report(model, eqs)
         result["controllability"] = [r.as_dict() for r in rows]

@@ -10,7 +10,7 @@ __all__ = ["register"]
 
 def _check(args: argparse.Namespace) -> int:
     from ..bench.hierarchy import check_scene
-    from ..scenes import load_scene
+    from ..scene import load_scene
 
     report = check_scene(load_scene(args.file), repeats=args.repeats, tolerance=args.tolerance)
     print(json.dumps(report.to_dict(), indent=1) if args.json else report.table())

@@ -57,7 +57,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pendulab simulate``; return the exit status."""
-    from ..scenes import default_scene, load_scene
+    from ..scene import default_scene, load_scene
 
     auto = args.model == "auto"
     if auto and args.scene is None:

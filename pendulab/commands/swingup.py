@@ -36,8 +36,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..control.episode import run_episode
-    from ..control.tasks import load_task, task_names
+    from ..control.swingup.episode import run_episode
+    from ..control.swingup.tasks import load_task, task_names
 
     if args.list:
         for name in task_names():
@@ -88,8 +88,8 @@ def run(args: argparse.Namespace) -> int:
 def _fmu_loop(ep, out: Path) -> dict:
     import numpy as np
 
-    from ..control.check import height_success
-    from ..fmu.cosim import cosim
+    from ..control.swingup.check import height_success
+    from ..cosim.master import cosim
     from ..fmu.export import export
 
     print("[swingup] exporting the FMU and running the closed loop through it ...", file=sys.stderr)

@@ -10,12 +10,10 @@ Inside this package ``import control as ct`` is python-control (absolute
 imports); never add a top-level module named ``control``.
 """
 
-from .analysis import ReportRow, controllability_report, controllable_subspace, finite_gramian, format_report
 from .balance import ROAResult, balanced, format_roa, region_of_attraction, simulate_balance
 from .bridge import to_nlsys, to_statespace
-from .guess import Guess, energy_guess, linear_guess
+from .controllability import ReportRow, controllability_report, controllable_subspace, finite_gramian, format_report
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
-from .problem import OBJECTIVES, SwingUpProblem
 from .sampled import (
     CONTROLLERS,
     EnergySwingUp,
@@ -26,10 +24,12 @@ from .sampled import (
     make_controller,
     upright_state,
 )
-from .swingup import GUESSES, SwingUpResult, swing_up
+from .swingup.guess import Guess, energy_guess, linear_guess
+from .swingup.problem import OBJECTIVES, SwingUpProblem
+from .swingup.solve import GUESSES, SwingUpResult, swing_up
+from .swingup.transcription import TRANSCRIPTIONS
 from .tracking import TrackingController, tvlqr
 from .tracking_sampled import TVLQRTracker, load_reference_csv, resample_reference, swingup_reference, tvlqr_tracker
-from .transcription import TRANSCRIPTIONS
 
 __all__ = [
     "CONTROLLERS",

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from ..integrate import SimulationError, simulate
+from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from ..model.simulate import SimulationError, simulate
-from ..model.trajectory import Trajectory
 from .lqr import LQRDesign, wrap_state_error
 
 __all__ = ["simulate_balance", "balanced", "ROAResult", "region_of_attraction", "format_roa", "DEFAULT_DIRECTIONS"]

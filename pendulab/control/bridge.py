@@ -12,8 +12,8 @@ from typing import Any
 import control as ct
 import numpy as np
 
-from ..model.equilibria import equilibrium
-from ..model.linearize import OutputSpec, check_actuation, linearize, selected_outputs
+from ..analysis.equilibria import equilibrium
+from ..analysis.linearize import OutputSpec, check_actuation, linearize, selected_outputs
 from ..model.model import INPUT_NAMES, Model
 
 __all__ = ["to_statespace", "to_nlsys"]

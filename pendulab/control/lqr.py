@@ -19,10 +19,10 @@ import control as ct
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov, solve_discrete_lyapunov
 
-from ..model.equilibria import Equilibrium, equilibrium
-from ..model.linearize import check_actuation, linearize, linearize_along
+from ..analysis.equilibria import Equilibrium, equilibrium
+from ..analysis.linearize import check_actuation, linearize, linearize_along
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
-from .analysis import controllable_subspace
+from .controllability import controllable_subspace
 
 __all__ = [
     "LQRDesign",

@@ -4,7 +4,7 @@ A :class:`SampledController` is called once per sample with the plant state
 and returns the torques it drives, which are then held constant until the next
 sample (zero-order hold). The same object therefore runs natively through
 ``pendulab.simulate(..., dt=sample_time, u=as_feedback(controller, model))`` and
-through an FMU with :func:`pendulab.fmu.cosim`.
+through an FMU with :func:`pendulab.cosim.master`.
 
 Three controllers are provided:
 
@@ -32,8 +32,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from .._checks import positive_float
-from ..model.equilibria import equilibrium
-from ..model.linearize import linearize
+from ..analysis.equilibria import equilibrium
+from ..analysis.linearize import linearize
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
 from .lqr import actuation_name, wrap_state_error, zoh
 from .lqr import lqr_balance as lqr_design
@@ -81,7 +81,7 @@ class SampledController(Protocol):
 def upright_state(model: Model) -> np.ndarray:
     """The up-up equilibrium (theta1 = theta2 = pi, at rest), shape (nx,).
 
-    A thin wrapper of ``pendulab.model.equilibria.equilibrium(model, "up-up").x``:
+    A thin wrapper of ``pendulab.analysis.equilibria.equilibrium(model, "up-up").x``:
     for the elastic model the springs carry the weight above them, so they are
     compressed (r1 = L1 - (m1 + m2) g / k1, r2 = L2 - m2 g / k2).
     """

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..model.model import INPUT_NAMES, Model
 from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, wrap_state_error
-from .swingup import SwingUpResult
+from .swingup.solve import SwingUpResult
 
 __all__ = ["TrackingController", "tvlqr", "default_weights"]
 
@@ -44,7 +44,7 @@ class TrackingController:
     """Sampled-data feedback ``u(t, x)`` -> (tau1, tau2) [N.m]; call it like a function.
 
     It is a :class:`pendulab.control.sampled.SampledController`, so
-    :func:`pendulab.fmu.cosim` drives it through an FMU as well.
+    :func:`pendulab.cosim.master` drives it through an FMU as well.
 
     Attributes
     ----------

@@ -166,7 +166,7 @@ def swingup_reference(
     Shapes (N,), (N, nx), (N, 2). Stands in for an optimized swing-up when none
     is at hand; any reference on the sample grid can be tracked the same way.
     """
-    from ..model.simulate import simulate
+    from ..integrate import simulate
 
     ctrl = energy_swingup(model, sample_time, u_max=u_max)
     x0 = model.state(theta1=0.1) if x0 is None else x0

@@ -8,7 +8,7 @@ compiled fast path. ``cosim(fmu_path, controller, comm_step, t_final)`` is the
 co-simulation master (``cosim.py``; ``cosim_many`` for several FMUs).
 """
 
-from .cosim import StepRejectedError, cosim, cosim_many
+from ..cosim.master import StepRejectedError, cosim, cosim_many
 from .export import CompilerNotFoundError, export
 from .validate import SCENES, ValidationReport, validate
 

@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..integrate import simulate
 from ..model.model import Model, make_model
-from ..model.simulate import simulate
 from .codegen import SOLVER_NAMES
 
 __all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind", "quasi_static_state"]

@@ -20,7 +20,7 @@ import numpy as np
 from .builders import SymbolicModel, build_elastic, build_rigid
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
 
-__all__ = ["Model", "rigid", "elastic", "make_model", "INPUT_NAMES", "ACTUATIONS"]
+__all__ = ["Model", "rigid", "elastic", "make_model", "model_functions", "INPUT_NAMES", "ACTUATIONS"]
 
 INPUT_NAMES: tuple[str, ...] = ("tau1", "tau2")
 #: Which of (tau1, tau2) each actuation drives.
@@ -66,7 +66,7 @@ def _state_unit(name: str) -> str:
 
 
 @cache
-def _functions(kind: str) -> dict[str, ca.Function]:
+def model_functions(kind: str) -> dict[str, ca.Function]:
     """CasADi Functions of one model kind, built once per process."""
     sym: SymbolicModel = build_rigid() if kind == "rigid" else build_elastic()
     x, u, p = sym.x, sym.u, sym.p
@@ -321,7 +321,7 @@ def make_model(kind: str, **params: float) -> Model:
     unknown = sorted(set(params) - set(cls.names()))
     if unknown:
         raise ValueError(f"unknown parameter name(s) {unknown} for the {kind} model; expected one of {list(cls.names())}")
-    return Model(kind, cls(**params), _functions(kind))
+    return Model(kind, cls(**params), model_functions(kind))
 
 
 def rigid(**params: float) -> Model:

@@ -26,9 +26,9 @@ __all__ = ["quasi_static_state", "quasi_static_lengths"]
 @cache
 def _solver() -> tuple[ca.Function, ca.Function]:
     """r*(r0, theta, omega, u, p) by Newton on the radial accelerations, and that residual."""
-    from .model import _functions
+    from .model import model_functions
 
-    f = _functions("elastic")["rhs"]
+    f = model_functions("elastic")["rhs"]
     npar = f.size1_in(2)
     r = ca.SX.sym("r", 2)
     theta, omega, u, p = ca.SX.sym("theta", 2), ca.SX.sym("omega", 2), ca.SX.sym("u", 2), ca.SX.sym("p", npar)

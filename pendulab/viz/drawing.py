@@ -8,8 +8,8 @@ from functools import cached_property
 
 import numpy as np
 
+from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from ..model.trajectory import Trajectory
 
 __all__ = ["Run", "as_runs", "link_polylines", "spring_polyline", "view_limits", "RUN_COLORS", "run_colors"]
 

@@ -16,9 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from ..model.equilibria import Equilibrium, equilibrium  # noqa: E402
+from ..analysis.equilibria import Equilibrium, equilibrium  # noqa: E402
+from ..analysis.modes import Mode, modes, stiffness_sweep  # noqa: E402
 from ..model.model import Model  # noqa: E402
-from ..model.modes import Mode, modes, stiffness_sweep  # noqa: E402
 
 __all__ = ["plot_mode_shapes", "plot_frequency_vs_stiffness", "save_mode_figures"]
 

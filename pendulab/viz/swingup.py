@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
-from ..control.episode import Episode  # noqa: E402
+from ..control.swingup.episode import Episode  # noqa: E402
 
 __all__ = ["plot_episode", "animate_episode"]
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
-from pendulab.model.fixed_step import FIXED_METHODS, integrate_fixed
+from pendulab.integrate.fixed_step import FIXED_METHODS, integrate_fixed
 
 
 @pytest.fixture(scope="module")

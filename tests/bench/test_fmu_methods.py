@@ -9,7 +9,7 @@ from pendulab.bench.cases import CASES
 from pendulab.bench.fmu_methods import fmu_runner
 from pendulab.bench.reference import load_reference
 from pendulab.bench.workprecision import BENCH_METHODS, run_work_precision
-from pendulab.model.simulate import SimulationError
+from pendulab.integrate import SimulationError
 
 
 def test_fmu_methods_are_registered_tolerance_sweeps():

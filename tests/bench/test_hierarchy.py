@@ -7,7 +7,7 @@ import pytest
 
 from pendulab.bench.hierarchy import check_scene, choose_model
 from pendulab.cli import main
-from pendulab.scenes import load_scene as load
+from pendulab.scene import load_scene as load
 
 
 def _report(name):

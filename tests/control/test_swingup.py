@@ -5,8 +5,8 @@ import pytest
 
 import pendulab as pl
 from pendulab.control import SwingUpProblem, swing_up
-from pendulab.control.check import replay
-from pendulab.control.tasks import load_task
+from pendulab.control.swingup.check import replay
+from pendulab.control.swingup.tasks import load_task
 
 
 @pytest.fixture(scope="module")

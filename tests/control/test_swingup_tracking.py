@@ -5,8 +5,8 @@ import pytest
 
 import pendulab as pl
 from pendulab.control import swing_up
-from pendulab.control.check import height_success
-from pendulab.control.tasks import load_task, task_names
+from pendulab.control.swingup.check import height_success
+from pendulab.control.swingup.tasks import load_task, task_names
 from pendulab.control.tracking import tvlqr
 
 

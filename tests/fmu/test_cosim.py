@@ -8,7 +8,7 @@ import pytest
 import pendulab as pl
 from pendulab.control.lqr import wrap_state_error
 from pendulab.control.sampled import as_feedback, energy_swingup, lqr_balance, upright_state
-from pendulab.fmu.cosim import cosim
+from pendulab.cosim.master import cosim
 
 KINDS = ("rigid", "elastic")
 VERSIONS = (2, 3)

@@ -8,7 +8,7 @@ from fmpy.fmi2 import FMU2Slave
 
 import pendulab as pl
 from pendulab.control.sampled import energy_swingup, lqr_balance, upright_state
-from pendulab.fmu.cosim import StepRejectedError, cosim, cosim_many
+from pendulab.cosim.master import StepRejectedError, cosim, cosim_many
 
 
 def _starts(k: float):

@@ -9,7 +9,7 @@ import pytest
 
 import pendulab as pl
 from pendulab.control.sampled import closed_loop_spectral_radius, lqr_balance
-from pendulab.fmu.cosim_sweep import comm_step_sweep, contraction_factor, fmu_runner, plot_sweep
+from pendulab.cosim.sweep import comm_step_sweep, contraction_factor, fmu_runner, plot_sweep
 
 
 def test_contraction_factor_recovers_a_geometric_rate():

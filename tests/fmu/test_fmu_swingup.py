@@ -4,8 +4,8 @@ import numpy as np
 
 import pendulab as pl
 from pendulab.control import swing_up
-from pendulab.control.check import height_success
-from pendulab.control.tasks import load_task
+from pendulab.control.swingup.check import height_success
+from pendulab.control.swingup.tasks import load_task
 from pendulab.control.tracking import tvlqr
 from pendulab.fmu import cosim
 

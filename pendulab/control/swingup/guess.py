@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import counterpart
-from ..model.simulate import simulate
+from ...integrate import simulate
+from ...model import counterpart
 from .problem import SwingUpProblem
 
 __all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic"]

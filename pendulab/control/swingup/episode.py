@@ -10,13 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from ..model.simulate import simulate
-from ..model.trajectory import Trajectory
+from ...integrate import simulate
+from ...integrate.trajectory import Trajectory
+from ..tracking import TrackingController, tvlqr
 from .check import HeightCheck, ReplayReport, height_success, replay
 from .guess import Guess
-from .swingup import SwingUpResult, swing_up
+from .solve import SwingUpResult, swing_up
 from .tasks import Task
-from .tracking import TrackingController, tvlqr
 
 __all__ = ["Episode", "run_episode"]
 

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.simulate import simulate
-from ..model.trajectory import Trajectory
-from .swingup import SwingUpResult
+from ...integrate import simulate
+from ...integrate.trajectory import Trajectory
+from .solve import SwingUpResult
 
 __all__ = ["ReplayReport", "replay", "height_success", "HeightCheck"]
 

@@ -19,7 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .model import Model, _functions
+from ..model.model import Model, model_functions
 
 __all__ = ["Equilibrium", "EQUILIBRIUM_NAMES", "equilibria", "equilibrium"]
 
@@ -93,8 +93,8 @@ class Equilibrium:
 @cache
 def _solver(kind: str) -> tuple[ca.Function, ca.Function]:
     """Newton rootfinder on the accelerations, and the potential gradient (per model kind)."""
-    rhs = _functions(kind)["rhs"]
-    potential = _functions(kind)["potential"]
+    rhs = model_functions(kind)["rhs"]
+    potential = model_functions(kind)["potential"]
     nx, nu, npar = rhs.size1_in(0), rhs.size1_in(1), rhs.size1_in(2)
     nq = nx // 2
     q = ca.SX.sym("q", nq)

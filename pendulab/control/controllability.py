@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm, null_space
 
-from ..model.equilibria import Equilibrium, equilibria, equilibrium
-from ..model.linearize import OutputSpec, linearize
+from ..analysis.equilibria import Equilibrium, equilibria, equilibrium
+from ..analysis.linearize import OutputSpec, linearize
 from ..model.model import ACTUATIONS, Model
 
 __all__ = [

@@ -26,9 +26,9 @@ import numpy as np
 
 from .._checks import positive_float
 from ..control.sampled import SampledController
+from ..integrate.trajectory import Trajectory
 from ..model.model import INPUT_NAMES, Model, make_model
 from ..model.params import ElasticParams, RigidParams
-from ..model.trajectory import Trajectory
 
 __all__ = ["cosim", "cosim_many", "FmuInfo", "FmuPlant", "StepRejectedError", "inspect_fmu", "StepCheck"]
 
@@ -367,7 +367,7 @@ class FmuPlant:
 
 
 def _solver_value(solver: str | int) -> dict[str, int]:
-    from .codegen import SOLVER_NAMES
+    from ..fmu.codegen import SOLVER_NAMES
 
     if isinstance(solver, str):
         if solver not in SOLVER_NAMES:

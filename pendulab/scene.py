@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from ..model.model import Model, make_model
-from ..model.params import ElasticParams, RigidParams
-from ..model.simulate import METHODS, simulate
-from ..model.trajectory import Trajectory
+from .integrate import METHODS, simulate
+from .integrate.trajectory import Trajectory
+from .model.model import Model, make_model
+from .model.params import ElasticParams, RigidParams
 
 if sys.version_info >= (3, 11):
     import tomllib

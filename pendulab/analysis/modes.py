@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
+from ..model.model import Model
 from .equilibria import Equilibrium, equilibrium
 from .linearize import linearize, operating_point
-from .model import Model
 
 __all__ = ["Mode", "modes", "mode_table", "stiffness_sweep"]
 
@@ -213,7 +213,7 @@ def stiffness_sweep(k_values: Sequence[float], **params: float) -> dict[str, np.
         frequencies [rad/s], ascending; ``rigid`` (2,) [rad/s] of the rigid
         pendulum with the same masses and lengths.
     """
-    from .model import elastic, rigid
+    from ..model.model import elastic, rigid
 
     k = np.asarray(k_values, dtype=float).ravel()
     if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):

@@ -32,7 +32,6 @@ name                   order  implicit  stability
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -40,7 +39,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["FixedMethod", "FIXED_METHODS", "step_function", "integrate_fixed", "run_fixed", "IMAG_AXIS_LIMIT"]
+from ..model.model import model_functions
+from .registry import DEFAULT_FIXED_STEP, MethodSpec, RunRequest, RunResult
+
+__all__ = ["FixedMethod", "FIXED_METHODS", "METHOD_SPECS", "step_function", "integrate_fixed", "run_fixed", "IMAG_AXIS_LIMIT"]
 
 _S3 = math.sqrt(3.0)
 
@@ -131,11 +133,9 @@ def step_function(kind: str, method: str) -> ca.Function:
     casadi.Function
         Inputs x (nx,), u (2,) [N.m], p (np,), h [s]; output x after one step.
     """
-    from .model import _functions
-
     spec = _get_method(method)
     tag = _tag(method)
-    f = _functions(kind)["rhs"]
+    f = model_functions(kind)["rhs"]
     nx, npar = f.size1_in(0), f.size1_in(2)
     s = spec.stages
     if spec.explicit:
@@ -251,40 +251,51 @@ def integrate_fixed(
     return np.vstack([x0, X])
 
 
-def run_fixed(
-    model: Any,
-    spec: Any,
-    x0: np.ndarray,
-    t: np.ndarray,
-    sched: np.ndarray | None,
-    u_fun: Callable[[float, np.ndarray], Any] | None,
-    rtol: float,
-    atol: float,
-    max_step: float | None,
-    extra: dict,
-) -> tuple[np.ndarray, np.ndarray, dict]:
-    """Runner for :func:`pendulab.simulate` (family ``"fixed"``); ``rtol``/``atol`` do not apply."""
-    from .simulate import _DEFAULT_FIXED_STEP, _eval_feedback
+def run_fixed(req: RunRequest) -> RunResult:
+    """Runner of the fixed-step family; ``rtol``/``atol`` do not apply.
 
-    if extra:
-        raise ValueError(f"options {sorted(extra)} are not supported by the fixed-step method {spec.name!r}")
+    Parameters
+    ----------
+    req : RunRequest
+        A validated run; ``max_step`` is the step (default 1e-3 s), rounded down
+        so that every output time is hit.
+
+    Returns
+    -------
+    RunResult
+        States, held inputs and the step count.
+
+    Raises
+    ------
+    ValueError
+        Options were given (the fixed-step methods take none).
+    """
+    model, t, spec = req.model, req.t, req.spec
+    if req.options:
+        raise ValueError(f"options {sorted(req.options)} are not supported by the fixed-step method {spec.name!r}")
     dt = float(t[1] - t[0])
-    n_sub = max(1, math.ceil(dt / (max_step or _DEFAULT_FIXED_STEP) - 1e-9))
+    n_sub = max(1, math.ceil(dt / (req.max_step or DEFAULT_FIXED_STEP) - 1e-9))
     h = dt / n_sub
-    n_int = len(t) - 1
-    if sched is not None:
+    n_int = req.n_intervals
+    if req.schedule is not None:
         G = _grid(model.kind, spec.name, n_sub, n_int)
-        X = np.vstack([x0, np.asarray(G(x0, sched.T, model.p, h)).T])
-        U = sched
+        X = np.vstack([req.x0, np.asarray(G(req.x0, req.schedule.T, model.p, h)).T])
+        U = req.schedule
     else:
         F = _repeat(model.kind, spec.name, n_sub)
         X = np.empty((n_int + 1, model.nx))
         U = np.empty((n_int, model.nu))
-        X[0] = x0
+        X[0] = req.x0
         for k in range(n_int):
-            U[k] = _eval_feedback(model, u_fun, float(t[k]), X[k])
+            U[k] = req.feedback_input(float(t[k]), X[k])
             X[k + 1] = np.asarray(F(X[k], U[k], model.p, h)).ravel()
     method = FIXED_METHODS[spec.name]
     n_steps = n_int * n_sub
     stats = {"n_steps": n_steps, "n_rhs": method.stages * n_steps if method.explicit else None, "step": h}
-    return X, U, stats
+    return RunResult(X, U, stats)
+
+
+#: The fixed-step methods as registry entries.
+METHOD_SPECS: tuple[MethodSpec, ...] = tuple(
+    MethodSpec(name, "fixed", m.description, run_fixed, True) for name, m in FIXED_METHODS.items()
+)

@@ -28,7 +28,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..model.model import _functions
+from ...model.model import model_functions
 from .problem import SwingUpProblem
 
 __all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING"]
@@ -189,7 +189,7 @@ def _build(
     kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple
 ) -> Transcription:
     t_start = time.perf_counter()
-    f = _functions(kind)["rhs"]
+    f = model_functions(kind)["rhs"]
     nx = f.size1_in(0)
     npar = f.size1_in(2)
     # Collocation: everything SX, expanded. Shooting: MX variables around a mapped interval Function.
@@ -234,7 +234,7 @@ def _collocation_maps(kind: str, scheme: str, d: int, N: int) -> ca.Function:
     Inputs: x_k (nx,), Xc (nx*d,) collocation states, u_k (2,), h [s], p.
     Outputs: defects (nx*d,) = h f(Xc_j) - dp/dtau(tau_j), end state (nx,).
     """
-    f = _functions(kind)["rhs"]
+    f = model_functions(kind)["rhs"]
     nx = f.size1_in(0)
     tau = np.append(0.0, ca.collocation_points(d, scheme))
     C = np.zeros((d + 1, d + 1))  # C[r, j]: derivative of Lagrange basis r at tau_j
@@ -263,7 +263,7 @@ def _collocation_maps(kind: str, scheme: str, d: int, N: int) -> ca.Function:
 
 def _shooting_map(kind: str, plugin: str, N: int) -> ca.Function:
     """Integrator over one interval (time scaled to [0, 1]), mapped over N intervals."""
-    f = _functions(kind)["rhs"]
+    f = model_functions(kind)["rhs"]
     nx, npar = f.size1_in(0), f.size1_in(2)
     x, u, h, p = ca.SX.sym("x", nx), ca.SX.sym("u", 2), ca.SX.sym("h"), ca.SX.sym("p", npar)
     dae = {"x": x, "p": ca.vertcat(u, h, p), "ode": h * f(x, u, p)}

@@ -11,7 +11,7 @@ upright state, the per-step contraction factor of the angular error (a log-linea
 fit over the run) estimates the dominant closed-loop eigenvalue modulus; from a
 large perturbation, whether the loop recovers at all (nonlinear stability).
 
-Runs go through an FMU (:func:`pendulab.fmu.cosim`) or natively
+Runs go through an FMU (:func:`pendulab.cosim.master`) or natively
 (:func:`pendulab.simulate` with the same controller); the study code is the same.
 """
 
@@ -34,8 +34,8 @@ from ..control.sampled import (
     lqr_balance,
     upright_state,
 )
+from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from ..model.trajectory import Trajectory
 
 __all__ = [
     "SweepPoint",
@@ -276,7 +276,7 @@ def _first_unstable(h: Sequence[float], stable: Sequence[bool]) -> float:
 
 def native_runner(model: Model, method: str = "cvodes", rtol: float = 1e-10, atol: float = 1e-10) -> LoopRunner:
     """The native sampled loop: ``simulate(model, x0, t_final, dt=h, u=controller)``."""
-    from ..model.simulate import simulate
+    from ..integrate import simulate
 
     def run(ctrl: LinearStateFeedback, h: float, x0: np.ndarray, t_final: float) -> Trajectory:
         return simulate(model, x0, t_final, dt=h, method=method, rtol=rtol, atol=atol, u=as_feedback(ctrl, model))
@@ -285,8 +285,8 @@ def native_runner(model: Model, method: str = "cvodes", rtol: float = 1e-10, ato
 
 
 def fmu_runner(fmu_path: str | Path, *, tolerance: float | None = 1e-10, solver: Any = None, params: Any = None) -> LoopRunner:
-    """The co-simulation loop through an FMU: :func:`pendulab.fmu.cosim`."""
-    from .cosim import cosim
+    """The co-simulation loop through an FMU: :func:`pendulab.cosim.master`."""
+    from .master import cosim
 
     def run(ctrl: LinearStateFeedback, h: float, x0: np.ndarray, t_final: float) -> Trajectory:
         return cosim(fmu_path, ctrl, h, t_final, x0=x0, tolerance=tolerance, solver=solver, params=params)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model.trajectory import Trajectory
+from ..integrate.trajectory import Trajectory
 
 __all__ = ["plot_cosim", "animate_cosim", "plot_side_by_side"]
 

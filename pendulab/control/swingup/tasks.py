@@ -29,10 +29,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..model.model import Model
-from ..scenes import SCENE_DIR, load_scene
+from ...model.model import Model
+from ...scene import SCENE_DIR, load_scene
+from ..sampled import upright_state
 from .problem import SwingUpProblem
-from .sampled import upright_state
 
 __all__ = ["Task", "load_task", "task_names"]
 
@@ -91,7 +91,7 @@ def task_names() -> tuple[str, ...]:
 def load_task(name_or_path: str | Path) -> Task:
     """Load a shipped task by name (see :func:`task_names`) or a scene file with a ``[task]`` section.
 
-    The scene itself is read by :func:`pendulab.scenes.load_scene` (validated there);
+    The scene itself is read by :func:`pendulab.scene.load_scene` (validated there);
     this function interprets its ``[task]`` section.
 
     Raises

@@ -16,8 +16,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..model.model import ACTUATIONS, INPUT_NAMES, Model, make_model, model_functions
 from .equilibria import Equilibrium
-from .model import ACTUATIONS, INPUT_NAMES, Model, _functions, make_model
 
 __all__ = [
     "Linearization",
@@ -146,7 +146,7 @@ def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
 @cache
 def _output_function(kind: str, names: tuple[str, ...]) -> ca.Function:
     """CasADi Function ``(y, C, D)(x, u, p)`` of the named signals (built once per kind and names)."""
-    functions = _functions(kind)
+    functions = model_functions(kind)
     rhs = functions["rhs"]
     x = ca.SX.sym("x", rhs.size1_in(0))
     u = ca.SX.sym("u", rhs.size1_in(1))

@@ -144,7 +144,7 @@ def swing_up(
     ----------
     problem : SwingUpProblem
     method : {"radau", "legendre", "shooting"}
-        Transcription (see :mod:`pendulab.control.transcription`).
+        Transcription (see :mod:`pendulab.control.swingup.transcription`).
     N : int
         Number of control intervals (torques are held on each).
     degree : int

@@ -1,7 +1,7 @@
 """The swing-up problem statement, independent of how it is transcribed.
 
 A :class:`SwingUpProblem` says *what* is asked (model, actuation, limits, start,
-goal, horizon, objective); :mod:`pendulab.control.transcription` says *how* it
+goal, horizon, objective); :mod:`pendulab.control.swingup.transcription` says *how* it
 becomes a nonlinear program (collocation or multiple shooting), in the spirit
 of rockit.
 """
@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import positive_float
-from ..model.model import ACTUATIONS, Model
-from .sampled import upright_state
+from ..._checks import positive_float
+from ...model.model import ACTUATIONS, Model
+from ..sampled import upright_state
 
 __all__ = ["SwingUpProblem", "OBJECTIVES"]
 

@@ -1,0 +1,1 @@
+"""Analysis of the model: equilibria, exact linearization, modes."""

@@ -1,0 +1,263 @@
+"""The method registry of :func:`pendulab.simulate` and the contract every runner keeps.
+
+A *method* is a :class:`MethodSpec`: a name, a family (``"casadi"``,
+``"scipy"``, ``"fixed"``; the fast-path families ``"taylor"`` and
+``"compiled"`` plug in the same way) and a *runner*. The front end
+(:func:`pendulab.simulate`) checks every argument once, builds a
+:class:`RunRequest` and hands it to the runner, which returns a
+:class:`RunResult` or raises :class:`SimulationError`. Runners never re-check
+user input and never print.
+
+The registry is assembled explicitly in :mod:`pendulab.integrate.methods`
+(no registration as a side effect of an import); :func:`register_method` adds
+a method at run time (tests, plug-ins).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..model.model import Model
+
+__all__ = [
+    "SimulationError",
+    "MethodSpec",
+    "RunRequest",
+    "RunResult",
+    "Runner",
+    "Registry",
+    "STIFF_HINT",
+    "DEFAULT_FIXED_STEP",
+]
+
+#: Hint attached to integration failures that are most often caused by stiffness.
+STIFF_HINT = "stiff springs need an implicit method such as 'cvodes', 'Radau' or 'collocation'"
+#: Step [s] of the fixed-step methods when ``max_step`` is not given.
+DEFAULT_FIXED_STEP = 1e-3
+
+
+class SimulationError(RuntimeError):
+    """An integrator failed; the message names the method, the time reached and a hint.
+
+    Parameters
+    ----------
+    method : str
+        Method name.
+    t_reached : float
+        Last time [s] the integration reached.
+    t_final : float
+        Requested horizon [s].
+    reason : str
+        What went wrong (solver message).
+    hint : str, optional
+        What to try instead.
+    """
+
+    def __init__(self, method: str, t_reached: float, t_final: float, reason: str, hint: str = "") -> None:
+        self.method = method
+        self.t_reached = t_reached
+        self.t_final = t_final
+        msg = f"method {method!r} failed at t = {t_reached:.6g} s of {t_final:.6g} s: {reason}"
+        if hint:
+            msg += f" (hint: {hint})"
+        super().__init__(msg)
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """Everything a runner needs, already validated by :func:`pendulab.simulate`.
+
+    Attributes
+    ----------
+    model : Model
+        The pendulum (its ``functions`` and parameter vector ``p``).
+    spec : MethodSpec
+        The method being run.
+    x0 : ndarray, shape (nx,)
+        Initial state.
+    t : ndarray, shape (N,)
+        Uniform output grid [s], ``t[0] = 0``.
+    schedule : ndarray, shape (N-1, nu), or None
+        Torques [N.m] held on each output interval; ``None`` when ``feedback`` is given.
+    feedback : callable or None
+        Sampled-data feedback ``u(t, x)``; evaluate it with :meth:`feedback_input`.
+    rtol, atol : float
+        Tolerances of the error-controlled methods.
+    max_step : float or None
+        Largest internal step [s]; the step of the fixed-step methods.
+    options : mapping
+        Method-specific options given by the user.
+    """
+
+    model: Model
+    spec: MethodSpec
+    x0: np.ndarray
+    t: np.ndarray
+    schedule: np.ndarray | None
+    feedback: Callable[[float, np.ndarray], Any] | None
+    rtol: float
+    atol: float
+    max_step: float | None
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def t_final(self) -> float:
+        """Horizon [s]."""
+        return float(self.t[-1])
+
+    @property
+    def n_intervals(self) -> int:
+        """Number of output intervals, N - 1."""
+        return len(self.t) - 1
+
+    @property
+    def constant_input(self) -> bool:
+        """True when the input is known in advance and the same on every interval."""
+        return self.schedule is not None and bool(np.all(self.schedule == self.schedule[0]))
+
+    def feedback_input(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Evaluate the feedback at ``(t, x)`` and validate it, shape (nu,) [N.m].
+
+        Raises
+        ------
+        ValueError
+            The feedback returned a wrong shape or a non-finite torque.
+        """
+        if self.feedback is None:
+            raise ValueError("this run has no feedback; use the input schedule")
+        value = self.feedback(t, np.array(x, dtype=float))
+        try:
+            return self.model.check_input(np.asarray(value, dtype=float).reshape(self.model.nu), "u(t, x)")
+        except ValueError as exc:
+            raise ValueError(f"feedback u(t, x) at t = {t:.6g} s returned an invalid torque: {exc}") from exc
+
+    def fail(self, t_reached: float, reason: str, hint: str = STIFF_HINT) -> SimulationError:
+        """A :class:`SimulationError` for this run (raise it)."""
+        return SimulationError(self.spec.name, float(t_reached), self.t_final, reason, hint)
+
+
+@dataclass
+class RunResult:
+    """What a runner returns.
+
+    Attributes
+    ----------
+    x : ndarray, shape (N, nx)
+        States on the output grid.
+    u : ndarray, shape (N-1, nu)
+        Torques held on each interval [N.m].
+    stats : dict
+        Solver statistics (``n_steps``, ``n_rhs``, ... where the solver reports them).
+    """
+
+    x: np.ndarray
+    u: np.ndarray
+    stats: dict[str, Any] = field(default_factory=dict)
+
+
+class Runner(Protocol):
+    """A method family's entry point: ``runner(request) -> RunResult``."""
+
+    def __call__(self, request: RunRequest) -> RunResult:
+        """Integrate ``request`` over its grid; raise :class:`SimulationError` on failure."""
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """One entry of the method registry.
+
+    Attributes
+    ----------
+    name : str
+        Name passed as ``simulate(..., method=name)``.
+    family : str
+        ``"casadi"``, ``"scipy"``, ``"fixed"``, ``"taylor"`` or ``"compiled"``.
+    description : str
+        One line for tables and messages.
+    runner : Runner
+        The family's runner.
+    fixed_step : bool
+        True when ``rtol``/``atol`` do not apply (the step is ``max_step``).
+    settings : mapping
+        Family-specific settings (e.g. the CasADi plugin and its options).
+    """
+
+    name: str
+    family: str
+    description: str
+    runner: Runner = field(repr=False, compare=False)
+    fixed_step: bool = False
+    settings: Mapping[str, Any] = field(default_factory=dict)
+
+
+class Registry(Mapping[str, MethodSpec]):
+    """Read-only mapping of method name to :class:`MethodSpec`, with aliases.
+
+    Parameters
+    ----------
+    specs : iterable of MethodSpec
+        The methods.
+    deprecated : mapping of str to str, optional
+        Old name -> current name; resolving an old name warns (``DeprecationWarning``).
+    """
+
+    def __init__(self, specs: Any, deprecated: Mapping[str, str] | None = None) -> None:
+        self._specs: dict[str, MethodSpec] = {}
+        self._deprecated = dict(deprecated or {})
+        for spec in specs:
+            self.add(spec)
+
+    def add(self, spec: MethodSpec) -> None:
+        """Register a method (a name may be registered once).
+
+        Raises
+        ------
+        ValueError
+            The name is taken.
+        """
+        if spec.name in self._specs or spec.name in self._deprecated:
+            raise ValueError(f"method {spec.name!r} is already registered")
+        self._specs[spec.name] = spec
+
+    def __getitem__(self, name: str) -> MethodSpec:
+        return self._specs[name]
+
+    def __iter__(self):
+        return iter(self._specs)
+
+    def __len__(self) -> int:
+        return len(self._specs)
+
+    def resolve(self, method: Any) -> MethodSpec:
+        """The spec of ``method`` (case-insensitive; deprecated names warn).
+
+        Raises
+        ------
+        ValueError
+            Not a string, or not a registered name.
+        """
+        if not isinstance(method, str):
+            raise ValueError(f"method must be a string, got {method!r}")
+        if method in self._deprecated:
+            new = self._deprecated[method]
+            warnings.warn(f"method {method!r} is deprecated; use {new!r}", DeprecationWarning, stacklevel=3)
+            method = new
+        if method in self._specs:
+            return self._specs[method]
+        by_lower = {k.lower(): v for k, v in self._specs.items()}
+        if method.lower() in by_lower:
+            return by_lower[method.lower()]
+        raise ValueError(f"unknown method {method!r}; expected one of {list(self._specs)}")
+
+    def by_family(self) -> Mapping[str, tuple[str, ...]]:
+        """Method names grouped by family."""
+        out: dict[str, list[str]] = {}
+        for spec in self._specs.values():
+            out.setdefault(spec.family, []).append(spec.name)
+        return MappingProxyType({k: tuple(v) for k, v in out.items()})
