@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 
 import pendulab as pl
-from pendulab.control.sampled import LinearStateFeedback, as_feedback, lqr_balance, upright_state
+from pendulab.control.feedback import LinearStateFeedback, as_feedback, balance_controller, upright_state
 from pendulab.cosim.master import cosim
 from pendulab.fmu.export import export
 
@@ -45,7 +45,7 @@ class TimedController(LinearStateFeedback):
 
 
 def measure(fmu: Path, model: pl.Model, h: float, n_steps: int) -> dict[str, float]:
-    base = lqr_balance(model, h)
+    base = balance_controller(model, h)
     ctrl = TimedController(model, base.K, base.x_eq, base.u_eq, h, base.input_names)
     x0 = upright_state(model)
     x0[0] += 0.1

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import pendulab as pl
-from pendulab.control.sampled import as_feedback, energy_swingup, lqr_balance, upright_state
+from pendulab.control.feedback import as_feedback, balance_controller, energy_swingup, upright_state
 from pendulab.cosim.master import cosim, cosim_many
 from pendulab.cosim.plots import plot_side_by_side
 from pendulab.fmu.export import export
@@ -62,7 +62,7 @@ def run(
         fmu_r, fmu_e = fmus
 
         # 1. LQR balance through the FMU vs natively.
-        ctrl = lqr_balance(rigid, comm_step)
+        ctrl = balance_controller(rigid, comm_step)
         x0 = upright_state(rigid)
         x0[0] += 0.1
         co = cosim(fmu_r, ctrl, comm_step, t_final, x0=x0, tolerance=1e-10)

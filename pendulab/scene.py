@@ -37,7 +37,7 @@ else:  # pragma: no cover - Python 3.10
 __all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "SCENE_DIR"]
 
 #: Directory of the scenes shipped with the package.
-SCENE_DIR = Path(__file__).resolve().parent
+SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
 _PARAM_CLASSES = {"rigid": RigidParams, "elastic": ElasticParams}
 _SIMULATION_DEFAULTS: Mapping[str, Any] = MappingProxyType(

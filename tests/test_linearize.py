@@ -75,7 +75,7 @@ def test_linearize_along_matches_pointwise():
     model = pl.rigid()
     traj = pl.simulate(model, [1.0, 2.0, 0.0, 0.0], 1.0, dt=0.25)
     U = np.tile([0.3, -0.2], (traj.t.size, 1))
-    A, B = pl.model.linearize.linearize_along(model, traj.x, U, inputs="acrobot")
+    A, B = pl.analysis.linearize.linearize_along(model, traj.x, U, inputs="acrobot")
     for k in range(traj.t.size):
         lin = pl.linearize(model, traj.x[k], U[k], inputs="acrobot")
         np.testing.assert_array_equal(A[k], lin.A)

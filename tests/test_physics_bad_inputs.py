@@ -48,7 +48,7 @@ CASES = [
     ("negative dt", lambda: _sim(dt=-0.01), ValueError, ["dt", "positive", "-0.01"]),
     ("zero rtol", lambda: _sim(rtol=0.0), ValueError, ["rtol", "positive", "0.0"]),
     ("NaN atol", lambda: _sim(atol=NAN), ValueError, ["atol", "positive", "nan"]),
-    ("negative max_step", lambda: _sim(method="rk", max_step=-1e-3), ValueError, ["max_step", "positive", "-0.001"]),
+    ("negative max_step", lambda: _sim(method="rk4", max_step=-1e-3), ValueError, ["max_step", "positive", "-0.001"]),
     ("NaN in constant u", lambda: _sim(u=[0.0, NAN]), ValueError, ["u", "finite", "nan"]),
     ("u of wrong length", lambda: _sim(u=[0.0, 1.0, 2.0]), ValueError, ["u", "(2,)", "(3,)"]),
     ("scalar u", lambda: _sim(u=1.0), ValueError, ["u", "(2,)", "1.0"]),

@@ -106,8 +106,8 @@ def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..control.sampled import make_controller
-    from ..control.tracking_sampled import load_reference_csv
+    from ..control.controllers import make_controller
+    from ..control.tracking import load_reference_csv
     from ..cosim.master import cosim, inspect_fmu
     from ..cosim.plots import animate_cosim, plot_cosim
 

@@ -1,10 +1,12 @@
-"""Control: python-control bridge, controllability analysis, LQR balancing, swing-up and tracking.
+"""Control: python-control bridge, controllability, LQR, sampled controllers, tracking and swing-up.
 
-One design per concept: :mod:`.lqr` holds the LQR design (continuous or
+One definition per concept: :mod:`.lqr` holds the LQR design (continuous or
 discrete), the TVLQR Riccati recursion, the ZOH discretization and the angle
-wrapping; :mod:`.sampled` and :mod:`.tracking_sampled` wrap those gains as
-sampled-data controllers for co-simulation; :mod:`.tracking` stabilizes an
-optimized swing-up with them.
+wrapping; :mod:`.feedback` holds the controller protocol
+(:class:`SampledController`) and the controllers that keep it (state
+feedback, energy swing-up, the TVLQR tracker); :mod:`.tracking` designs the
+TVLQR gains; :mod:`.controllers` names them for the CLI; :mod:`.swingup`
+solves swing-up optimal control.
 
 Inside this package ``import control as ct`` is python-control (absolute
 imports); never add a top-level module named ``control``.
@@ -13,66 +15,79 @@ imports); never add a top-level module named ``control``.
 from .balance import ROAResult, balanced, format_roa, region_of_attraction, simulate_balance
 from .bridge import to_nlsys, to_statespace
 from .controllability import ReportRow, controllability_report, controllable_subspace, finite_gramian, format_report
-from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
-from .sampled import (
-    CONTROLLERS,
+from .controllers import CONTROLLERS, make_controller
+from .feedback import (
     EnergySwingUp,
     LinearStateFeedback,
     SampledController,
+    TVLQRTracker,
+    actuated_inputs,
     as_feedback,
+    balance_controller,
     energy_swingup,
-    make_controller,
     upright_state,
 )
+from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
+from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, swing_up
 from .swingup.guess import Guess, energy_guess, linear_guess
-from .swingup.problem import OBJECTIVES, SwingUpProblem
-from .swingup.solve import GUESSES, SwingUpResult, swing_up
-from .swingup.transcription import TRANSCRIPTIONS
-from .tracking import TrackingController, tvlqr
-from .tracking_sampled import TVLQRTracker, load_reference_csv, resample_reference, swingup_reference, tvlqr_tracker
+from .tracking import default_weights, load_reference_csv, resample_reference, swingup_reference, tvlqr, tvlqr_tracker
 
 __all__ = [
     "CONTROLLERS",
-    "EnergySwingUp",
-    "LinearStateFeedback",
-    "SampledController",
-    "TVLQRTracker",
-    "TrackingController",
-    "actuation_name",
-    "as_feedback",
-    "discrete_tvlqr",
-    "energy_swingup",
-    "load_reference_csv",
-    "make_controller",
-    "resample_reference",
-    "swingup_reference",
-    "tvlqr",
-    "tvlqr_tracker",
-    "zoh",
     "GUESSES",
+    "OBJECTIVES",
+    "TRANSCRIPTIONS",
+    "EnergySwingUp",
     "Guess",
     "LQRDesign",
-    "OBJECTIVES",
+    "LinearStateFeedback",
     "ROAResult",
     "ReportRow",
+    "SampledController",
     "SwingUpProblem",
     "SwingUpResult",
-    "TRANSCRIPTIONS",
+    "TVLQRTracker",
     "UncontrollableError",
+    "actuated_inputs",
+    "actuation_name",
+    "as_feedback",
+    "balance_controller",
     "balanced",
     "controllability_report",
     "controllable_subspace",
+    "default_weights",
+    "discrete_tvlqr",
     "energy_guess",
+    "energy_swingup",
     "finite_gramian",
     "format_report",
     "format_roa",
     "linear_guess",
+    "load_reference_csv",
     "lqr_balance",
+    "make_controller",
     "region_of_attraction",
+    "resample_reference",
     "simulate_balance",
     "swing_up",
+    "swingup_reference",
+    "tvlqr",
+    "tvlqr_tracker",
     "to_nlsys",
     "to_statespace",
     "upright_state",
     "wrap_state_error",
+    "zoh",
 ]
+
+
+def __getattr__(name: str):
+    # Deprecated names, kept for one release.
+    if name == "TrackingController":
+        import warnings
+
+        warnings.warn(
+            "pendulab.control.TrackingController is deprecated; tvlqr() returns a TVLQRTracker", DeprecationWarning, stacklevel=2
+        )
+        return TVLQRTracker
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,108 +1,116 @@
-"""Stabilise a swing-up: time-varying LQR along the optimum, LQR balancing at the top.
+"""Time-varying LQR tracking: the one design behind :class:`~pendulab.control.feedback.TVLQRTracker`.
 
-The controller is sampled-data (zero-order hold at ``dt``), as in
+The tracker is sampled-data (zero-order hold at the sample time), as in
 ``pendulab.simulate`` with a callable input and in a co-simulation master, so
-it is designed in discrete time: at each sample the exact CasADi Jacobians
-``model.functions["jac_rhs"]`` at the nominal state and torque are discretised
-exactly for the hold (matrix exponential), and the Riccati recursion runs
-backward from the balancing LQR's cost-to-go at the top. After the horizon
-the balancing LQR (discrete algebraic Riccati equation on the same
-linearisation at the goal) takes over. Torques saturate at the limit; passive
-joints get zero.
+it is designed in discrete time: each sample interval is linearized with the
+exact CasADi Jacobians and discretized exactly for the hold, and the Riccati
+recursion (:func:`pendulab.control.lqr.discrete_tvlqr`) runs backward from
+the cost-to-go of the discrete LQR that balances at the reference's end
+(:func:`pendulab.control.lqr.lqr_balance`, same weights), which then takes over.
+
+* :func:`tvlqr_tracker` tracks any reference ``(t, x, u)`` (resampled to the
+  sample grid by :func:`resample_reference`, linearized at its samples);
+* :func:`tvlqr` tracks an optimized swing-up (linearized at the middle of
+  each sample interval of the collocation polynomial);
+* :func:`default_weights` are the weights both use when none are given.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._checks import positive_float
 from ..model.model import INPUT_NAMES, Model
-from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, wrap_state_error
-from .swingup.solve import SwingUpResult
+from .feedback import LinearStateFeedback, TVLQRTracker, actuated_inputs, as_feedback, energy_swingup, upright_state
+from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, weight_matrix
 
-__all__ = ["TrackingController", "tvlqr", "default_weights"]
+if TYPE_CHECKING:  # typing only: the swing-up package builds on this module
+    from .swingup.solve import SwingUpResult
+
+__all__ = [
+    "default_weights",
+    "tvlqr",
+    "tvlqr_tracker",
+    "resample_reference",
+    "swingup_reference",
+    "load_reference_csv",
+]
 
 
-def default_weights(model: Model, torque_limit: float) -> tuple[np.ndarray, np.ndarray]:
-    """State and input weights (Q (nx, nx), R scalar-per-actuator) used when none are given.
+def default_weights(model: Model, torque_limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """State weight Q and per-torque input weight r used when none are given.
 
     Angles 10 /rad^2, link rates 1 /(rad/s)^2; spring lengths 100 /m^2 and
-    rates 0.1 /(m/s)^2 (springs are stiff and need little control); R makes
-    a torque at the limit cost as much as a 1/sqrt(10) rad angle error.
-    """
-    if model.kind == "rigid":
-        q = [10.0, 10.0, 1.0, 1.0]
-    else:
-        q = [10.0, 10.0, 100.0, 100.0, 1.0, 1.0, 0.1, 0.1]
-    return np.diag(q), np.array(1.0 / torque_limit**2)
+    rates 0.1 /(m/s)^2 (springs are stiff and need little control); r makes a
+    torque at the limit cost as much as a 1/sqrt(10) rad angle error (r = 1
+    without a limit).
 
-
-@dataclass(frozen=True)
-class TrackingController:
-    """Sampled-data feedback ``u(t, x)`` -> (tau1, tau2) [N.m]; call it like a function.
-
-    It is a :class:`pendulab.control.sampled.SampledController`, so
-    :func:`pendulab.cosim.master` drives it through an FMU as well.
-
-    Attributes
+    Parameters
     ----------
-    dt : float
-        Sample time [s]; ``pendulab.simulate(..., dt=dt, u=controller)`` holds it.
-    t_nom : ndarray, shape (M,)
-        Sample times along the nominal trajectory [s].
-    x_nom : ndarray, shape (M, nx)
-    u_nom : ndarray, shape (M, 2)
-    K : ndarray, shape (M, n_act, nx)
-        Time-varying gains on the actuated torques.
-    K_top : ndarray, shape (n_act, nx)
-        Balancing gain at the goal.
-    goal : ndarray, shape (nx,)
-    actuated : tuple of int
-    torque_limit : float
-    state_names : tuple of str
-        Names of the state entries (angle differences are wrapped).
+    model : Model
+        Rigid or elastic pendulum.
+    torque_limit : float, optional
+        Torque limit [N.m].
+
+    Returns
+    -------
+    Q : ndarray, shape (nx, nx)
+        Diagonal state weight.
+    r : ndarray, shape ()
+        Weight of each driven torque [1/(N.m)^2].
     """
+    q = {"theta": 10.0, "omega": 1.0, "r": 100.0, "v": 0.1}
+    Q = np.diag([q[n.rstrip("0123456789")] for n in model.state_names])
+    r = 1.0 if torque_limit is None else 1.0 / positive_float("torque_limit", torque_limit) ** 2
+    return Q, np.array(r)
 
-    dt: float
-    t_nom: np.ndarray
-    x_nom: np.ndarray
-    u_nom: np.ndarray
-    K: np.ndarray
-    K_top: np.ndarray
-    goal: np.ndarray
-    actuated: tuple[int, ...]
-    torque_limit: float
-    state_names: tuple[str, ...]
-    u_goal: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
-    @property
-    def sample_time(self) -> float:
-        """Sample time [s] (:class:`pendulab.control.sampled.SampledController` protocol)."""
-        return self.dt
+def _weights(model: Model, m: int, Q: Any, R: Any, torque_limit: float | None) -> tuple[np.ndarray, np.ndarray]:
+    Qd, rd = default_weights(model, torque_limit)
+    Qm = weight_matrix(Qd if Q is None else Q, model.nx, "Q", definite=False)
+    if R is None:
+        R = rd
+    Rm = np.atleast_2d(np.asarray(R, dtype=float)) * (np.eye(m) if np.ndim(R) == 0 else 1.0)
+    return Qm, weight_matrix(Rm, m, "R", definite=True)
 
-    @property
-    def input_names(self) -> tuple[str, ...]:
-        """Both torques: a passive joint gets zero (SampledController protocol)."""
-        return INPUT_NAMES
 
-    def reset(self) -> None:
-        """Stateless: nothing to forget (SampledController protocol)."""
-
-    @property
-    def horizon(self) -> float:
-        return float(self.t_nom[-1] + self.dt) if len(self.t_nom) else 0.0
-
-    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
-        act = list(self.actuated)
-        k = int(math.floor(t / self.dt + 1e-6))
-        u = np.zeros(2)
-        if k < len(self.t_nom):
-            u[act] = self.u_nom[k, act] - self.K[k] @ wrap_state_error(x - self.x_nom[k], self.state_names)
-        else:
-            u[act] = self.u_goal[act] - self.K_top @ wrap_state_error(x - self.goal, self.state_names)
-        return np.clip(u, -self.torque_limit, self.torque_limit)
+def _design(
+    model: Model,
+    t_s: np.ndarray,
+    x_s: np.ndarray,
+    u_s: np.ndarray,
+    x_lin: np.ndarray,
+    goal: np.ndarray,
+    sample_time: float,
+    names: tuple[str, ...],
+    out_names: tuple[str, ...],
+    Q: Any,
+    R: Any,
+    u_max: float | None,
+) -> TVLQRTracker:
+    """Gains along a reference on the sample grid, and the tracker that applies them."""
+    cols = [INPUT_NAMES.index(n) for n in names]
+    Qm, Rm = _weights(model, len(cols), Q, R, u_max)
+    try:
+        top = lqr_balance(model, names, Qm, Rm, sample_time, at=goal)
+    except UncontrollableError as exc:
+        raise ValueError(f"the reference's end is not stabilisable with the torques {list(names)}: {exc}") from exc
+    M = len(t_s) - 1
+    K = discrete_tvlqr(model, x_lin, u_s[:M], sample_time, Qm, Rm, top.P, actuation=names)
+    # Scatter onto the controller's outputs: a passive torque in out_names gets zero gains and zero reference.
+    rows = [out_names.index(n) for n in names]
+    K_out = np.zeros((M, len(out_names), model.nx))
+    K_out[:, rows] = K
+    K_top = np.zeros((len(out_names), model.nx))
+    K_top[rows] = top.K
+    u_ref = u_s[:M][:, [INPUT_NAMES.index(n) for n in out_names]]
+    u_eq = top.u_eq[[INPUT_NAMES.index(n) for n in out_names]]
+    final = LinearStateFeedback(model, K_top, goal, u_eq, sample_time, out_names, u_max, top.P, "discrete")
+    return TVLQRTracker(model, t_s, x_s, u_ref, K_out, sample_time, out_names, final=final, u_max=u_max)
 
 
 def tvlqr(
@@ -110,8 +118,11 @@ def tvlqr(
     dt: float = 0.01,
     Q: np.ndarray | None = None,
     R: np.ndarray | float | None = None,
-) -> TrackingController:
-    """Time-varying LQR along ``result`` handing over to balancing LQR at the goal.
+) -> TVLQRTracker:
+    """Time-varying LQR along an optimized swing-up, handing over to balancing LQR at the goal.
+
+    The tracker drives both torques (a passive joint gets zero), so it is also
+    a plain feedback ``u(t, x) -> (tau1, tau2)`` for :func:`pendulab.simulate`.
 
     Parameters
     ----------
@@ -119,16 +130,21 @@ def tvlqr(
         A successful swing-up (its goal must be an equilibrium with zero torque).
     dt : float
         Controller sample time [s]; the NLP interval should be a multiple of it.
-    Q : ndarray, shape (nx, nx), or None
+    Q : ndarray, shape (nx, nx), optional
         State weight (default :func:`default_weights`).
-    R : float or ndarray, shape (n_act, n_act), or None
-        Input weight on the actuated torques.
+    R : float or ndarray, shape (m, m), optional
+        Weight on the driven torques (default :func:`default_weights` at the torque limit).
+
+    Returns
+    -------
+    TVLQRTracker
+        Saturated at the problem's torque limit.
 
     Raises
     ------
     ValueError
-        If the result failed, dt is not positive, or the goal is not
-        stabilisable with the actuated torques.
+        The result failed, ``dt`` is not positive, or the goal is not
+        stabilisable with the driven torques.
     """
     if not result.success:
         raise ValueError(f"result must be a successful swing-up to track, got status {result.status!r}")
@@ -136,25 +152,152 @@ def tvlqr(
         raise ValueError(f"dt must be a positive sample time [s], got {dt!r}")
     pb = result.problem
     model = pb.model
-    act = list(pb.actuated)
-    Qd, Rd = default_weights(model, pb.torque_limit)
-    Q = Qd if Q is None else np.asarray(Q, dtype=float)
-    R = Rd if R is None else R
-    R = np.atleast_2d(np.asarray(R, dtype=float)) * (np.eye(len(act)) if np.ndim(R) == 0 else 1.0)
-    if Q.shape != (model.nx, model.nx):
-        raise ValueError(f"Q must have shape ({model.nx}, {model.nx}), got {Q.shape}")
-    if R.shape != (len(act), len(act)):
-        raise ValueError(f"R must have shape ({len(act)}, {len(act)}) for actuation {pb.actuation!r}, got {R.shape}")
-    goal = pb.target
-    try:
-        top = lqr_balance(model, pb.actuation, Q, R, dt, at=goal)
-    except UncontrollableError as exc:
-        raise ValueError(f"the goal is not stabilisable with actuation {pb.actuation!r}: {exc}") from exc
-
     M = max(1, int(round(result.horizon / dt)))
-    t_nom = np.arange(M) * dt
-    x_nom = result.x_at(t_nom)
-    # The nominal torque of a sample is the one held at its middle (robust to grid round-off).
-    u_nom = result.u_at(t_nom + 0.5 * dt)
-    K = discrete_tvlqr(model, result.x_at(t_nom + 0.5 * dt), u_nom, dt, Q, R, top.P, actuation=pb.actuation)
-    return TrackingController(dt, t_nom, x_nom, u_nom, K, top.K, goal, tuple(act), pb.torque_limit, model.state_names)
+    t_s = np.arange(M + 1) * dt
+    x_s = result.x_at(t_s)
+    x_s[-1] = pb.target
+    # The torque of a sample is the one held at its middle (robust to grid round-off); the ZOH
+    # discretization of an interval is linearized at its middle too.
+    u_s = result.u_at(t_s + 0.5 * dt)
+    x_lin = result.x_at(t_s[:M] + 0.5 * dt)
+    names = actuated_inputs(pb.actuation)
+    return _design(model, t_s, x_s, u_s, x_lin, pb.target, float(dt), names, INPUT_NAMES, Q, R, pb.torque_limit)
+
+
+def tvlqr_tracker(
+    model: Model,
+    t: np.ndarray,
+    x: np.ndarray,
+    u: np.ndarray,
+    sample_time: float,
+    *,
+    u_max: float | None = 20.0,
+    actuation: str | Sequence[str] = "full",
+    Q: Any = None,
+    R: Any = None,
+) -> TVLQRTracker:
+    """TVLQR tracking of any reference (e.g. a swing-up), handing over to discrete LQR balance upright.
+
+    Parameters
+    ----------
+    model : Model
+        Design model.
+    t : ndarray, shape (N,)
+        Reference times [s], increasing from 0 (any grid).
+    x : ndarray, shape (N, nx)
+        Reference states.
+    u : ndarray, shape (N, 2) or (N-1, 2)
+        Full reference torques (tau1, tau2) [N.m], held from ``t[k]``.
+    sample_time : float
+        Controller sample time [s]; the reference is resampled to it (:func:`resample_reference`).
+    u_max : float or None
+        Torque limit [N.m] (also scales the default input weight).
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        The torques driven (the tracker outputs only those).
+    Q, R : array_like, optional
+        Weights (default :func:`default_weights`).
+
+    Returns
+    -------
+    TVLQRTracker
+    """
+    h = positive_float("sample_time", sample_time)
+    ts, xs, us = resample_reference(t, x, u, h, model)
+    xs = model.check_state(xs, "x_ref")
+    names = actuated_inputs(actuation)
+    return _design(model, ts, xs, us, xs[:-1], upright_state(model), h, names, names, Q, R, u_max)
+
+
+def swingup_reference(
+    model: Model, sample_time: float, t_final: float, *, x0: np.ndarray | None = None, u_max: float = 20.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A swing-up reference from the native energy-pumping loop: ``(t, x_ref, u_ref)``.
+
+    Shapes (N,), (N, nx), (N, 2). Stands in for an optimized swing-up when none
+    is at hand; any reference on the sample grid can be tracked the same way.
+    """
+    from ..integrate import simulate
+
+    ctrl = energy_swingup(model, sample_time, u_max=u_max)
+    x0 = model.state(theta1=0.1) if x0 is None else x0
+    traj = simulate(model, x0, t_final, dt=sample_time, u=as_feedback(ctrl, model), rtol=1e-10, atol=1e-10)
+    return traj.t, traj.x, traj.u
+
+
+def resample_reference(
+    t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, model: Model | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Put a reference ``(t, x, u)`` on the uniform sample grid ``0, h, 2h, ... <= t[-1]``.
+
+    Torques are zero-order held (the value of the last reference knot at or
+    before each sample), so a reference whose knots are a multiple of ``h``
+    apart keeps its torques exactly. States between knots are interpolated by
+    cubic Hermite with the slopes ``f(x, u)`` of ``model`` (a coarse optimized
+    trajectory stays close to a solution: linear interpolation would cut
+    corners and the tracker would fight them), or linearly without a model.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Increasing times [s], starting at 0.
+    x : ndarray, shape (N, nx)
+    u : ndarray, shape (N, 2) or (N-1, 2)
+        Torques held from ``t[k]`` [N.m].
+    sample_time : float
+        [s].
+    model : Model, optional
+        Gives the Hermite slopes.
+
+    Returns
+    -------
+    t_s, x_s, u_s : ndarrays, shapes (M,), (M, nx), (M, 2)
+    """
+    h = positive_float("sample_time", sample_time)
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0) or abs(t[0]) > 1e-12:
+        raise ValueError(f"reference times must increase from 0 with at least 2 samples, got {t[:3]!r}...")
+    if x.shape[0] != len(t) or u.shape[0] not in (len(t), len(t) - 1):
+        raise ValueError(f"reference x must have {len(t)} rows and u {len(t)} or {len(t) - 1}, got {x.shape}, {u.shape}")
+    n = int(np.floor(t[-1] / h + 1e-9))
+    if n < 1:
+        raise ValueError(f"reference ({t[-1]:g} s) is shorter than one sample ({h:g} s)")
+    ts = np.arange(n + 1) * h
+    k = np.clip(np.searchsorted(t, ts + 1e-9 * h, side="right") - 1, 0, len(u) - 1)
+    if model is None:
+        xs = np.column_stack([np.interp(ts, t, x[:, j]) for j in range(x.shape[1])])
+        return ts, xs, u[k]
+    j = np.minimum(k, len(t) - 2)  # interval of each sample
+    dt = t[j + 1] - t[j]
+    s = ((ts - t[j]) / dt)[:, None]
+    f0, f1 = model.rhs(x[j], u[j]), model.rhs(x[j + 1], u[j])
+    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+    xs = h00 * x[j] + h10 * dt[:, None] * f0 + h01 * x[j + 1] + h11 * dt[:, None] * f1
+    return ts, xs, u[k]
+
+
+def load_reference_csv(path: str, model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Read a reference ``(t, x, u)`` from a CSV with a header naming ``t``, the model's states and ``tau1, tau2``.
+
+    Trajectory CSVs (``Trajectory.to_csv``, ``pendulab cosim``, ``pendulab simulate``) and the
+    optimal trajectory of ``pendulab swingup`` (``optimal.csv``) have these columns.
+    """
+    import csv
+
+    with open(path, newline="") as fh:
+        reader = csv.reader(fh)
+        header = [h.strip() for h in next(reader)]
+        rows = np.array([[float(v) for v in row] for row in reader if row])
+    need = ("t",) + model.state_names + INPUT_NAMES
+    missing = [n for n in need if n not in header]
+    if missing or rows.ndim != 2 or len(rows) < 2:
+        raise ValueError(
+            f"reference {path!r} must be a CSV with a header containing {list(need)} and at least 2 rows; missing {missing}"
+        )
+    col = {n: header.index(n) for n in need}
+    return (
+        rows[:, col["t"]],
+        rows[:, [col[n] for n in model.state_names]],
+        rows[:, [col[n] for n in INPUT_NAMES]],
+    )

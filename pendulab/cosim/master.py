@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import positive_float
-from ..control.sampled import SampledController
+from ..control.feedback import SampledController
 from ..integrate.trajectory import Trajectory
 from ..model.model import INPUT_NAMES, Model, make_model
 from ..model.params import ElasticParams, RigidParams

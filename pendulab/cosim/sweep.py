@@ -26,14 +26,14 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from ..control.lqr import wrap_state_error
-from ..control.sampled import (
+from ..control.feedback import (
     LinearStateFeedback,
     as_feedback,
+    balance_controller,
     closed_loop_spectral_radius,
-    lqr_balance,
     upright_state,
 )
+from ..control.lqr import wrap_state_error
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model
 
@@ -212,7 +212,7 @@ def comm_step_sweep(
     steps = sorted(float(h) for h in steps)
     if not steps or steps[0] <= 0:
         raise ValueError(f"steps must be positive communication steps [s], got {steps!r}")
-    design = lqr_balance(model, steps[0], design="continuous")
+    design = balance_controller(model, steps[0], design="continuous")
     points = []
     for i, h in enumerate(steps):
         ctrl = LinearStateFeedback(model, design.K, design.x_eq, design.u_eq, h, design.input_names, P=design.P)

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from .._checks import positive_float
-from .methods import METHODS
 from ..model.model import Model
+from .methods import METHODS
 from .registry import STIFF_HINT, RunRequest, SimulationError
 from .trajectory import Trajectory
 

@@ -9,7 +9,7 @@ from scipy.signal import cont2discrete
 
 import pendulab as pl
 from pendulab._checks import positive_float
-from pendulab.control import SampledController, TrackingController, actuation_name, lqr_balance, upright_state, zoh
+from pendulab.control import LinearStateFeedback, SampledController, TVLQRTracker, actuation_name, lqr_balance, upright_state, zoh
 
 
 def test_zoh_matches_scipy_cont2discrete():
@@ -73,11 +73,13 @@ def test_swingup_tracking_controller_is_a_sampled_controller():
     model = pl.rigid()
     goal = upright_state(model)
     K_top = lqr_balance(model, "pendubot", dt=0.02).K
-    ctrl = TrackingController(
-        0.02, np.zeros(1), goal[None], np.zeros((1, 2)), K_top[None], K_top, goal, (0,), 5.0, model.state_names
-    )
+    K_full = np.vstack([K_top, np.zeros_like(K_top)])  # passive elbow: a zero row
+    final = LinearStateFeedback(model, K_full, goal, np.zeros(2), 0.02, ("tau1", "tau2"), 5.0)
+    ctrl = TVLQRTracker(model, [0.0, 0.02], np.vstack([goal, goal]), np.zeros((1, 2)), K_full[None], 0.02, final=final, u_max=5.0)
     assert isinstance(ctrl, SampledController)
     assert ctrl.sample_time == 0.02 and ctrl.input_names == ("tau1", "tau2")
     x = goal + np.array([0.01, 0.0, 0.0, 0.0])
-    # Passive elbow gets exactly zero; the shoulder torque is the LQR law on the 0.01 rad error.
-    np.testing.assert_allclose(ctrl(0.1, x), [-(K_top @ (x - goal))[0], 0.0], rtol=1e-12, atol=0)
+    # Passive elbow gets exactly zero; the shoulder torque is the LQR law on the 0.01 rad error,
+    # on the reference (t = 0.01 s) and after it (t = 0.1 s, the final controller).
+    for t in (0.01, 0.1):
+        np.testing.assert_allclose(ctrl(t, x), [-(K_top @ (x - goal))[0], 0.0], rtol=1e-12, atol=0)

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 import pendulab as pl
-from pendulab.control.lqr import wrap_state_error
-from pendulab.control.sampled import (
+from pendulab.control.feedback import (
     as_feedback,
+    balance_controller,
     closed_loop_spectral_radius,
-    lqr_balance,
     upright_state,
 )
-from pendulab.control.tracking_sampled import resample_reference
+from pendulab.control.lqr import wrap_state_error
+from pendulab.control.tracking import resample_reference
 
 
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])
@@ -26,18 +26,18 @@ def test_upright_state_is_an_equilibrium(kind):
 def test_discrete_design_beats_continuous_gain_at_a_coarse_rate():
     """At h = 0.17 s the fixed continuous gain is close to its limit; the DARE gain for that rate has margin."""
     model = pl.rigid()
-    cont = lqr_balance(model, 0.17)
-    disc = lqr_balance(model, 0.17, design="discrete")
+    cont = balance_controller(model, 0.17)
+    disc = balance_controller(model, 0.17, design="discrete")
     assert 0.9 < closed_loop_spectral_radius(model, cont.K, 0.17) < 1.0
     assert closed_loop_spectral_radius(model, disc.K, 0.17) < 0.7  # measured 0.66 vs 0.91
     # Re-designed per rate it stays stable where the continuous gain has long lost it (rho 2.6 and 17.9).
     for h in (0.25, 0.5):
-        assert closed_loop_spectral_radius(model, lqr_balance(model, h, design="discrete").K, h) < 0.6
+        assert closed_loop_spectral_radius(model, balance_controller(model, h, design="discrete").K, h) < 0.6
 
 
 def test_pendubot_balance_drives_tau1_only():
     model = pl.rigid()
-    ctrl = lqr_balance(model, 0.01, actuation="pendubot")
+    ctrl = balance_controller(model, 0.01, actuation="pendubot")
     assert ctrl.input_names == ("tau1",) and ctrl.K.shape == (1, 4)
     x0 = upright_state(model)
     x0[1] += 0.05

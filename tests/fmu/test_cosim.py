@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pendulab as pl
+from pendulab.control.feedback import as_feedback, balance_controller, energy_swingup, upright_state
 from pendulab.control.lqr import wrap_state_error
-from pendulab.control.sampled import as_feedback, energy_swingup, lqr_balance, upright_state
 from pendulab.cosim.master import cosim
 
 KINDS = ("rigid", "elastic")
@@ -31,7 +31,7 @@ def _native(model, ctrl, x0, t_final):
 @pytest.mark.parametrize("solver", ("dopri5", "rodas4"))
 def test_lqr_balance_matches_native_loop(cosim_fmu, kind, version, solver):
     model = pl.make_model(kind)
-    ctrl = lqr_balance(model, 0.01)
+    ctrl = balance_controller(model, 0.01)
     x0 = _perturbed_upright(model)
     fmu = cosim(cosim_fmu(kind, version), ctrl, 0.01, 3.0, x0=x0, tolerance=1e-10, solver=solver)
     nat = _native(model, ctrl, x0, 3.0)
@@ -67,7 +67,7 @@ def test_swingup_matches_native_loop(cosim_fmu):
 def test_controller_sampled_slower_than_comm_step_is_held(cosim_fmu):
     """sample_time = 4 comm steps: the master holds the torque for 4 steps; native loop on the sample grid agrees."""
     model = pl.rigid()
-    ctrl = lqr_balance(model, 0.04)
+    ctrl = balance_controller(model, 0.04)
     x0 = _perturbed_upright(model)
     fmu = cosim(cosim_fmu("rigid", 2), ctrl, 0.01, 2.0, x0=x0, tolerance=1e-10)
     nat = _native(model, ctrl, x0, 2.0)
@@ -78,7 +78,7 @@ def test_controller_sampled_slower_than_comm_step_is_held(cosim_fmu):
 
 def test_tvlqr_tracks_a_reference_from_another_grid(cosim_fmu, tmp_path):
     """Any reference (here a 5 ms swing-up saved as CSV) is resampled to 10 ms and tracked through the FMU."""
-    from pendulab.control.tracking_sampled import load_reference_csv, tvlqr_tracker
+    from pendulab.control.tracking import load_reference_csv, tvlqr_tracker
 
     model = pl.rigid()
     swing = energy_swingup(model, 0.005)

@@ -54,7 +54,7 @@ def test_cosim_cli_writes_csv_plot_gif(cosim_fmu, tmp_path, capsys):
 
 def test_cosim_cli_tracks_a_reference_csv(cosim_fmu, tmp_path):
     import pendulab as pl
-    from pendulab.control.sampled import as_feedback, energy_swingup
+    from pendulab.control.feedback import as_feedback, energy_swingup
 
     model = pl.rigid()
     ref = pl.simulate(model, model.state(theta1=0.2), 5.0, dt=0.01, u=as_feedback(energy_swingup(model, 0.01), model))

@@ -11,7 +11,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
 import pendulab as pl
-from pendulab.control.sampled import LinearStateFeedback, lqr_balance, upright_state
+from pendulab.control.feedback import LinearStateFeedback, balance_controller, upright_state
 from pendulab.cosim.master import cosim, inspect_fmu
 
 _FOREIGN_MD = """<?xml version="1.0" encoding="UTF-8"?>
@@ -47,7 +47,7 @@ def rigid_setup(cosim_fmu):
     model = pl.rigid()
     x0 = upright_state(model)
     x0[0] += 0.05
-    return cosim_fmu("rigid", 2), model, lqr_balance(model, 0.01), x0
+    return cosim_fmu("rigid", 2), model, balance_controller(model, 0.01), x0
 
 
 def test_foreign_fmu_is_rejected(tmp_path):
@@ -154,7 +154,7 @@ def test_instance_freed_when_fmu_fails_in_do_step(cosim_fmu, spy_free):
     x0 = model.state(theta1=0.5)
     x0[2] = 0.0  # zero spring length: the right-hand side divides by r1, the embedded solver reports Error
     with pytest.raises(RuntimeError, match=r"failed in doStep at t = 0 s, h = 0.01 s \(status 3\)"):
-        cosim(cosim_fmu("elastic", 2), lqr_balance(model, 0.01), 0.01, 0.1, x0=x0)
+        cosim(cosim_fmu("elastic", 2), balance_controller(model, 0.01), 0.01, 0.1, x0=x0)
     assert len(spy_free) == 1
 
 
@@ -163,7 +163,7 @@ def test_fmi3_instance_freed_when_controller_raises(cosim_fmu, monkeypatch):
     real = FMU3Slave.freeInstance
     monkeypatch.setattr(FMU3Slave, "freeInstance", lambda self: (freed.append(1), real(self))[1])
     model = pl.rigid()
-    ctrl = lqr_balance(model, 0.01)
+    ctrl = balance_controller(model, 0.01)
 
     def boom(t, x):
         raise RuntimeError("controller crashed")

@@ -7,7 +7,7 @@ import pytest
 from fmpy.fmi2 import FMU2Slave
 
 import pendulab as pl
-from pendulab.control.sampled import energy_swingup, lqr_balance, upright_state
+from pendulab.control.feedback import balance_controller, energy_swingup, upright_state
 from pendulab.cosim.master import StepRejectedError, cosim, cosim_many
 
 
@@ -25,7 +25,7 @@ def test_rigid_and_elastic_side_by_side(cosim_fmu):
     dev = []
     for k in (5e3, 5e4):
         rigid, xr, xe = _starts(k)
-        ctrl = lqr_balance(rigid, 0.01)
+        ctrl = balance_controller(rigid, 0.01)
         trs = cosim_many(fmus, ctrl, 0.01, 1.0, x0=[xr, xe], params=[None, {"k1": k, "k2": k}], solver="rodas4", tolerance=1e-9)
         assert np.array_equal(trs[0].u, trs[1].u)  # one input sequence for both plants
         assert trs[1].state_names[2:4] == ("r1", "r2")
@@ -68,7 +68,7 @@ def test_step_retry_gives_up_clearly(cosim_fmu, monkeypatch):
     with pytest.raises(StepRejectedError, match=r"rejected at the smallest step h = 0.0025 s"):
         cosim(
             cosim_fmu("rigid", 2),
-            lqr_balance(model, 0.01),
+            balance_controller(model, 0.01),
             0.01,
             0.1,
             x0=model.state(theta1=0.1),

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
-from pendulab.control.sampled import closed_loop_spectral_radius, lqr_balance
+from pendulab.control.feedback import balance_controller, closed_loop_spectral_radius
 from pendulab.cosim.sweep import comm_step_sweep, contraction_factor, fmu_runner, plot_sweep
 
 
@@ -20,7 +20,7 @@ def test_contraction_factor_recovers_a_geometric_rate():
 
 def test_spectral_radius_limits():
     model = pl.rigid()
-    ctrl = lqr_balance(model, 0.01)
+    ctrl = balance_controller(model, 0.01)
     # h -> 0: Ad - Bd K = I + h (A - BK) + O(h^2): rho -> exp(h * max Re eig(A - BK)), the slowest continuous pole.
     slowest = np.max(
         np.linalg.eigvals(

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...integrate import simulate
 from ...integrate.trajectory import Trajectory
-from ..tracking import TrackingController, tvlqr
+from ..tracking import TVLQRTracker, tvlqr
 from .check import HeightCheck, ReplayReport, height_success, replay
 from .guess import Guess
 from .solve import SwingUpResult, swing_up
@@ -31,7 +31,7 @@ class Episode:
     result : SwingUpResult
     replay : ReplayReport or None
         None when the solve failed.
-    controller : TrackingController or None
+    controller : TVLQRTracker or None
     closed_loop : Trajectory or None
         Native closed-loop simulation over the episode (controller held at ``task.dt``).
     height : HeightCheck or None
@@ -42,7 +42,7 @@ class Episode:
     task: Task
     result: SwingUpResult
     replay: ReplayReport | None
-    controller: TrackingController | None
+    controller: TVLQRTracker | None
     closed_loop: Trajectory | None
     height: HeightCheck | None
     x0: np.ndarray

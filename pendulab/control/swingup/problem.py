@@ -15,7 +15,7 @@ import numpy as np
 
 from ..._checks import positive_float
 from ...model.model import ACTUATIONS, Model
-from ..sampled import upright_state
+from ..feedback import upright_state
 
 __all__ = ["SwingUpProblem", "OBJECTIVES"]
 
@@ -46,7 +46,7 @@ class SwingUpProblem:
         Start state; None = hanging at rest (:meth:`Model.rest_state`).
     goal : array_like, shape (nx,), or None
         Goal state reached exactly at the end of the horizon; None = up-up at
-        rest (:func:`pendulab.control.sampled.upright_state`; elastic springs statically compressed).
+        rest (:func:`pendulab.control.feedback.upright_state`; elastic springs statically compressed).
     horizon : float
         Fixed horizon T [s]; with ``free_horizon`` the initial guess of T.
     free_horizon : bool

@@ -31,7 +31,7 @@ from pathlib import Path
 
 from ...model.model import Model
 from ...scene import SCENE_DIR, load_scene
-from ..sampled import upright_state
+from ..feedback import upright_state
 from .problem import SwingUpProblem
 
 __all__ = ["Task", "load_task", "task_names"]

@@ -1,0 +1,427 @@
+"""Sampled-data controllers: the one controller protocol, and the controllers that keep it.
+
+A :class:`SampledController` is called once per sample with the plant state
+and returns the torques it drives, which are then held constant until the next
+sample (zero-order hold). The same object therefore runs natively through
+``pendulab.simulate(..., dt=sample_time, u=as_feedback(controller, model))`` and
+through an FMU with :func:`pendulab.cosim.cosim`.
+
+Controllers:
+
+* :class:`LinearStateFeedback` (from :func:`balance_controller`): LQR balance
+  about the upright equilibrium, a continuous-time gain applied with a ZOH or
+  a discrete gain designed at the sample time;
+* :class:`EnergySwingUp` (from :func:`energy_swingup`): energy pumping on
+  ``tau1`` while ``tau2`` keeps the links aligned, then a switch to LQR balance;
+* :class:`TVLQRTracker` (from :mod:`.tracking`): tracks a reference with
+  time-varying gains, then hands over to a final controller.
+
+Every gain comes from the one LQR design, :func:`pendulab.control.lqr.lqr_balance`,
+and the one Riccati recursion, :func:`pendulab.control.lqr.discrete_tvlqr`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from .._checks import positive_float
+from ..analysis.equilibria import equilibrium
+from ..analysis.linearize import linearize
+from ..model.model import ACTUATIONS, INPUT_NAMES, Model
+from .lqr import actuation_name, lqr_balance, wrap_state_error, zoh
+
+__all__ = [
+    "SampledController",
+    "LinearStateFeedback",
+    "EnergySwingUp",
+    "TVLQRTracker",
+    "balance_controller",
+    "energy_swingup",
+    "upright_state",
+    "closed_loop_spectral_radius",
+    "as_feedback",
+    "full_input",
+    "actuated_inputs",
+    "angular_states",
+]
+
+
+@runtime_checkable
+class SampledController(Protocol):
+    """What a co-simulation master needs from a controller.
+
+    Attributes
+    ----------
+    sample_time : float
+        Sample period [s]; the output is held constant in between.
+    input_names : tuple of str
+        The plant inputs driven, a subset of ("tau1", "tau2"), in output order.
+    """
+
+    sample_time: float
+    input_names: tuple[str, ...]
+
+    def reset(self) -> None:
+        """Forget internal state (mode switches) before a new run."""
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Torques [N.m], shape (len(input_names),), from time ``t`` [s] and the plant state ``x``, shape (nx,)."""
+
+
+# -- helpers -------------------------------------------------------------------------
+
+
+def upright_state(model: Model) -> np.ndarray:
+    """The up-up equilibrium (theta1 = theta2 = pi, at rest), shape (nx,).
+
+    A thin wrapper of ``pendulab.analysis.equilibria.equilibrium(model, "up-up").x``:
+    for the elastic model the springs carry the weight above them, so they are
+    compressed (r1 = L1 - (m1 + m2) g / k1, r2 = L2 - m2 g / k2).
+    """
+    return equilibrium(model, "up-up").x.copy()
+
+
+def actuated_inputs(actuation: str | Sequence[str]) -> tuple[str, ...]:
+    """Names of the torques an actuation drives, e.g. ``("tau1",)`` for ``"pendubot"``.
+
+    Parameters
+    ----------
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        The actuation.
+
+    Returns
+    -------
+    tuple of str
+        A subset of ("tau1", "tau2") in input order.
+
+    Raises
+    ------
+    ValueError
+        Unknown actuation.
+    """
+    return tuple(INPUT_NAMES[i] for i in ACTUATIONS[actuation_name(actuation)])
+
+
+def angular_states(model: Model) -> np.ndarray:
+    """Mask of the angles and link rates (the states an upright balance gain acts on).
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum.
+
+    Returns
+    -------
+    ndarray of bool, shape (nx,)
+        True at ``theta*`` and ``omega*``.
+    """
+    return np.array([n.startswith(("theta", "omega")) for n in model.state_names])
+
+
+def _angular_weight(model: Model, Q: Any) -> np.ndarray:
+    """Embed a weight on (theta1, theta2, omega1, omega2), shape (4, 4) or (4,), into the full state (zero on r, v).
+
+    At the aligned upright equilibrium the spring (radial) coordinates of the
+    elastic model decouple from the angles to first order, so their modes are
+    uncontrollable by the torques and get no weight (and no gain).
+    """
+    sel = np.flatnonzero(angular_states(model))
+    Qa = np.diag([10.0, 10.0, 1.0, 1.0]) if Q is None else np.atleast_2d(np.asarray(Q, dtype=float))
+    if Qa.shape == (1, len(sel)):
+        Qa = np.diag(Qa[0])
+    if Qa.shape != (len(sel), len(sel)):
+        raise ValueError(f"Q must have shape ({len(sel)}, {len(sel)}) or ({len(sel)},), got {np.shape(Q)}")
+    Qf = np.zeros((model.nx, model.nx))
+    Qf[np.ix_(sel, sel)] = Qa
+    return Qf
+
+
+# -- controllers -----------------------------------------------------------------
+
+
+@dataclass
+class LinearStateFeedback:
+    """``u = u_eq - K (x - x_eq)`` (angles wrapped), optionally saturated.
+
+    Attributes
+    ----------
+    model : Model
+        Plant the gain was designed for (state order, angle wrapping).
+    K : ndarray, shape (len(input_names), nx)
+        Gain [N.m per state unit].
+    x_eq : ndarray, shape (nx,)
+        Operating point.
+    u_eq : ndarray, shape (len(input_names),)
+        Feed-forward torque [N.m].
+    sample_time : float
+        [s].
+    input_names : tuple of str
+    u_max : float or None
+        Symmetric torque limit [N.m].
+    P : ndarray or None
+        Riccati solution (cost-to-go matrix) of the design, shape (nx, nx).
+    design : str
+        "continuous" or "discrete".
+    """
+
+    model: Model
+    K: np.ndarray
+    x_eq: np.ndarray
+    u_eq: np.ndarray
+    sample_time: float
+    input_names: tuple[str, ...]
+    u_max: float | None = None
+    P: np.ndarray | None = None
+    design: str = "continuous"
+
+    def reset(self) -> None:
+        """Stateless: nothing to forget."""
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        u = self.u_eq - self.K @ wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.model.state_names)
+        return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
+
+    def cost(self, x: np.ndarray) -> float:
+        """Quadratic cost-to-go ``e' P e`` of the deviation from ``x_eq``."""
+        e = wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.model.state_names)
+        return float(e @ self.P @ e) if self.P is not None else float(e @ e)
+
+
+def balance_controller(
+    model: Model,
+    sample_time: float,
+    *,
+    design: str = "continuous",
+    Q: Any = None,
+    R: Any = None,
+    actuation: str | Sequence[str] = "full",
+    u_max: float | None = None,
+) -> LinearStateFeedback:
+    """LQR balance about the upright equilibrium as a sampled controller (the gain from :func:`~pendulab.control.lqr.lqr_balance`).
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic plant (design model).
+    sample_time : float
+        Sample period [s].
+    design : {"continuous", "discrete"}
+        ``"continuous"``: the continuous-time LQR gain, whatever the sample time
+        (a fixed design applied with a zero-order hold; it degrades and finally
+        destabilizes as the sample time grows). ``"discrete"``: discrete LQR on
+        the exact ZOH discretization at ``sample_time`` (re-designed per rate).
+    Q : array_like, optional
+        State weight on the angular states (theta1, theta2, omega1, omega2),
+        shape (4, 4) or (4,); default diag(10, 10, 1, 1).
+    R : array_like, optional
+        Input weight, shape (m, m) or (m,); default identity.
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        Which torques the controller drives.
+    u_max : float, optional
+        Torque limit [N.m].
+
+    Returns
+    -------
+    LinearStateFeedback
+    """
+    h = positive_float("sample_time", sample_time)
+    if design not in ("continuous", "discrete"):
+        raise ValueError(f"design must be 'continuous' or 'discrete', got {design!r}")
+    names = actuated_inputs(actuation)
+    lq = lqr_balance(model, names, _angular_weight(model, Q), R, None if design == "continuous" else h)
+    return LinearStateFeedback(model, lq.K, lq.x_eq, np.zeros(len(names)), h, names, u_max, lq.P, design)
+
+
+def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_names: Sequence[str] = INPUT_NAMES) -> float:
+    """Spectral radius of ``Ad - Bd K``: the gain ``K`` applied with a ZOH of period ``h`` to the upright linearization.
+
+    Below 1 the sampled linear closed loop is asymptotically stable. For the
+    elastic model only the angular block is used: its spring modes are
+    decoupled (and uncontrollable) at the upright equilibrium.
+    """
+    cols = [INPUT_NAMES.index(n) for n in input_names]
+    lin = linearize(model, equilibrium(model, "up-up"))
+    sel = angular_states(model)
+    Ad, Bd = zoh(lin.A[np.ix_(sel, sel)], lin.B[np.ix_(sel, cols)], positive_float("h", h))
+    return float(np.max(np.abs(np.linalg.eigvals(Ad - Bd @ np.asarray(K)[:, sel]))))
+
+
+@dataclass
+class EnergySwingUp:
+    """Energy pumping with ``tau1``, link alignment with ``tau2``, then LQR balance.
+
+    Away from the top, ``tau1 = sat(k_energy (E_up - E) omega1)`` pumps energy
+    (power ``tau1 omega1`` has the sign of the energy deficit) and ``tau2 =
+    -kp (theta2 - theta1) - kd (omega2 - omega1)`` keeps the pair close to a
+    single pendulum. When the LQR cost-to-go falls below ``catch_cost`` the
+    controller switches to ``balance`` for good (until :meth:`reset`).
+    """
+
+    model: Model
+    balance: LinearStateFeedback
+    sample_time: float
+    k_energy: float = 2.0
+    kp: float = 40.0
+    kd: float = 6.0
+    u_max: float = 20.0
+    catch_cost: float = 20.0
+    input_names: tuple[str, ...] = INPUT_NAMES
+    e_up: float = field(init=False)
+    caught_at: float | None = field(init=False, default=None)
+
+    def __post_init__(self) -> None:
+        self.e_up = float(self.model.energy(upright_state(self.model)))
+
+    def reset(self) -> None:
+        """Back to the pumping mode."""
+        self.caught_at = None
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        if self.caught_at is None and self.balance.cost(x) < self.catch_cost:
+            self.caught_at = float(t)
+        if self.caught_at is not None:
+            return np.clip(self.balance(t, x), -self.u_max, self.u_max)
+        th1, th2 = x[0], x[1]
+        w1, w2 = x[self.model.nq], x[self.model.nq + 1]
+        deficit = self.e_up - float(self.model.energy(x))
+        # Start from rest: no velocity to pump with, so kick.
+        tau1 = self.k_energy * deficit * w1 if abs(w1) > 1e-3 else self.u_max
+        rel = (th2 - th1 + np.pi) % (2 * np.pi) - np.pi
+        tau2 = -self.kp * rel - self.kd * (w2 - w1)
+        return np.clip(np.array([tau1, tau2]), -self.u_max, self.u_max)
+
+
+def energy_swingup(
+    model: Model,
+    sample_time: float,
+    *,
+    k_energy: float = 2.0,
+    u_max: float = 20.0,
+    catch_cost: float = 20.0,
+) -> EnergySwingUp:
+    """Energy-pumping swing-up (full actuation) switching to continuous LQR balance.
+
+    Parameters
+    ----------
+    model : Model
+    sample_time : float
+        [s].
+    k_energy : float
+        Pumping gain [N.m / (J rad/s)].
+    u_max : float
+        Torque limit [N.m].
+    catch_cost : float
+        Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this.
+    """
+    h = positive_float("sample_time", sample_time)
+    balance = balance_controller(model, h, u_max=u_max)
+    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=positive_float("u_max", u_max), catch_cost=catch_cost)
+
+
+# -- glue -----------------------------------------------------------------------------
+
+
+def full_input(controller: SampledController, u: np.ndarray) -> np.ndarray:
+    """Scatter a controller output into (tau1, tau2), zeros elsewhere, shape (2,)."""
+    full = np.zeros(len(INPUT_NAMES))
+    for name, value in zip(controller.input_names, np.atleast_1d(u), strict=True):
+        full[INPUT_NAMES.index(name)] = value
+    return full
+
+
+def as_feedback(controller: SampledController, model: Model) -> Callable[[float, np.ndarray], np.ndarray]:
+    """Wrap a controller (after resetting it) as ``u(t, x) -> (tau1, tau2)`` for :func:`pendulab.simulate`.
+
+    Run ``simulate`` with ``dt = controller.sample_time`` so the output grid is
+    the sample grid: simulate holds each value over its output step.
+    """
+    controller.reset()
+
+    def feedback(t: float, x: np.ndarray) -> np.ndarray:
+        return full_input(controller, controller(t, x))
+
+    return feedback
+
+
+@dataclass
+class TVLQRTracker:
+    """Track a reference with time-varying gains, then hand over to ``final``: the one TVLQR tracker.
+
+    ``u = u_ref[k] - K[k] (x - x_ref[k])`` (angles wrapped) on sample ``k``, the
+    last reference sample at or before ``t`` (a time a hair, 1e-6 of a sample,
+    before a grid time belongs to it: masters accumulate time in floating
+    point). After the reference, ``final`` (e.g. LQR balance) takes over.
+    Build it with :func:`pendulab.control.tracking.tvlqr_tracker` (any
+    reference) or :func:`pendulab.control.tracking.tvlqr` (an optimized swing-up).
+
+    Attributes
+    ----------
+    model : Model
+        Plant the gains were designed for.
+    t_ref : ndarray, shape (N,)
+        Reference times [s], increasing.
+    x_ref : ndarray, shape (N, nx)
+        Reference states.
+    u_ref : ndarray, shape (N-1, m) or (N, m)
+        Reference torques [N.m] for ``input_names``.
+    K : ndarray, shape (N-1, m, nx) or (N, m, nx)
+        Gains [N.m per state unit].
+    sample_time : float
+        Sample period [s].
+    input_names : tuple of str
+        The torques driven (m of them); a passive torque in the list gets zero rows.
+    final : SampledController or None
+        Used after ``t_ref[-1]``; holds ``u_ref[-1]`` if None.
+    u_max : float or None
+        Symmetric torque limit [N.m].
+    """
+
+    model: Model
+    t_ref: np.ndarray
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    K: np.ndarray
+    sample_time: float
+    input_names: tuple[str, ...] = INPUT_NAMES
+    final: Any = None
+    u_max: float | None = None
+
+    def __post_init__(self) -> None:
+        self.t_ref = np.asarray(self.t_ref, dtype=float)
+        self.x_ref = np.asarray(self.x_ref, dtype=float)
+        self.u_ref = np.asarray(self.u_ref, dtype=float).reshape(len(self.u_ref), -1)
+        self.K = np.asarray(self.K, dtype=float)
+        n, m = len(self.t_ref), len(self.input_names)
+        if n < 2 or np.any(np.diff(self.t_ref) <= 0):
+            raise ValueError(f"t_ref must be increasing with at least 2 samples, got {self.t_ref[:5]!r}...")
+        if self.x_ref.shape != (n, self.model.nx):
+            raise ValueError(f"x_ref must have shape ({n}, {self.model.nx}), got {self.x_ref.shape}")
+        if self.u_ref.shape[0] not in (n - 1, n) or self.u_ref.shape[1] != m:
+            raise ValueError(f"u_ref must have shape ({n}, {m}) or ({n - 1}, {m}), got {self.u_ref.shape}")
+        if self.K.ndim != 3 or self.K.shape[0] not in (n - 1, n) or self.K.shape[1:] != (m, self.model.nx):
+            raise ValueError(f"K must have shape ({n - 1}, {m}, {self.model.nx}), got {self.K.shape}")
+        self.sample_time = positive_float("sample_time", self.sample_time)
+
+    @property
+    def horizon(self) -> float:
+        """End of the reference [s]; ``final`` acts from then on."""
+        return float(self.t_ref[-1])
+
+    def reset(self) -> None:
+        """Reset the final controller."""
+        if self.final is not None:
+            self.final.reset()
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Torques [N.m] for ``input_names`` at time ``t`` [s] and state ``x``, shape (m,)."""
+        k = int(np.searchsorted(self.t_ref, t + 1e-6 * self.sample_time, side="right")) - 1
+        if k >= min(len(self.K), len(self.u_ref), len(self.t_ref) - 1):
+            u = np.asarray(self.final(t, x), dtype=float) if self.final is not None else self.u_ref[-1].copy()
+        else:
+            k = max(k, 0)
+            u = self.u_ref[k] - self.K[k] @ wrap_state_error(np.asarray(x, dtype=float) - self.x_ref[k], self.model.state_names)
+        return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)

@@ -1,0 +1,1 @@
+"""Scenes shipped with pendulab (TOML files read by :mod:`pendulab.scene`)."""
