@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pendulab as pl
 from pendulab.control.feedback import LinearStateFeedback, as_feedback, balance_controller, upright_state
-from pendulab.cosim.master import cosim
+from pendulab.cosim import cosim
 from pendulab.fmu.export import export
 
 

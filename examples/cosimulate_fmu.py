@@ -19,7 +19,7 @@ import numpy as np
 
 import pendulab as pl
 from pendulab.control.feedback import as_feedback, balance_controller, energy_swingup, upright_state
-from pendulab.cosim.master import cosim, cosim_many
+from pendulab.cosim import cosim, cosim_many
 from pendulab.cosim.plots import plot_side_by_side
 from pendulab.fmu.export import export
 

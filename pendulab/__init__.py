@@ -1,5 +1,6 @@
 """pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed."""
 
+from ._version import __version__
 from .analysis.equilibria import Equilibrium, equilibria, equilibrium
 from .analysis.linearize import Linearization, linearize
 from .analysis.modes import Mode, modes
@@ -9,6 +10,7 @@ from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
 from .model.params import ElasticParams, RigidParams
 
 __all__ = [
+    "__version__",
     "ACTUATIONS",
     "METHODS",
     "Mode",
@@ -28,4 +30,3 @@ __all__ = [
     "rigid",
     "simulate",
 ]
-__version__ = "0.1.0"

@@ -12,14 +12,12 @@ import importlib
 import sys
 from collections.abc import Sequence
 
+from .commands import CLIError
+
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
 
 #: Modules under ``pendulab.commands`` that each register one top-level command.
 COMMAND_MODULES: tuple[str, ...] = ("simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup")
-
-
-class CLIError(ValueError):
-    """Bad command-line input (reported as one line, exit status 2)."""
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -179,8 +179,6 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
     RuntimeError
         Newton did not converge.
     """
-    from .linearize import linearize
-
     name = _check_name(name)
     uv = model.check_input(u, "u")
     if uv.ndim != 1:
@@ -201,7 +199,9 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
         raise _SpringsTooSoftError(
             f"equilibrium {name!r}: spring lengths {q[2:].tolist()} m are not positive; expected larger k1, k2"
         )
-    A = linearize(model, x, uv).A
+    # The exact Jacobian (what pendulab.linearize returns as A), evaluated here so that
+    # linearize may depend on this module and not the other way round.
+    A = np.asarray(model.functions["jac_rhs"](x, uv, model.p)[0], dtype=float)
     ev = np.linalg.eigvals(A)
     ev = ev[np.argsort(-ev.real, kind="stable")]
     # Undamped stable modes have eigenvalues on the imaginary axis; round-off gives them tiny real parts.

@@ -32,18 +32,16 @@ import shutil
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..integrate import SimulationError, time_grid
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model
+from .methods import BenchMethod
 
-if TYPE_CHECKING:
-    from .workprecision import BenchMethod
-
-__all__ = ["FMU_SOLVERS", "fmu_runner", "fmu_bench_methods", "register_fmu_methods"]
+__all__ = ["FMU_SOLVERS", "fmu_runner", "fmu_bench_methods"]
 
 #: Method name -> value of the FMU's ``solver`` parameter.
 FMU_SOLVERS: dict[str, int] = {"fmu-dopri5": 0, "fmu-rodas4": 1}
@@ -125,15 +123,16 @@ def fmu_runner(solver: int) -> Callable[[Model, np.ndarray, float, float, float]
 
 
 def fmu_bench_methods(settings: tuple[float, ...], quick: tuple[float, ...]) -> list[BenchMethod]:
-    """One ``BenchMethod`` per embedded solver (tolerance sweeps ``settings`` / ``quick``)."""
-    from .workprecision import BenchMethod
+    """One ``BenchMethod`` per embedded solver.
 
+    Parameters
+    ----------
+    settings, quick : tuple of float
+        Full and quick tolerance sweeps (rtol = atol), loosest first.
+
+    Returns
+    -------
+    list of BenchMethod
+        ``fmu-dopri5`` and ``fmu-rodas4``.
+    """
     return [BenchMethod(name, "tol", settings, quick, fmu_runner(solver), "fmu") for name, solver in FMU_SOLVERS.items()]
-
-
-def register_fmu_methods(settings: tuple[float, ...], quick: tuple[float, ...]) -> None:
-    """Add ``fmu-dopri5`` and ``fmu-rodas4`` to the benchmark's ``BENCH_METHODS``."""
-    from .workprecision import register_method
-
-    for m in fmu_bench_methods(settings, quick):
-        register_method(m)

@@ -18,11 +18,9 @@ once its timed runs took ``REPEAT_BUDGET_S``. When a point's median exceeds
 CPU time (``time.process_time``) is recorded next to wall time because the
 benchmark machine may be shared.
 
-Methods are entries of ``BENCH_METHODS``: a name, the kind of sweep, its
-settings and a runner ``run(model, x0, t_final, dt, setting) -> Trajectory``.
-More methods (e.g. the FMU's embedded solvers through fmpy) are added by
-appending one ``BenchMethod`` whose runner returns a Trajectory on the same
-output grid; see ``docs/benchmarks.md``.
+Methods are entries of ``BENCH_METHODS`` (see :mod:`.methods`): the native
+ones come from the integrate registry, the FMU's embedded solvers from
+:mod:`.fmu_methods`; see ``docs/benchmarks.md``.
 """
 
 from __future__ import annotations
@@ -32,23 +30,22 @@ import math
 import statistics
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..integrate import METHODS, SimulationError, simulate
-from ..integrate.trajectory import Trajectory
+from ..integrate import SimulationError
 from ..model.model import Model
 from .cases import Case, get_cases
-from .fmu_methods import register_fmu_methods
+from .fmu_methods import fmu_bench_methods
+from .methods import TOLS, TOLS_QUICK, BenchMethod, native_bench_methods
 from .reference import Reference, load_reference
 
 __all__ = [
     "BenchMethod",
     "BENCH_METHODS",
-    "register_method",
     "Row",
     "run_work_precision",
     "write_csv",
@@ -58,92 +55,15 @@ __all__ = [
     "merge_rows",
 ]
 
-Runner = Callable[[Model, np.ndarray, float, float, float], Trajectory]
 Progress = Callable[[int, int, str], None]
 
 REPEAT_BUDGET_S = 2.0  # stop repeating a point once its timed runs took this long [s]
-_TOLS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
-_TOLS_QUICK = (1e-4, 1e-7)
-_STEPS = (5e-2, 2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)
-_STEPS_QUICK = (1e-2, 2e-3)
 
-
-def _adaptive(method: str) -> Runner:
-    def run(model: Model, x0: np.ndarray, t_final: float, dt: float, tol: float) -> Trajectory:
-        return simulate(model, x0, t_final, dt, method, rtol=tol, atol=tol)
-
-    return run
-
-
-def _fixed(method: str) -> Runner:
-    def run(model: Model, x0: np.ndarray, t_final: float, dt: float, h: float) -> Trajectory:
-        return simulate(model, x0, t_final, dt, method, max_step=h)
-
-    return run
-
-
-@dataclass(frozen=True)
-class BenchMethod:
-    """One method of the benchmark.
-
-    Attributes
-    ----------
-    name : str
-        Label in tables and charts.
-    sweep : {"tol", "step"}
-        What the settings are: rtol = atol, or the fixed step h [s].
-    settings, quick : tuple of float
-        Full and quick sweeps, loosest first.
-    run : callable
-        ``run(model, x0, t_final, dt, setting) -> Trajectory`` on the output
-        grid ``time_grid(t_final, dt)``; raise ``SimulationError`` on failure.
-    family : str
-        Grouping for colours: "casadi", "scipy", "fixed", "fmu", ...
-    """
-
-    name: str
-    sweep: str
-    settings: tuple[float, ...]
-    quick: tuple[float, ...]
-    run: Runner = field(repr=False)
-    family: str = ""
-
-
-def _native() -> dict[str, BenchMethod]:
-    out: dict[str, BenchMethod] = {}
-    for name in ("cvodes-bdf", "cvodes-adams", "idas", "RK45", "DOP853", "Radau", "BDF", "LSODA"):
-        out[name] = BenchMethod(name, "tol", _TOLS, _TOLS_QUICK, _adaptive(name), METHODS[name].family)
-    for name in ("rk", "collocation-radau", "collocation-legendre"):
-        # CasADi builds one integrator over the whole refined grid: keep the grid below ~5000 points.
-        out[name] = BenchMethod(name, "step", _STEPS[:5], _STEPS_QUICK, _fixed(name), "casadi")
-    for name in ("rk4", "gauss4", "radau3"):
-        out[name] = BenchMethod(name, "step", _STEPS, _STEPS_QUICK, _fixed(name), "fixed")
-    return out
-
-
-#: The benchmark's method registry (insertion order = legend order).
-BENCH_METHODS: dict[str, BenchMethod] = _native()
-
-
-def register_method(method: BenchMethod) -> None:
-    """Add a method to ``BENCH_METHODS`` (e.g. an FMU's embedded solver run through fmpy).
-
-    Raises
-    ------
-    ValueError
-        The name is taken, the sweep kind is unknown or the settings are empty.
-    """
-    if method.name in BENCH_METHODS:
-        raise ValueError(f"method name {method.name!r} is already registered")
-    if method.sweep not in ("tol", "step"):
-        raise ValueError(f"sweep must be 'tol' or 'step', got {method.sweep!r}")
-    if not method.settings or not method.quick:
-        raise ValueError(f"method {method.name!r}: settings and quick settings must be non-empty")
-    BENCH_METHODS[method.name] = method
-
-
-# The FMU's embedded solvers (exported once per model kind, run through fmpy) are part of the default run.
-register_fmu_methods(_TOLS, _TOLS_QUICK)
+#: The benchmark's methods (insertion order = legend order): native methods, then the FMU's solvers.
+BENCH_METHODS: dict[str, BenchMethod] = {
+    **native_bench_methods(),
+    **{m.name: m for m in fmu_bench_methods(TOLS, TOLS_QUICK)},
+}
 
 
 @dataclass

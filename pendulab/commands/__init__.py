@@ -1,1 +1,7 @@
-"""One module per ``pendulab`` command; each exposes ``register(subparsers)``."""
+"""The CLI's commands, one module each (``register(subparsers)``), and the error they raise on bad input."""
+
+__all__ = ["CLIError"]
+
+
+class CLIError(ValueError):
+    """Bad command-line input (reported as one line, exit status 2)."""

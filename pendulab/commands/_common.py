@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ..cli import CLIError
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model
+from . import CLIError
 
 __all__ = ["parse_number", "parse_settings", "trajectory_format", "write_trajectory", "summarize", "format_summary"]
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cli import CLIError
+from . import CLIError
 
 _DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0}
 

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..cli import CLIError
+from . import CLIError
 
 
 def _parse_sets(items: list[str]) -> dict[str, float]:

@@ -8,8 +8,7 @@ import math
 import sys
 from typing import Any
 
-from ..cli import CLIError
-from ._common import parse_settings
+from ._common import CLIError, parse_settings
 
 __all__ = ["register", "run"]
 

@@ -9,8 +9,7 @@ import sys
 import time
 from typing import Any
 
-from ..cli import CLIError
-from ._common import format_summary, parse_number, parse_settings, summarize, trajectory_format, write_trajectory
+from ._common import CLIError, format_summary, parse_number, parse_settings, summarize, trajectory_format, write_trajectory
 
 __all__ = ["register", "run"]
 

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from ..cli import CLIError
+from . import CLIError
 
 __all__ = ["register"]
 

@@ -201,7 +201,7 @@ def balance_controller(
     actuation: str | Sequence[str] = "full",
     u_max: float | None = None,
 ) -> LinearStateFeedback:
-    """LQR balance about the upright equilibrium as a sampled controller (the gain from :func:`~pendulab.control.lqr.lqr_balance`).
+    """LQR balance about the upright equilibrium as a sampled controller (gain: :func:`pendulab.control.lqr.lqr_balance`).
 
     Parameters
     ----------

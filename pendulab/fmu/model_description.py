@@ -12,7 +12,7 @@ import math
 import re
 import xml.etree.ElementTree as ET
 
-from .. import __version__
+from .._version import __version__
 from ..model.model import Model
 from .codegen import (
     DEFAULT_TOLERANCE,

@@ -11,7 +11,6 @@ from pendulab.bench.workprecision import (
     fastest_table,
     merge_rows,
     read_csv,
-    register_method,
     write_csv,
 )
 
@@ -30,15 +29,20 @@ def test_fastest_table_picks_cheapest_run_reaching_each_level():
     assert t[1e-10]["method"] is None
 
 
-def test_register_method_rejects_duplicates_and_bad_sweeps():
+def test_bench_methods_come_from_the_integrate_registry_and_reject_bad_sweeps():
     def run(*_args):
         raise NotImplementedError
 
-    with pytest.raises(ValueError, match="already registered"):
-        register_method(BenchMethod("DOP853", "tol", (1e-6,), (1e-6,), run))
+    from pendulab.integrate import METHODS
+
+    native = [m for m in BENCH_METHODS.values() if m.family != "fmu"]
+    assert native and all(m.name in METHODS for m in native)
+    # The sweep kind follows the registry: fixed-step methods sweep the step, the others the tolerance.
+    assert all((m.sweep == "step") == METHODS[m.name].fixed_step for m in native)
     with pytest.raises(ValueError, match="sweep must be"):
-        register_method(BenchMethod("fmu-x", "order", (1.0,), (1.0,), run))
-    assert "fmu-x" not in BENCH_METHODS
+        BenchMethod("fmu-x", "order", (1.0,), (1.0,), run)
+    with pytest.raises(ValueError, match="non-empty"):
+        BenchMethod("fmu-x", "tol", (), (1.0,), run)
 
 
 def test_csv_round_trip(tmp_path):

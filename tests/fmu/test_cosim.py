@@ -8,7 +8,7 @@ import pytest
 import pendulab as pl
 from pendulab.control.feedback import as_feedback, balance_controller, energy_swingup, upright_state
 from pendulab.control.lqr import wrap_state_error
-from pendulab.cosim.master import cosim
+from pendulab.cosim import cosim
 
 KINDS = ("rigid", "elastic")
 VERSIONS = (2, 3)

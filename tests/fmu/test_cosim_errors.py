@@ -12,7 +12,7 @@ from fmpy.fmi3 import FMU3Slave
 
 import pendulab as pl
 from pendulab.control.feedback import LinearStateFeedback, balance_controller, upright_state
-from pendulab.cosim.master import cosim, inspect_fmu
+from pendulab.cosim import cosim, inspect_fmu
 
 _FOREIGN_MD = """<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription fmiVersion="2.0" modelName="BouncingBall" guid="{1}" generationTool="other tool"

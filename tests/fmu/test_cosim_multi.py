@@ -8,7 +8,7 @@ from fmpy.fmi2 import FMU2Slave
 
 import pendulab as pl
 from pendulab.control.feedback import balance_controller, energy_swingup, upright_state
-from pendulab.cosim.master import StepRejectedError, cosim, cosim_many
+from pendulab.cosim import StepRejectedError, cosim, cosim_many
 
 
 def _starts(k: float):

@@ -7,7 +7,7 @@ from pendulab.control import swing_up
 from pendulab.control.swingup.check import height_success
 from pendulab.control.swingup.tasks import load_task
 from pendulab.control.tracking import tvlqr
-from pendulab.fmu import cosim
+from pendulab.cosim import cosim
 
 
 def test_tracked_swingup_through_fmu_matches_native(fmu_builds):
