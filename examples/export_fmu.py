@@ -16,7 +16,7 @@ def run(
     *,
     kind: str = "elastic",
     fmi_version: int = 3,
-    scenes: tuple[str, ...] = ("elastic_stiff",),
+    scenes: tuple[str, ...] = ("elastic_stiff_forced",),
     out_dir: str | Path | None = None,
 ) -> dict:
     """Export, validate on ``scenes``; return the FMU path, PASS flag, max error and plot path."""

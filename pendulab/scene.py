@@ -1,14 +1,20 @@
 """Scenes: a pendulum, an initial state, a horizon and what the user cares about, as TOML.
 
 A scene file has the sections ``[scene]``, ``[model]`` (with ``[model.params]``),
-``[initial]``, ``[simulation]``, ``[outputs]`` and ``[input]``; any other
+``[initial]`` (state values by name, and ``start``: how unstated spring
+lengths are set), ``[simulation]``, ``[outputs]`` and ``[input]`` (constant
+torques, plus an optional ``[input.sine]``); any other
 top-level section (e.g. ``[task]``) is kept verbatim in ``Scene.extra`` for the
 feature that uses it. Every key of the known sections is validated: a typo is
 an error naming the file, the section, the key, the value and what was
 expected, never a silently ignored setting. See ``docs/scenes.md``.
 
-Shipped scenes live next to this module (``pendulab/scenes/*.toml``) and are
-loaded by name: ``load_scene("seed_paper")``.
+Shipped scenes live in ``pendulab/scenes/*.toml`` and are loaded by name:
+``load_scene("seed_paper")``. Two groups sit in subdirectories: the cases of
+the work-precision study (``"bench/rigid_chaotic_10s"``) and the FMU
+validation scenes (``"validation/rigid_forced"``); ``list_scenes("bench")``
+lists a group. Every scene of the project -- user scenes, benchmark cases,
+validation scenes and swing-up tasks -- is this one type.
 """
 
 from __future__ import annotations
@@ -24,17 +30,18 @@ from typing import Any
 
 import numpy as np
 
-from .integrate import METHODS, simulate
+from .integrate import METHODS, simulate, time_grid
 from .integrate.trajectory import Trajectory
 from .model.model import Model, make_model
 from .model.params import ElasticParams, RigidParams
+from .model.quasistatic import quasi_static_state
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "SCENE_DIR"]
+__all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "initial_state", "SCENE_DIR", "STARTS", "GROUPS"]
 
 #: Directory of the scenes shipped with the package.
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
@@ -45,6 +52,11 @@ _SIMULATION_DEFAULTS: Mapping[str, Any] = MappingProxyType(
 )
 _DEFAULT_OUTPUTS = ("theta1", "theta2")
 _KNOWN_SECTIONS = ("scene", "model", "initial", "simulation", "outputs", "input")
+#: How unstated spring lengths are set at t = 0: static hanging length, rest length L (excites
+#: the spring mode), or quasi-static (zero radial acceleration at the initial angles and rates).
+STARTS: tuple[str, ...] = ("static", "rest-length", "quasi-static")
+#: Groups of shipped scenes in subdirectories of ``SCENE_DIR``.
+GROUPS: tuple[str, ...] = ("bench", "validation")
 
 
 @dataclass(frozen=True)
@@ -62,8 +74,8 @@ class Scene:
     initial : mapping of str to float
         The initial state values the file states explicitly, by name.
     x0 : ndarray, shape (nx,)
-        Full initial state: ``model.state(**initial)`` (unstated entries at
-        rest, springs at their static hanging length).
+        Full initial state: the stated values, unstated entries at rest and
+        unstated spring lengths as ``start`` says.
     t_final, dt : float
         Horizon and output step [s].
     method : str
@@ -76,6 +88,12 @@ class Scene:
         Acceptable error on those outputs, in their units (None: not stated).
     u : ndarray, shape (2,), or None
         Constant torques (tau1, tau2) [N.m]; None when the scene has no ``[input]``.
+    start : {"static", "rest-length", "quasi-static"}
+        How unstated spring lengths are set (elastic; "static" for rigid).
+    u_amplitude : ndarray, shape (2,), or None
+        Amplitudes [N.m] of a sine torque added to ``u`` (``[input.sine]``).
+    u_frequency : float
+        Its frequency [Hz].
     extra : mapping
         Other top-level sections, unvalidated, for the feature that uses them.
     path : Path or None
@@ -97,6 +115,30 @@ class Scene:
     u: np.ndarray | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
     path: Path | None = None
+    start: str = "static"
+    u_amplitude: np.ndarray | None = None
+    u_frequency: float = 0.0
+
+    @property
+    def kind(self) -> str:
+        """Model kind, ``"rigid"`` or ``"elastic"``."""
+        return self.model.kind
+
+    def grid(self) -> np.ndarray:
+        """The output grid of :func:`pendulab.simulate` for this scene, shape (N,) [s]."""
+        return time_grid(self.t_final, self.dt)
+
+    def inputs(self, t: np.ndarray | None = None) -> np.ndarray:
+        """Torques (tau1, tau2) [N.m] at times ``t`` (default :meth:`grid`), shape (N, 2).
+
+        Constant ``u`` (zero without ``[input]``) plus the ``[input.sine]`` term;
+        :meth:`simulate` holds row k over ``[t_k, t_k+1)``.
+        """
+        t = self.grid() if t is None else np.asarray(t, dtype=float)
+        u = np.zeros((len(t), self.model.nu)) + (0.0 if self.u is None else self.u)
+        if self.u_amplitude is not None:
+            u = u + np.outer(np.sin(2 * np.pi * self.u_frequency * t), self.u_amplitude)
+        return u
 
     def with_settings(self, **settings: float) -> Scene:
         """Return a copy with parameters and/or initial-state values changed by name.
@@ -128,7 +170,8 @@ class Scene:
                 raise ValueError(f"initial state {name!r} must be a finite number, got {value!r}")
         model = self.model.with_params(**params) if params else self.model
         initial = {**self.initial, **{k: float(v) for k, v in states.items()}}
-        return dataclasses.replace(self, model=model, initial=MappingProxyType(initial), x0=_frozen(model.state(**initial)))
+        x0 = _frozen(initial_state(model, initial, self.start))
+        return dataclasses.replace(self, model=model, initial=MappingProxyType(initial), x0=x0)
 
     def simulate(self, **overrides: Any) -> Trajectory:
         """Run the scene with :func:`pendulab.simulate`.
@@ -151,7 +194,7 @@ class Scene:
             "method": self.method,
             "rtol": self.rtol,
             "atol": self.atol,
-            "u": self.u,
+            "u": self.inputs() if self.u_amplitude is not None else self.u,
         }
         allowed = set(kwargs) | {"max_step", "options"}
         unknown = sorted(set(overrides) - allowed)
@@ -159,6 +202,41 @@ class Scene:
             raise ValueError(f"unknown simulate override(s) {unknown}; expected some of {sorted(allowed)}")
         kwargs.update(overrides)
         return simulate(self.model, **kwargs)
+
+
+def initial_state(model: Model, initial: Mapping[str, float], start: str = "static") -> np.ndarray:
+    """Full initial state from the stated values and the spring-length rule.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+    initial : mapping of str to float
+        Stated state values by name; the others at rest.
+    start : {"static", "rest-length", "quasi-static"}
+        Unstated spring lengths (elastic): static hanging length, rest length L,
+        or quasi-static (zero radial acceleration; stated lengths are then
+        overridden, so state none).
+
+    Returns
+    -------
+    ndarray, shape (nx,)
+
+    Raises
+    ------
+    ValueError
+        Unknown state name or start rule.
+    """
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {list(STARTS)}, got {start!r}")
+    values = dict(initial)
+    if model.kind == "elastic" and start == "rest-length":
+        values.setdefault("r1", model.params.L1)
+        values.setdefault("r2", model.params.L2)
+    x = model.state(**values)
+    if model.kind == "elastic" and start == "quasi-static":
+        x = quasi_static_state(model, x[0:2], x[4:6])
+    return x
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -191,9 +269,29 @@ def default_scene(kind: str) -> Scene:
     )
 
 
-def list_scenes() -> tuple[str, ...]:
-    """Names of the scenes shipped with the package, sorted."""
-    return tuple(sorted(p.stem for p in SCENE_DIR.glob("*.toml")))
+def list_scenes(group: str | None = None) -> tuple[str, ...]:
+    """Names of the scenes shipped with the package, sorted.
+
+    Parameters
+    ----------
+    group : {None, "bench", "validation"}
+        None: the user-facing scenes (top level); a group: its scenes, named ``"<group>/<stem>"``.
+
+    Returns
+    -------
+    tuple of str
+        Names accepted by :func:`load_scene`.
+
+    Raises
+    ------
+    ValueError
+        Unknown group.
+    """
+    if group is None:
+        return tuple(sorted(p.stem for p in SCENE_DIR.glob("*.toml")))
+    if group not in GROUPS:
+        raise ValueError(f"unknown scene group {group!r}; expected one of {list(GROUPS)}")
+    return tuple(sorted(f"{group}/{p.stem}" for p in (SCENE_DIR / group).glob("*.toml")))
 
 
 def scene_path(path_or_name: str | Path) -> Path:
@@ -209,7 +307,8 @@ def scene_path(path_or_name: str | Path) -> Path:
         return candidate
     text = str(path_or_name)
     stem = text[:-5] if text.endswith(".toml") else text
-    if "/" not in stem and "\\" not in stem and (SCENE_DIR / f"{stem}.toml").is_file():
+    group, _, leaf = stem.rpartition("/")
+    if group in ("", *GROUPS) and leaf and "\\" not in leaf and (SCENE_DIR / f"{stem}.toml").is_file():
         return SCENE_DIR / f"{stem}.toml"
     raise FileNotFoundError(f"scene {text!r}: no such file and no shipped scene of that name; shipped: {list(list_scenes())}")
 
@@ -308,10 +407,13 @@ def load_scene(path_or_name: str | Path) -> Scene:
     except (ValueError, TypeError) as exc:
         raise ValueError(f"scene file {str(path)!r}: [model.params]: {exc}") from None
 
-    init_table = rd.table("initial")
-    rd.only("initial", init_table, model.state_names, f"{kind} state names")
+    init_table = dict(rd.table("initial"))
+    start = rd.string("initial", "start", init_table.pop("start", "static"), STARTS if kind == "elastic" else ("static",))
+    rd.only("initial", init_table, model.state_names, f"{kind} state names (or 'start')")
     initial = {k: rd.real("initial", k, v) for k, v in init_table.items()}
-    x0 = model.state(**initial)
+    if start == "quasi-static" and ({"r1", "r2"} & set(initial)):
+        raise rd.error("initial", "start", start, "no stated r1, r2 with a quasi-static start (it sets them)")
+    x0 = initial_state(model, initial, start)
     if kind == "elastic" and np.any(x0[2:4] <= 0):
         raise rd.error("initial", "r1/r2", x0[2:4].tolist(), "spring lengths > 0 m")
 
@@ -334,10 +436,22 @@ def load_scene(path_or_name: str | Path) -> Scene:
         tolerance = rd.real("outputs", "tolerance", tolerance, positive=True)
 
     u = None
+    amplitude, frequency = None, 0.0
     if "input" in data:
-        in_table = rd.table("input")
-        rd.only("input", in_table, model.input_names, "input names")
+        in_table = dict(rd.table("input"))
+        sine = rd.table("input.sine") if "sine" in in_table else {}
+        in_table.pop("sine", None)
+        rd.only("input", in_table, model.input_names, "input names (or the table 'sine')")
         u = np.array([rd.real("input", k, in_table.get(k, 0.0)) for k in model.input_names])
+        if sine:
+            rd.only("input.sine", sine, ("amplitude", "frequency"), "keys")
+            amp = sine.get("amplitude", _MISSING)
+            if not isinstance(amp, list) or len(amp) != model.nu:
+                raise rd.error(
+                    "input.sine", "amplitude", amp, f"a list of {model.nu} amplitudes [N.m] for {list(model.input_names)}"
+                )
+            amplitude = np.array([rd.real("input.sine", "amplitude", a) for a in amp])
+            frequency = rd.real("input.sine", "frequency", sine.get("frequency", _MISSING), positive=True)
 
     extra = {k: v for k, v in data.items() if k not in _KNOWN_SECTIONS}
     return Scene(
@@ -356,4 +470,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
         u=None if u is None else _frozen(u),
         extra=MappingProxyType(extra),
         path=path,
+        start=start,
+        u_amplitude=None if amplitude is None else _frozen(amplitude),
+        u_frequency=frequency,
     )

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..integrate import simulate
 from ..model.pycode import to_python
-from .cases import Case
+from ..scene import Scene
 
 __all__ = ["Reference", "REFERENCE_DIR", "load_reference", "compute_reference", "gbs_mp", "ReferenceMissingError"]
 
@@ -62,7 +62,7 @@ class Reference:
         return path
 
 
-def load_reference(case: Case, directory: Path = REFERENCE_DIR) -> Reference:
+def load_reference(case: Scene, directory: Path = REFERENCE_DIR) -> Reference:
     """Load the stored reference of ``case``; raise ReferenceMissingError if absent or stale."""
     path = Path(directory) / f"{case.name}.npz"
     if not path.is_file():
@@ -70,7 +70,7 @@ def load_reference(case: Case, directory: Path = REFERENCE_DIR) -> Reference:
     d = np.load(path)
     t = d["t"]
     # 1e-12: the quasi-static start comes from a Newton solve whose last bits may vary by platform.
-    if not np.isclose(t[-1], case.t_final) or not np.allclose(d["x"][0], case.initial_state(), rtol=0, atol=1e-12):
+    if not np.isclose(t[-1], case.t_final) or not np.allclose(d["x"][0], case.x0, rtol=0, atol=1e-12):
         raise ReferenceMissingError(f"stored reference {path} does not match case {case.name!r}; run 'pendulab bench references'")
     return Reference(case.name, t, d["x"], str(d["method"]), str(d["check_method"]), float(d["accuracy"]), str(d["notes"]))
 
@@ -160,10 +160,10 @@ def gbs_mp(
         return X, float(est)
 
 
-def compute_reference(case: Case, *, progress: Callable[[str], None] | None = None) -> Reference:
+def compute_reference(case: Scene, *, progress: Callable[[str], None] | None = None) -> Reference:
     """Compute the reference of one case (seconds for elastic cases, about a minute for rigid 10 s)."""
-    model = case.model()
-    x0 = case.initial_state()
+    model = case.model
+    x0 = case.x0
     say = progress or (lambda _msg: None)
     say(f"{case.name}: DOP853 rtol 1e-13")
     dop = simulate(model, x0, case.t_final, case.dt, "DOP853", 1e-13, 1e-13).x

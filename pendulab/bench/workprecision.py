@@ -38,7 +38,8 @@ import numpy as np
 
 from ..integrate import SimulationError
 from ..model.model import Model
-from .cases import Case, get_cases
+from ..scene import Scene
+from .cases import get_cases
 from .fmu_methods import fmu_bench_methods
 from .methods import TOLS, TOLS_QUICK, BenchMethod, native_bench_methods
 from .reference import Reference, load_reference
@@ -89,7 +90,7 @@ class Row:
     message: str = ""
 
 
-def _measure(method: BenchMethod, case: Case, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int) -> Row:
+def _measure(method: BenchMethod, case: Scene, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int) -> Row:
     row = Row(case.name, method.name, method.sweep, setting, "ok", reference_accuracy=ref.accuracy)
     times: list[float] = []
     cpu: list[float] = []
@@ -176,7 +177,7 @@ def run_work_precision(
     rows: list[Row] = []
     done = 0
     for case, bm in plan:
-        model, x0 = case.model(), case.initial_state()
+        model, x0 = case.model, case.x0
         settings = bm.quick if quick else bm.settings
         stop = False
         for s in settings:

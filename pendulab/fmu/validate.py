@@ -18,17 +18,18 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..integrate import simulate
-from ..model.model import Model, make_model
+from ..model.model import make_model
+from ..scene import Scene, list_scenes, load_scene
 from .codegen import SOLVER_NAMES
 
-__all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind", "quasi_static_state"]
+__all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind"]
 
 REFERENCE_TOL = 1e-12
 REFERENCE_METHOD = "cvodes"
@@ -36,122 +37,52 @@ REFERENCE_METHOD = "cvodes"
 
 @dataclass(frozen=True)
 class ValidationScene:
-    """One validation case (until shipped TOML scenes land, they are defined here)."""
+    """A shipped validation scene (``pendulab/scenes/validation/*.toml``) with its acceptance settings.
 
-    name: str
-    kind: str
-    params: Mapping[str, float]
-    initial: Mapping[str, float]
-    t_final: float
-    dt: float
-    tau1_amplitude: float  # [N.m], sine torque on tau1
-    tau1_frequency: float  # [Hz]
-    tolerance: float  # solver tolerance passed to the FMU (CS) and fmpy's CVode (ME)
-    bound: float  # max normalised error accepted on every signal
-    note: str = ""
-    quasi_static: bool = False  # elastic: spring lengths with zero radial acceleration at the initial angles
-
-    def model(self) -> Model:
-        return make_model(self.kind, **self.params)
-
-    def x0(self) -> np.ndarray:
-        model = self.model()
-        x = model.state(**self.initial)
-        if self.quasi_static:
-            x = quasi_static_state(model, x)
-        return x
-
-    def inputs(self) -> np.ndarray:
-        """Sampled torques, shape (N, 2): row k acts on [t_k, t_k+1)."""
-        t = self.grid()
-        u = np.zeros((len(t), 2))
-        u[:, 0] = self.tau1_amplitude * np.sin(2 * np.pi * self.tau1_frequency * t)
-        return u
-
-    def grid(self) -> np.ndarray:
-        n = int(round(self.t_final / self.dt))
-        return np.linspace(0.0, self.t_final, n + 1)
-
-
-SCENES: tuple[ValidationScene, ...] = (
-    ValidationScene(
-        "rigid_regular",
-        "rigid",
-        {},
-        {"theta1": 0.8, "theta2": 0.4},
-        5.0,
-        0.01,
-        0.5,
-        0.5,
-        1e-10,
-        1e-6,
-        "moderate swing, regular motion",
-    ),
-    ValidationScene(
-        "rigid_chaotic",
-        "rigid",
-        {},
-        {"theta1": 2.0, "theta2": 2.0},
-        2.0,
-        0.01,
-        0.5,
-        0.5,
-        1e-10,
-        1e-5,
-        "chaotic: errors grow ~1e2 over 2 s, so the bound is 10x looser",
-    ),
-    ValidationScene(
-        "elastic_soft",
-        "elastic",
-        {"k1": 200.0, "k2": 200.0},
-        {"theta1": 0.8, "theta2": 0.4},
-        3.0,
-        0.01,
-        0.5,
-        0.5,
-        1e-10,
-        1e-6,
-        "soft springs (modes ~9 and 23 rad/s)",
-    ),
-    ValidationScene(
-        "elastic_stiff",
-        "elastic",
-        {"k1": 1e6, "k2": 1e6},
-        {"theta1": 0.8, "theta2": 0.4},
-        1.0,
-        0.01,
-        0.5,
-        0.5,
-        1e-10,
-        1e-6,
-        "stiff springs k = 1e6 N/m (spring mode ~1600 rad/s), quasi-static start",
-        quasi_static=True,
-    ),
-)
-
-
-def quasi_static_state(model: Model, x: np.ndarray) -> np.ndarray:
-    """Elastic state ``x`` with spring lengths set so that the radial accelerations vanish.
-
-    Starting there does not excite the fast spring mode (see DESIGN numerics facts),
-    so an L-stable method can step over it.
+    Attributes
+    ----------
+    scene : Scene
+        Model, initial state, horizon, output step and the sine torque on tau1.
+    tolerance : float
+        Solver tolerance passed to the FMU (CS) and fmpy's CVode (ME) (``[validation] solver_tolerance``).
+    bound : float
+        Largest accepted normalised error of every signal (``[validation] bound``).
     """
-    from scipy.optimize import fsolve
 
-    if model.kind != "elastic":
-        return np.array(x, dtype=float)
-    x = np.array(x, dtype=float)
+    scene: Scene
+    tolerance: float
+    bound: float
 
-    def radial_acc(r: np.ndarray) -> np.ndarray:
-        xx = x.copy()
-        xx[2:4] = r
-        return model.rhs(xx)[6:8]
+    @property
+    def name(self) -> str:
+        """Scene name."""
+        return self.scene.name
 
-    r, _, ier, msg = fsolve(radial_acc, x[2:4], xtol=1e-15, full_output=True)
-    if ier != 1 and np.max(np.abs(radial_acc(r))) > 1e-6:
-        raise RuntimeError(f"quasi-static spring lengths not found: {msg}")
-    x[2:4] = r
-    return x
+    @property
+    def kind(self) -> str:
+        """Model kind."""
+        return self.scene.kind
+
+    @property
+    def note(self) -> str:
+        """Scene description."""
+        return self.scene.description
+
+
+def _load_validation_scenes() -> tuple[ValidationScene, ...]:
+    out = []
+    for name in list_scenes("validation"):
+        scene = load_scene(name)
+        settings = scene.extra.get("validation", {})
+        try:
+            out.append(ValidationScene(scene, float(settings["solver_tolerance"]), float(settings["bound"])))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"validation scene {str(scene.path)!r}: [validation] needs solver_tolerance and bound") from exc
+    return tuple(out)
+
+
+#: The validation scenes, rigid and elastic.
+SCENES: tuple[ValidationScene, ...] = _load_validation_scenes()
 
 
 @dataclass(frozen=True)
@@ -212,7 +143,7 @@ def fmu_kind(model_description) -> str:
 
 def _input_table(scene: ValidationScene) -> np.ndarray:
     """fmpy input table reproducing a zero-order hold: each change is a repeated time stamp."""
-    t, u = scene.grid(), scene.inputs()
+    t, u = scene.scene.grid(), scene.scene.inputs()
     times = np.repeat(t, 2)[1:]
     values = np.repeat(u, 2, axis=0)[:-1]
     table = np.zeros(len(times), dtype=[("time", float), ("tau1", float), ("tau2", float)])
@@ -223,9 +154,9 @@ def _input_table(scene: ValidationScene) -> np.ndarray:
 def _run_fmu(unzipdir: str, md, scene: ValidationScene, fmi_type: str, solver: int, signals: Sequence[str]) -> np.ndarray:
     from fmpy import simulate_fmu
 
-    model = scene.model()
+    model = scene.scene.model
     start = {name: float(v) for name, v in zip(model.param_names, model.p, strict=True)}
-    start.update({name: float(v) for name, v in zip(model.state_names, scene.x0(), strict=True)})
+    start.update({name: float(v) for name, v in zip(model.state_names, scene.scene.x0, strict=True)})
     if fmi_type == "CoSimulation":
         start["solver"] = solver
         start["solver_tolerance"] = scene.tolerance
@@ -234,9 +165,9 @@ def _run_fmu(unzipdir: str, md, scene: ValidationScene, fmi_type: str, solver: i
         model_description=md,
         fmi_type=fmi_type,
         start_time=0.0,
-        stop_time=scene.t_final,
-        step_size=scene.dt,
-        output_interval=scene.dt,
+        stop_time=scene.scene.t_final,
+        step_size=scene.scene.dt,
+        output_interval=scene.scene.dt,
         relative_tolerance=scene.tolerance,
         start_values=start,
         input=_input_table(scene),
@@ -245,20 +176,21 @@ def _run_fmu(unzipdir: str, md, scene: ValidationScene, fmi_type: str, solver: i
         record_events=False,
     )
     out = np.column_stack([res[s] for s in signals])
-    if len(out) != len(scene.grid()):
-        raise RuntimeError(f"{fmi_type} run of scene {scene.name!r} returned {len(out)} samples, expected {len(scene.grid())}")
+    n = len(scene.scene.grid())
+    if len(out) != n:
+        raise RuntimeError(f"{fmi_type} run of scene {scene.name!r} returned {len(out)} samples, expected {n}")
     return out
 
 
 def _reference(scene: ValidationScene, signals: Sequence[str]) -> np.ndarray:
-    model = scene.model()
-    u = scene.inputs()
+    sc = scene.scene
+    u = sc.inputs()
 
     def held(t: float, x: np.ndarray) -> np.ndarray:
-        return u[min(int(round(t / scene.dt)), len(u) - 1)]
+        return u[min(int(round(t / sc.dt)), len(u) - 1)]
 
     traj = simulate(
-        model, scene.x0(), scene.t_final, dt=scene.dt, method=REFERENCE_METHOD, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, u=held
+        sc.model, sc.x0, sc.t_final, dt=sc.dt, method=REFERENCE_METHOD, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, u=held
     )
     return np.column_stack([traj[s] for s in signals])
 
@@ -354,7 +286,7 @@ def _plot(report: ValidationReport, scenes, curves, signals, out_dir: Path) -> P
     fig, axes = plt.subplots(len(scenes), 2, figsize=(12, 3.2 * len(scenes)), squeeze=False)
     i1, i2 = signals.index("theta1"), signals.index("theta2")
     for row, scene in zip(axes, scenes, strict=True):
-        t = scene.grid()
+        t = scene.scene.grid()
         c = curves[scene.name]
         ref = c["reference"]
         ax = row[0]

@@ -69,7 +69,7 @@ def test_stored_reference_agrees_with_independent_method(name):
 
     case = CASES[name]
     ref = load_reference(case)
-    x = simulate(case.model(), case.initial_state(), case.t_final, case.dt, "cvodes-adams", 1e-12, 1e-12).x
+    x = simulate(case.model, case.x0, case.t_final, case.dt, "cvodes-adams", 1e-12, 1e-12).x
     diff = np.max(np.abs(x - ref.x))
     # CVODES Adams at 1e-12 (local) with <= 1e3 error growth over the horizon: within 1e-8;
     # a stale or wrong reference would be off by orders of magnitude more.
@@ -82,6 +82,6 @@ def test_rigid_reference_self_consistent_to_stated_accuracy():
 
     case = CASES["rigid_chaotic_2s"]
     ref = load_reference(case)
-    X, _ = gbs_mp(case.model(), case.initial_state(), 0.2, case.dt, substeps=2)
+    X, _ = gbs_mp(case.model, case.x0, 0.2, case.dt, substeps=2)
     # Recomputing the 32-digit GBS over the first 0.2 s reproduces the stored solution to its stated accuracy.
     assert np.max(np.abs(X - ref.x[: X.shape[0]])) <= ref.accuracy

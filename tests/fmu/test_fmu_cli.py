@@ -32,7 +32,7 @@ def test_cli_export_sets_parameters_and_initial_state(tmp_path, capsys):
 
 
 def test_cli_validate_passes_and_writes_plot(fmu_builds, tmp_path, capsys):
-    rc = main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "rigid_chaotic", "--out", str(tmp_path)])
+    rc = main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "rigid_chaotic_forced", "--out", str(tmp_path)])
     out = capsys.readouterr().out
     assert rc == 0, out
     assert "overall: PASS" in out and "no problem" in out
@@ -42,7 +42,7 @@ def test_cli_validate_passes_and_writes_plot(fmu_builds, tmp_path, capsys):
 def test_cli_bad_input_exits_2_with_one_line(fmu_builds, tmp_path, capsys):
     assert main(["fmu", "export", "--model", "rigid", "--set", "m1", "--out", str(tmp_path / "x.fmu")]) == 2
     assert "--set expects name=value" in capsys.readouterr().err
-    assert main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "elastic_soft"]) == 2
+    assert main(["fmu", "validate", str(fmu_builds[("rigid", 2)].path), "--scene", "elastic_soft_forced"]) == 2
     assert "not for the rigid model" in capsys.readouterr().err
     assert main(["fmu", "validate", str(tmp_path / "missing.fmu")]) == 2
 
@@ -56,6 +56,6 @@ def test_cli_validate_exits_1_on_fail(fmu_builds, monkeypatch, capsys):
     # an impossible bound (1e-15, below the solvers' 1e-10 tolerance) must turn into FAIL and exit status 1
     strict = tuple(dataclasses.replace(s, bound=1e-15) for s in v.SCENES)
     monkeypatch.setattr(v, "SCENES", strict)
-    assert main(["fmu", "validate", str(fmu_builds[("rigid", 3)].path), "--scene", "rigid_chaotic"]) == 1
+    assert main(["fmu", "validate", str(fmu_builds[("rigid", 3)].path), "--scene", "rigid_chaotic_forced"]) == 1
     out = capsys.readouterr().out
     assert "FAIL" in out and "overall: FAIL" in out

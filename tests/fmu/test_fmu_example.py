@@ -11,6 +11,6 @@ def test_export_fmu_example_runs(tmp_path):
     spec = importlib.util.spec_from_file_location("export_fmu_example", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    result = mod.run(kind="rigid", fmi_version=2, scenes=("rigid_chaotic",), out_dir=tmp_path)
+    result = mod.run(kind="rigid", fmi_version=2, scenes=("rigid_chaotic_forced",), out_dir=tmp_path)
     assert result["passed"] and result["max_error"] < 1e-5  # the scene's stated bound
     assert result["plot"].exists() and result["fmu"].exists()

@@ -15,7 +15,7 @@ X0_RIGID = {"theta1": 1.2, "theta2": 0.3}
 @pytest.mark.parametrize("version", [2, 3])
 def test_rigid_fmu_matches_native_cvodes_cs_both_solvers_and_me(fmu_builds, version):
     # CS with each embedded solver and ME (fmpy CVode), sine torque on tau1, against CVODES at 1e-12
-    report = validate(fmu_builds[("rigid", version)].path, scenes=["rigid_regular"])
+    report = validate(fmu_builds[("rigid", version)].path, scenes=["rigid_forced"])
     assert report.passed, report.table()
     assert {r.run for r in report.rows} == {"CS-dopri5", "CS-rodas4", "ME-CVode"}
     cs = [r.max_error for r in report.rows if r.run.startswith("CS")]
@@ -26,7 +26,7 @@ def test_rigid_fmu_matches_native_cvodes_cs_both_solvers_and_me(fmu_builds, vers
 @pytest.mark.parametrize("version", [2, 3])
 def test_elastic_stiff_fmu_matches_native(fmu_builds, version):
     # k = 1e6 N/m: the explicit solver is stability-limited, the Rosenbrock solver steps over the spring mode
-    report = validate(fmu_builds[("elastic", version)].path, scenes=["elastic_stiff"])
+    report = validate(fmu_builds[("elastic", version)].path, scenes=["elastic_stiff_forced"])
     assert report.passed, report.table()
     assert max(r.max_error for r in report.rows if r.run.startswith("CS")) < 1e-8
 
