@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from ..model.model import Model, model_functions
+from ..model.statics import static_spring_lengths
 
 __all__ = ["Equilibrium", "EQUILIBRIUM_NAMES", "equilibria", "equilibrium"]
 
@@ -148,10 +149,7 @@ def _seed(model: Model, name: str, u: np.ndarray, grad_v: ca.Function) -> np.nda
             )
         q[j] = math.asin(s) if side == "down" else math.pi - math.asin(s)
     if model.kind == "elastic":
-        pr = model.params
-        # Spring tensions of the vertical chain: spring 2 carries m2 g cos(theta2), spring 1 (m1 + m2) g cos(theta1).
-        q[2] = pr.L1 + (pr.m1 + pr.m2) * pr.g * math.cos(q[0]) / pr.k1
-        q[3] = pr.L2 + pr.m2 * pr.g * math.cos(q[1]) / pr.k2
+        q[2:4] = static_spring_lengths(model.params, q[0:2])
     return q
 
 

@@ -27,15 +27,13 @@ import numpy as np
 from .._checks import positive_float
 from ..control.feedback import SampledController
 from ..integrate.trajectory import Trajectory
+from ..model.builders import STATE_NAMES
 from ..model.model import INPUT_NAMES, Model, make_model
 from ..model.params import ElasticParams, RigidParams
 
 __all__ = ["cosim", "cosim_many", "FmuInfo", "FmuPlant", "StepRejectedError", "inspect_fmu", "StepCheck"]
 
-_STATES = {
-    "rigid": ("theta1", "theta2", "omega1", "omega2"),
-    "elastic": ("theta1", "theta2", "r1", "r2", "omega1", "omega2", "v1", "v2"),
-}
+_STATES = STATE_NAMES
 _PARAMS = {"rigid": RigidParams, "elastic": ElasticParams}
 _FLOAT_TYPES = ("Real", "Float64")
 _INT_TYPES = ("Integer", "Enumeration", "Int32", "Int64")

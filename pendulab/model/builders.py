@@ -21,7 +21,13 @@ import casadi as ca
 from .lagrange import LagrangeSystem, lagrange_equations
 from .params import ElasticParams, RigidParams
 
-__all__ = ["SymbolicModel", "build_rigid", "build_elastic"]
+__all__ = ["SymbolicModel", "build_rigid", "build_elastic", "STATE_NAMES"]
+
+#: State names of each model kind (the one place they are typed): angles, [spring lengths,] their rates.
+STATE_NAMES: dict[str, tuple[str, ...]] = {
+    "rigid": ("theta1", "theta2", "omega1", "omega2"),
+    "elastic": ("theta1", "theta2", "r1", "r2", "omega1", "omega2", "v1", "v2"),
+}
 
 
 @dataclass(frozen=True)
@@ -162,7 +168,7 @@ def build_rigid() -> SymbolicModel:
         g=g,
         positions=ca.vertcat(L1 * e1, L1 * e1 + L2 * e2),
         stretch=ca.SX.zeros(2, 1),
-        state_names=("theta1", "theta2", "omega1", "omega2"),
+        state_names=STATE_NAMES["rigid"],
     )
 
 
@@ -199,5 +205,5 @@ def build_elastic() -> SymbolicModel:
         g=g,
         positions=ca.vertcat(bob1, bob2),
         stretch=stretch,
-        state_names=("theta1", "theta2", "r1", "r2", "omega1", "omega2", "v1", "v2"),
+        state_names=STATE_NAMES["elastic"],
     )

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .builders import STATE_NAMES
 from .model import Model, rigid
 
 __all__ = ["rigid_counterpart", "rigid_state"]
@@ -58,5 +59,5 @@ def rigid_state(model: Model, x: Any) -> np.ndarray:
     """
     x = model.check_state(x)
     names = model.state_names
-    cols = [names.index(n) for n in ("theta1", "theta2", "omega1", "omega2")]
+    cols = [names.index(n) for n in STATE_NAMES["rigid"]]
     return x[..., cols].copy()

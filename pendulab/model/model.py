@@ -19,6 +19,7 @@ import numpy as np
 
 from .builders import SymbolicModel, build_elastic, build_rigid
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
+from .statics import static_spring_lengths
 
 __all__ = ["Model", "rigid", "elastic", "make_model", "model_functions", "INPUT_NAMES", "ACTUATIONS"]
 
@@ -277,10 +278,7 @@ class Model:
         """Hanging straight down at rest, springs at their static length, shape (nx,)."""
         x = np.zeros(self.nx)
         if self.kind == "elastic":
-            pr = self.params
-            # Static equilibrium of the hanging chain: spring 2 carries m2 g, spring 1 carries (m1 + m2) g.
-            x[2] = pr.L1 + (pr.m1 + pr.m2) * pr.g / pr.k1
-            x[3] = pr.L2 + pr.m2 * pr.g / pr.k2
+            x[2:4] = static_spring_lengths(self.params)
         return x
 
     def state(self, **values: float) -> np.ndarray:

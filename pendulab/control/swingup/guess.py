@@ -21,6 +21,7 @@ import numpy as np
 
 from ...integrate import simulate
 from ...model import counterpart
+from ...model.statics import static_spring_lengths, static_spring_rates
 from .problem import SwingUpProblem
 
 __all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic"]
@@ -124,14 +125,12 @@ def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
 def lift_to_elastic(problem: SwingUpProblem, t: np.ndarray, x_rigid: np.ndarray, u: np.ndarray) -> Guess:
     """Lift a rigid trajectory to the elastic state with quasi-static springs.
 
-    Spring lengths carry the gravity load along each link,
-    r1 = L1 + (m1 + m2) g cos(theta1) / k1 and r2 = L2 + m2 g cos(theta2) / k2,
-    exact at the hanging and the inverted equilibrium; v = dr/dt.
+    Spring lengths carry the gravity load along each link
+    (:func:`pendulab.model.statics.static_spring_lengths`, exact at the hanging
+    and the inverted equilibrium); v = dr/dt.
     """
     pr = problem.model.params
-    th1, th2, w1, w2 = x_rigid.T
-    a1 = (pr.m1 + pr.m2) * pr.g / pr.k1
-    a2 = pr.m2 * pr.g / pr.k2
-    r1, r2 = pr.L1 + a1 * np.cos(th1), pr.L2 + a2 * np.cos(th2)
-    v1, v2 = -a1 * np.sin(th1) * w1, -a2 * np.sin(th2) * w2
-    return Guess(np.asarray(t), np.column_stack([th1, th2, r1, r2, w1, w2, v1, v2]), np.asarray(u))
+    theta, omega = x_rigid[:, 0:2], x_rigid[:, 2:4]
+    r = static_spring_lengths(pr, theta)
+    v = static_spring_rates(pr, theta, omega)
+    return Guess(np.asarray(t), np.column_stack([theta, r, omega, v]), np.asarray(u))
