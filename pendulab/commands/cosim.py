@@ -108,7 +108,7 @@ def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.
 def run(args: argparse.Namespace) -> int:
     from ..control.controllers import make_controller
     from ..control.tracking import load_reference_csv
-    from ..cosim.master import cosim, inspect_fmu
+    from ..cosim import cosim, inspect_fmu
     from ..cosim.plots import animate_cosim, plot_cosim
 
     out: Path = args.out
@@ -179,7 +179,7 @@ def _steps(text: str) -> list[float]:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from ..cosim.master import inspect_fmu
+    from ..cosim import inspect_fmu
     from ..cosim.sweep import comm_step_sweep, fmu_runner, native_runner, plot_sweep
 
     steps = _steps(args.steps)

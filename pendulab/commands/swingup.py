@@ -89,7 +89,7 @@ def _fmu_loop(ep, out: Path) -> dict:
     import numpy as np
 
     from ..control.swingup.check import height_success
-    from ..cosim.master import cosim
+    from ..cosim import cosim
     from ..fmu.export import export
 
     print("[swingup] exporting the FMU and running the closed loop through it ...", file=sys.stderr)

@@ -4,6 +4,7 @@
 ``cosim_many`` runs several side by side with the same loop.
 """
 
-from .master import FmuInfo, StepRejectedError, cosim, cosim_many, inspect_fmu
+from .master import cosim, cosim_many
+from .plant import FmuInfo, StepRejectedError, inspect_fmu
 
 __all__ = ["FmuInfo", "StepRejectedError", "cosim", "cosim_many", "inspect_fmu"]

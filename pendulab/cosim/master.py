@@ -3,9 +3,10 @@
 :func:`cosim` instantiates one FMU once, sets parameters and start values,
 initializes it, then per communication step reads the states and outputs,
 evaluates the controller (at its sample times), sets the inputs (held constant
-over the step) and calls ``doStep``. :class:`FmuPlant` is the instance wrapper
-it is built on; :func:`cosim_many` steps several FMUs side by side with the
-same inputs. Both can save the FMU state before a step and, when a step is
+over the step) and calls ``doStep``. :class:`~pendulab.cosim.plant.FmuPlant` is the
+instance wrapper it is built on. :func:`cosim_many` steps several FMUs side
+by side with the same inputs; :func:`cosim` is its one-plant case, so both
+share one loop, and both can save the FMU state before a step and, when a step is
 rejected (``doStep`` returns Discard, the result is non-finite, or a
 user check refuses it), restore the state and retry the step in halves.
 
@@ -15,10 +16,8 @@ The instance is always freed (``terminate`` when legal, then
 
 from __future__ import annotations
 
-import shutil
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,353 +26,10 @@ import numpy as np
 from .._checks import positive_float
 from ..control.feedback import SampledController
 from ..integrate.trajectory import Trajectory
-from ..model.builders import STATE_NAMES
-from ..model.model import INPUT_NAMES, Model, make_model
-from ..model.params import ElasticParams, RigidParams
+from ..model.model import INPUT_NAMES
+from .plant import FmuInfo, FmuPlant, StepCheck, inspect_fmu
 
-__all__ = ["cosim", "cosim_many", "FmuInfo", "FmuPlant", "StepRejectedError", "inspect_fmu", "StepCheck"]
-
-_STATES = STATE_NAMES
-_PARAMS = {"rigid": RigidParams, "elastic": ElasticParams}
-_FLOAT_TYPES = ("Real", "Float64")
-_INT_TYPES = ("Integer", "Enumeration", "Int32", "Int64")
-
-#: ``check(t, x_before, x_after) -> bool``: False rejects the step just taken.
-StepCheck = Callable[[float, np.ndarray, np.ndarray], bool]
-
-
-class StepRejectedError(RuntimeError):
-    """A communication step was rejected and could not be completed by retrying with smaller steps."""
-
-
-@dataclass(frozen=True)
-class FmuInfo:
-    """What the master knows about a pendulab FMU (from its model description).
-
-    Attributes
-    ----------
-    path : Path
-    fmi_version : str
-        "2.0" or "3.0".
-    kind : str
-        "rigid" or "elastic" (from the state variables).
-    state_names, input_names, output_names : tuple of str
-    variables : dict
-        Model variable by name.
-    model_description : fmpy.model_description.ModelDescription
-    """
-
-    path: Path
-    fmi_version: str
-    kind: str
-    state_names: tuple[str, ...]
-    input_names: tuple[str, ...]
-    output_names: tuple[str, ...]
-    variables: Mapping[str, Any] = field(repr=False)
-    model_description: Any = field(repr=False)
-
-    @property
-    def can_get_set_state(self) -> bool:
-        return bool(self.model_description.coSimulation.canGetAndSetFMUstate)
-
-    @property
-    def parameter_names(self) -> tuple[str, ...]:
-        return tuple(v.name for v in self.model_description.modelVariables if v.causality in ("parameter", "structuralParameter"))
-
-    def model(self, params: Mapping[str, float] | None = None) -> Model:
-        """The native pendulab ``Model`` with the FMU's parameter start values, overridden by ``params``."""
-        names = _PARAMS[self.kind].names()
-        values = {n: float(self.variables[n].start) for n in names if n in self.variables and self.variables[n].start is not None}
-        values.update({k: float(v) for k, v in (params or {}).items() if k in names})
-        return make_model(self.kind, **values)
-
-
-def inspect_fmu(fmu_path: str | Path) -> FmuInfo:
-    """Read and check an FMU's model description: a pendulab plant with Co-Simulation.
-
-    Raises
-    ------
-    FileNotFoundError
-        No such file.
-    ValueError
-        Not an FMU, not a pendulab FMU (states tau1/tau2 missing) or no Co-Simulation interface.
-    """
-    from fmpy import read_model_description
-
-    path = Path(fmu_path)
-    if not path.exists():
-        raise FileNotFoundError(f"fmu_path: no such file {str(path)!r}")
-    try:
-        md = read_model_description(str(path))
-    except Exception as exc:  # fmpy raises bare Exceptions (besides BadZipFile, KeyError, XML errors)
-        raise ValueError(f"fmu_path: {str(path)!r} is not a readable FMU ({_first_line(exc)})") from None
-    variables = {v.name: v for v in md.modelVariables}
-    kind = "elastic" if all(n in variables for n in _STATES["elastic"]) else "rigid"
-    inputs = tuple(v.name for v in md.modelVariables if v.causality == "input")
-    missing = [n for n in _STATES[kind] if n not in variables] + [n for n in INPUT_NAMES if n not in inputs]
-    if not str(md.generationTool or "").startswith("pendulab"):
-        raise ValueError(
-            f"fmu_path: {str(path)!r} (model {md.modelName!r}, generated by {md.generationTool!r}) is not a pendulab FMU; "
-            "export one with pendulab.fmu.export(model, path)"
-        )
-    if missing:
-        raise ValueError(
-            f"fmu_path: {str(path)!r} (model {md.modelName!r}) is not a pendulab FMU: it lacks the variables "
-            f"{missing}; expected states {list(_STATES['rigid'])} or {list(_STATES['elastic'])} and inputs {list(INPUT_NAMES)}"
-        )
-    if md.coSimulation is None:
-        raise ValueError(
-            f"fmu_path: {str(path)!r} has no Co-Simulation interface (Model Exchange only); "
-            "a co-simulation master needs an FMU exported with Co-Simulation"
-        )
-    outputs = tuple(v.name for v in md.modelVariables if v.causality == "output" and v.type in _FLOAT_TYPES)
-    return FmuInfo(path, md.fmiVersion, kind, _STATES[kind], inputs, outputs, variables, md)
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__
-
-
-class FmuPlant:
-    """One Co-Simulation instance of a pendulab FMU (a context manager that always frees it).
-
-    Parameters
-    ----------
-    fmu : str, Path or FmuInfo
-    params : mapping, optional
-        Parameter values by name (e.g. ``{"m1": 1.2}``), set before initialization.
-    x0 : array_like, shape (nx,), optional
-        Initial state in ``state_names`` order (start values); default: the FMU's.
-    solver : str or int, optional
-        Embedded solver (the FMU's structural parameter ``solver``).
-    tolerance : float, optional
-        Relative tolerance of the embedded solver (passed to the FMU at initialization).
-    instance_name : str, optional
-    start_time : float
-        [s].
-    """
-
-    def __init__(
-        self,
-        fmu: str | Path | FmuInfo,
-        *,
-        params: Mapping[str, float] | None = None,
-        x0: Any = None,
-        solver: str | int | None = None,
-        tolerance: float | None = None,
-        instance_name: str | None = None,
-        start_time: float = 0.0,
-    ) -> None:
-        self.info = fmu if isinstance(fmu, FmuInfo) else inspect_fmu(fmu)
-        info = self.info
-        self._values = self._start_values(params, x0, solver)
-        if tolerance is not None:
-            tolerance = positive_float("tolerance", tolerance)
-        self.tolerance = tolerance
-        self.time = float(start_time)
-        self.time_in_do_step = 0.0
-        self.n_do_step = 0
-        self._fmu: Any = None
-        self._unzipdir: str | None = None
-        self._instantiated = False
-        self._errored = False
-        self._fmi3 = info.fmi_version.startswith("3")
-        self._vr = {n: info.variables[n].valueReference for n in info.variables}
-        self._read_vrs = [self._vr[n] for n in info.state_names + info.output_names]
-        self._input_vrs = [self._vr[n] for n in INPUT_NAMES]
-        try:
-            self._open(instance_name or info.model_description.coSimulation.modelIdentifier)
-        except BaseException:
-            self.close()
-            raise
-
-    # -- setup -------------------------------------------------------------------
-    def _start_values(self, params, x0, solver) -> dict[str, float | int]:
-        info = self.info
-        values: dict[str, float | int] = {}
-        for name, value in (params or {}).items():
-            if name not in info.parameter_names:
-                raise ValueError(
-                    f"params: {name!r} is not a parameter of the FMU {info.path.name!r}; "
-                    f"expected one of {list(info.parameter_names)}"
-                )
-            values[name] = float(value)
-        if x0 is not None:
-            x = np.asarray(x0, dtype=float)
-            if x.shape != (len(info.state_names),) or not np.all(np.isfinite(x)):
-                raise ValueError(
-                    f"x0 must be finite with shape ({len(info.state_names)},) = {list(info.state_names)} for the "
-                    f"{info.kind} FMU, got {np.asarray(x0).tolist()!r}"
-                )
-            values.update(zip(info.state_names, x.tolist(), strict=True))
-        if solver is not None:
-            values.update(_solver_value(solver))
-        return values
-
-    def _open(self, instance_name: str) -> None:
-        import fmpy
-        from fmpy.fmi2 import FMU2Slave
-        from fmpy.fmi3 import FMU3Slave
-
-        info = self.info
-        md = info.model_description
-        self._unzipdir = fmpy.extract(str(info.path))
-        cls = FMU3Slave if self._fmi3 else FMU2Slave
-        token = md.instantiationToken if cls is FMU3Slave else md.guid
-        self._fmu = cls(
-            guid=token,
-            unzipDirectory=self._unzipdir,
-            modelIdentifier=md.coSimulation.modelIdentifier,
-            instanceName=instance_name,
-        )
-        self._fmu.instantiate()
-        self._instantiated = True
-        fmu = self._fmu  # the FMI 2 / FMI 3 names of the calls the loop needs
-        self._get_real = fmu.getFloat64 if self._fmi3 else fmu.getReal
-        self._set_real = fmu.setFloat64 if self._fmi3 else fmu.setReal
-        self._set_by_name(self._values)
-        if cls is FMU3Slave:
-            self._fmu.enterInitializationMode(tolerance=self.tolerance, startTime=self.time)
-        else:
-            self._fmu.setupExperiment(tolerance=self.tolerance, startTime=self.time)
-            self._fmu.enterInitializationMode()
-        self._fmu.exitInitializationMode()
-
-    def _set_by_name(self, values: Mapping[str, float | int]) -> None:
-        floats = {n: float(v) for n, v in values.items() if self.info.variables[n].type in _FLOAT_TYPES}
-        if floats:
-            self._set_real([self._vr[n] for n in floats], list(floats.values()))
-        for name, value in values.items():
-            var_type = self.info.variables[name].type
-            if var_type in _INT_TYPES:
-                if not self._fmi3:
-                    self._fmu.setInteger([self._vr[name]], [int(value)])
-                else:
-                    setter = self._fmu.setInt64 if var_type in ("Int64", "Enumeration") else self._fmu.setInt32
-                    setter([self._vr[name]], [int(value)])
-
-    # -- stepping ----------------------------------------------------------------
-    def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """States (nx,) and outputs (ny,) at the current communication point."""
-        values = np.array(self._get_real(self._read_vrs))
-        nx = len(self.info.state_names)
-        return values[:nx], values[nx:]
-
-    def set_inputs(self, u: np.ndarray) -> None:
-        """Set (tau1, tau2) [N.m], held constant over the next step(s)."""
-        self._set_real(self._input_vrs, [float(v) for v in u])
-
-    def do_step(self, h: float, *, allow_restore: bool = False) -> None:
-        """Advance by ``h`` [s] from ``self.time``.
-
-        Raises
-        ------
-        StepRejectedError
-            The FMU discarded the step (FMI Discard, early return or termination request).
-        RuntimeError
-            The FMU returned Error/Fatal (the instance can then only be freed).
-        """
-        from fmpy.fmi1 import FMICallException
-
-        start = time.perf_counter()
-        try:
-            result = self._fmu.doStep(self.time, h, noSetFMUStatePriorToCurrentPoint=not allow_restore)
-        except FMICallException as exc:
-            if exc.status == 2:  # fmi2Discard / fmi3Discard
-                raise StepRejectedError(f"FMU discarded the step from t = {self.time:.6g} s, h = {h:.3g} s") from None
-            self._errored = True
-            raise RuntimeError(
-                f"FMU {self.info.path.name!r} failed in doStep at t = {self.time:.6g} s, h = {h:.3g} s "
-                f"(status {exc.status}); see the FMU log above"
-            ) from None
-        finally:
-            self.time_in_do_step += time.perf_counter() - start
-            self.n_do_step += 1
-        if isinstance(result, tuple) and (result[1] or result[2]):  # FMI 3: terminateSimulation / earlyReturn
-            raise StepRejectedError(f"FMU returned early from the step at t = {self.time:.6g} s, h = {h:.3g} s")
-        self.time += h
-
-    def get_state(self) -> Any:
-        """Save the complete FMU state (needs canGetAndSetFMUstate)."""
-        self._require_state_access()
-        return self._fmu.getFMUState() if self._fmi3 else self._fmu.getFMUstate()
-
-    def set_state(self, state: Any, t: float) -> None:
-        """Restore a state saved at time ``t`` [s]."""
-        (self._fmu.setFMUState if self._fmi3 else self._fmu.setFMUstate)(state)
-        self.time = t
-
-    def free_state(self, state: Any) -> None:
-        """Release a state saved with :meth:`get_state`."""
-        (self._fmu.freeFMUState if self._fmi3 else self._fmu.freeFMUstate)(state)
-
-    def _require_state_access(self) -> None:
-        if not self.info.can_get_set_state:
-            raise ValueError(f"FMU {self.info.path.name!r} cannot get and set its state (canGetAndSetFMUstate is false)")
-
-    def step_with_retry(self, h: float, check: StepCheck | None, max_halvings: int, stats: dict) -> None:
-        """Advance by ``h``; on rejection restore the saved state and cover ``h`` in two halves, recursively."""
-        x_before, _ = self.read()
-        t0 = self.time
-        state = self.get_state()
-        try:
-            try:
-                self.do_step(h, allow_restore=True)
-                x_after, _ = self.read()
-                ok = bool(np.all(np.isfinite(x_after))) and (check is None or bool(check(t0, x_before, x_after)))
-                reason = "the step result was refused"
-            except StepRejectedError as exc:
-                ok, reason = False, str(exc)
-            if ok:
-                return
-            stats["n_rejected"] = stats.get("n_rejected", 0) + 1
-            if max_halvings <= 0:
-                raise StepRejectedError(f"step at t = {t0:.6g} s rejected at the smallest step h = {h:.3g} s: {reason}")
-            self.set_state(state, t0)
-        finally:
-            self.free_state(state)
-        self.step_with_retry(h / 2, check, max_halvings - 1, stats)
-        self.step_with_retry(h / 2, check, max_halvings - 1, stats)
-
-    # -- teardown ----------------------------------------------------------------
-    def close(self) -> None:
-        """Terminate (when legal) and free the instance, unload the library and delete the extracted files."""
-        fmu, self._fmu = self._fmu, None
-        try:
-            if fmu is not None:
-                try:
-                    if self._instantiated and not self._errored:
-                        fmu.terminate()
-                except Exception:  # noqa: S110 - freeing must still happen; the original error matters more
-                    pass
-                finally:
-                    if self._instantiated:
-                        fmu.freeInstance()
-                    else:
-                        fmu.freeLibrary()
-        finally:
-            if self._unzipdir is not None:
-                shutil.rmtree(self._unzipdir, ignore_errors=True)
-                self._unzipdir = None
-
-    def __enter__(self) -> FmuPlant:
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-
-def _solver_value(solver: str | int) -> dict[str, int]:
-    from ..fmu.codegen import SOLVER_NAMES
-
-    if isinstance(solver, str):
-        if solver not in SOLVER_NAMES:
-            raise ValueError(f"solver must be one of {list(SOLVER_NAMES)} (or its index), got {solver!r}")
-        return {"solver": SOLVER_NAMES.index(solver)}
-    if isinstance(solver, bool) or not isinstance(solver, int) or not 0 <= solver < len(SOLVER_NAMES):
-        raise ValueError(f"solver must be one of {list(SOLVER_NAMES)} or an index 0..{len(SOLVER_NAMES) - 1}, got {solver!r}")
-    return {"solver": solver}
+__all__ = ["cosim", "cosim_many"]
 
 
 def _check_controller(controller: SampledController, info: FmuInfo, comm_step: float) -> int:
@@ -418,6 +74,66 @@ def _controller_output(controller: SampledController, cols: list[int], t: float,
     full = np.zeros(len(INPUT_NAMES))
     full[cols] = u
     return full
+
+
+def _run(
+    infos: Sequence[FmuInfo],
+    controller: SampledController,
+    h: float,
+    n: int,
+    *,
+    feedback_from: int,
+    x0s: Sequence[Any],
+    params: Sequence[Mapping[str, float] | None],
+    solver: str | int | None,
+    tolerance: float | None,
+    check: StepCheck | None,
+    max_halvings: int,
+) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray, list[dict[str, Any]], float]:
+    """The one master loop: states, outputs, shared inputs and per-plant stats of ``n`` steps of ``h``."""
+    every = _check_controller(controller, infos[feedback_from], h)
+    if isinstance(max_halvings, bool) or not isinstance(max_halvings, int) or max_halvings < 0:
+        raise ValueError(f"max_halvings must be a non-negative integer, got {max_halvings!r}")
+    if max_halvings:
+        cannot = [i.path.name for i in infos if not i.can_get_set_state]
+        if cannot:
+            raise ValueError(f"max_halvings={max_halvings} needs FMUs that can get and set their state; {cannot} cannot")
+    cols = [INPUT_NAMES.index(name) for name in controller.input_names]
+    controller.reset()
+    X = [np.empty((n + 1, len(i.state_names))) for i in infos]
+    Y = [np.empty((n + 1, len(i.output_names))) for i in infos]
+    U = np.zeros((n + 1, len(INPUT_NAMES)))
+    stats: list[dict[str, Any]] = [{"n_rejected": 0, "comm_step": h} for _ in infos]
+    plants: list[FmuPlant] = []
+    wall = time.perf_counter()
+    try:
+        for j, info in enumerate(infos):
+            name = None if len(infos) == 1 else f"plant{j}"
+            plants.append(FmuPlant(info, params=params[j], x0=x0s[j], solver=solver, tolerance=tolerance, instance_name=name))
+        u = np.zeros(len(INPUT_NAMES))
+        for k in range(n + 1):
+            for j, plant in enumerate(plants):
+                X[j][k], Y[j][k] = plant.read()
+            if k == n:
+                break
+            t = k * h
+            if k % every == 0:
+                u = _controller_output(controller, cols, t, X[feedback_from][k])
+            U[k] = u
+            for j, plant in enumerate(plants):
+                plant.set_inputs(u)
+                plant.time = t  # multiply, never accumulate: t_k = k h exactly as in the native grid
+                if max_halvings:
+                    plant.step_with_retry(h, check, max_halvings, stats[j])
+                else:
+                    plant.do_step(h)
+        for j, plant in enumerate(plants):
+            stats[j].update(time_in_do_step=plant.time_in_do_step, n_do_step=plant.n_do_step)
+    finally:
+        for plant in plants:
+            plant.close()
+    U[-1] = U[-2]  # last row repeats, as in native trajectories
+    return X, Y, U, stats, time.perf_counter() - wall
 
 
 def cosim(
@@ -486,46 +202,31 @@ def cosim(
     h = positive_float("comm_step", comm_step, "[s]")
     n = _n_steps(positive_float("t_final", t_final, "[s]"), h)
     info = inspect_fmu(fmu_path)
-    every = _check_controller(controller, info, h)
-    cols = [INPUT_NAMES.index(name) for name in controller.input_names]
-    if max_halvings and not info.can_get_set_state:
-        raise ValueError(f"max_halvings={max_halvings} needs an FMU that can get and set its state; {info.path.name!r} cannot")
-    nx, ny = len(info.state_names), len(info.output_names)
-    X, Y, U = np.empty((n + 1, nx)), np.empty((n + 1, ny)), np.zeros((n + 1, len(INPUT_NAMES)))
-    stats: dict[str, Any] = {"n_rejected": 0, "comm_step": h}
-    controller.reset()
-    wall = time.perf_counter()
-    with FmuPlant(info, params=params, x0=x0, solver=solver, tolerance=tolerance) as plant:
-        u = np.zeros(len(INPUT_NAMES))
-        for k in range(n + 1):
-            X[k], Y[k] = plant.read()
-            if k == n:
-                break
-            t = k * h
-            if k % every == 0:
-                u = _controller_output(controller, cols, t, X[k])
-            U[k] = u
-            plant.set_inputs(u)
-            plant.time = t  # multiply, never accumulate: t_k = k h exactly as in the native grid
-            if max_halvings:
-                plant.step_with_retry(h, check, max_halvings, stats)
-            else:
-                plant.do_step(h)
-        stats.update(time_in_do_step=plant.time_in_do_step, n_do_step=plant.n_do_step)
-    U[-1] = U[-2]  # last row repeats, as in native trajectories
-    stats["wall_time"] = time.perf_counter() - wall
+    X, Y, U, stats, wall = _run(
+        [info],
+        controller,
+        h,
+        n,
+        feedback_from=0,
+        x0s=[x0],
+        params=[params],
+        solver=solver,
+        tolerance=tolerance,
+        check=check,
+        max_halvings=max_halvings,
+    )
     return Trajectory(
         t=np.arange(n + 1) * h,
-        x=X,
+        x=X[0],
         u=U,
-        y=Y,
+        y=Y[0],
         state_names=info.state_names,
         input_names=INPUT_NAMES,
         output_names=info.output_names,
         method=f"fmu:fmi{info.fmi_version[0]}:cs" + (f":{solver}" if solver is not None else ""),
         success=True,
         message=f"co-simulated {info.path.name} to t = {n * h:.6g} s in {n} communication steps of {h:g} s",
-        stats=stats,
+        stats={**stats[0], "wall_time": wall},
     )
 
 
@@ -540,6 +241,8 @@ def cosim_many(
     params: Sequence[Mapping[str, float] | None] | None = None,
     solver: str | int | None = None,
     tolerance: float | None = None,
+    check: StepCheck | None = None,
+    max_halvings: int = 0,
 ) -> list[Trajectory]:
     """Step several pendulab FMUs side by side in one master, all driven by the same inputs.
 
@@ -559,8 +262,8 @@ def cosim_many(
         Per-plant initial states.
     params : sequence of mapping or None, optional
         Per-plant parameters.
-    solver, tolerance
-        As in :func:`cosim`, for all plants.
+    solver, tolerance, check, max_halvings
+        As in :func:`cosim`, for all plants (a rejected step is retried per plant).
 
     Returns
     -------
@@ -578,35 +281,19 @@ def cosim_many(
     ps = list(params) if params is not None else [None] * len(infos)
     if len(x0s) != len(infos) or len(ps) != len(infos):
         raise ValueError(f"x0 and params must have one entry per FMU ({len(infos)}), got {len(x0s)} and {len(ps)}")
-    every = _check_controller(controller, infos[feedback_from], h)
-    cols = [INPUT_NAMES.index(name) for name in controller.input_names]
-    controller.reset()
-    X = [np.empty((n + 1, len(i.state_names))) for i in infos]
-    Y = [np.empty((n + 1, len(i.output_names))) for i in infos]
-    U = np.zeros((n + 1, len(INPUT_NAMES)))
-    plants: list[FmuPlant] = []
-    wall = time.perf_counter()
-    try:
-        for j, info in enumerate(infos):
-            plants.append(FmuPlant(info, params=ps[j], x0=x0s[j], solver=solver, tolerance=tolerance, instance_name=f"plant{j}"))
-        u = np.zeros(len(INPUT_NAMES))
-        for k in range(n + 1):
-            for j, plant in enumerate(plants):
-                X[j][k], Y[j][k] = plant.read()
-            if k == n:
-                break
-            if k % every == 0:
-                u = _controller_output(controller, cols, k * h, X[feedback_from][k])
-            U[k] = u
-            for plant in plants:
-                plant.set_inputs(u)
-                plant.time = k * h
-                plant.do_step(h)
-    finally:
-        for plant in plants:
-            plant.close()
-    U[-1] = U[-2]  # last row repeats, as in native trajectories
-    wall = time.perf_counter() - wall
+    X, Y, U, stats, wall = _run(
+        infos,
+        controller,
+        h,
+        n,
+        feedback_from=feedback_from,
+        x0s=x0s,
+        params=ps,
+        solver=solver,
+        tolerance=tolerance,
+        check=check,
+        max_halvings=max_halvings,
+    )
     return [
         Trajectory(
             t=np.arange(n + 1) * h,
@@ -618,7 +305,7 @@ def cosim_many(
             output_names=info.output_names,
             method=f"fmu:fmi{info.fmi_version[0]}:cs",
             message=f"plant {j} of {len(infos)} ({info.kind}) in one master",
-            stats={"wall_time": wall, "comm_step": h, "time_in_do_step": plants[j].time_in_do_step},
+            stats={**stats[j], "wall_time": wall},
         )
         for j, info in enumerate(infos)
     ]

@@ -11,7 +11,7 @@ upright state, the per-step contraction factor of the angular error (a log-linea
 fit over the run) estimates the dominant closed-loop eigenvalue modulus; from a
 large perturbation, whether the loop recovers at all (nonlinear stability).
 
-Runs go through an FMU (:func:`pendulab.cosim.master`) or natively
+Runs go through an FMU (:func:`pendulab.cosim.cosim`) or natively
 (:func:`pendulab.simulate` with the same controller); the study code is the same.
 """
 
@@ -285,7 +285,7 @@ def native_runner(model: Model, method: str = "cvodes", rtol: float = 1e-10, ato
 
 
 def fmu_runner(fmu_path: str | Path, *, tolerance: float | None = 1e-10, solver: Any = None, params: Any = None) -> LoopRunner:
-    """The co-simulation loop through an FMU: :func:`pendulab.cosim.master`."""
+    """The co-simulation loop through an FMU: :func:`pendulab.cosim.cosim`."""
     from .master import cosim
 
     def run(ctrl: LinearStateFeedback, h: float, x0: np.ndarray, t_final: float) -> Trajectory:
