@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...model.model import Model
-from ...scene import SCENE_DIR, load_scene
+from ...scene import SCENE_DIR, Scene, load_scene
 from ..feedback import upright_state
 from .problem import SwingUpProblem
 
@@ -45,41 +45,64 @@ _TASK_KEYS = {
 
 @dataclass(frozen=True)
 class Task:
-    """A swing-up task: the problem plus episode and solver settings.
+    """A swing-up task: a scene, the optimal-control problem its ``[task]`` section states, and solver settings.
 
     Attributes
     ----------
-    name, description : str
+    scene : Scene
+        The scene (model, start, episode length ``t_final``, controller sample time ``dt``).
     problem : SwingUpProblem
-    t_final : float
-        Episode length [s] (swing-up plus hold).
-    dt : float
-        Controller sample time [s].
+        The swing-up problem.
     N : int
+        Number of intervals of the transcription.
     method : str
+        Transcription (``radau``, ``legendre``, ``shooting``).
     degree : int
+        Collocation degree.
     success_fraction : float
         End effector must stay above this fraction of L1 + L2.
-    path : Path or None
     """
 
-    name: str
-    description: str
+    scene: Scene
     problem: SwingUpProblem
-    t_final: float
-    dt: float
     N: int
     method: str
     degree: int
     success_fraction: float
-    path: Path | None = None
+
+    @property
+    def name(self) -> str:
+        """Task name (the scene's)."""
+        return self.scene.name
+
+    @property
+    def description(self) -> str:
+        """The scene's description."""
+        return self.scene.description
+
+    @property
+    def t_final(self) -> float:
+        """Episode length [s] (swing-up plus hold)."""
+        return self.scene.t_final
+
+    @property
+    def dt(self) -> float:
+        """Controller sample time [s]."""
+        return self.scene.dt
+
+    @property
+    def path(self) -> Path | None:
+        """The scene file."""
+        return self.scene.path
 
     @property
     def model(self) -> Model:
+        """The problem's model (the scene's, with the problem's parameters)."""
         return self.problem.model
 
     @property
     def rest_lengths(self) -> tuple[float, float]:
+        """Link lengths L1, L2 [m] (spring rest lengths) that the success height refers to."""
         return (self.model.params.L1, self.model.params.L2)
 
 
@@ -128,14 +151,10 @@ def load_task(name_or_path: str | Path) -> Task:
             kw[k] = tuple(task[k])
     problem = SwingUpProblem(model=model, actuation=task["actuation"], x0=scene.x0, goal=goal, name=scene.name, **kw)
     return Task(
-        name=scene.name,
-        description=scene.description,
+        scene=scene,
         problem=problem,
-        t_final=scene.t_final,
-        dt=scene.dt,
         N=int(task.get("N", 100)),
         method=str(task.get("method", "radau")),
         degree=int(task.get("degree", 3)),
         success_fraction=float(task.get("success_fraction", 0.9)),
-        path=scene.path,
     )
