@@ -1,0 +1,44 @@
+"""Suite-wide settings: tests that build C code skip, with the reason, where no C compiler is found.
+
+Marker ``needs_cc``: the test exports an FMU or builds the native library. Every
+test under ``tests/fmu/`` needs one (the FMUs are built per session), so that
+directory is marked as a whole; elsewhere tests carry the marker themselves.
+Everything else runs without a compiler. ``PENDULAB_TEST_NO_CC=1`` pretends
+no compiler exists (used by a test of this rule).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+FMU_TESTS = Path(__file__).resolve().parent / "fmu"
+
+
+def compiler_missing() -> str | None:
+    """Why C code cannot be built here (None when a compiler is found)."""
+    if os.environ.get("PENDULAB_TEST_NO_CC") == "1":
+        return "PENDULAB_TEST_NO_CC=1 is set"
+    from pendulab.fmu.export import CompilerNotFoundError, find_compiler
+
+    try:
+        find_compiler()
+    except CompilerNotFoundError as exc:
+        return str(exc)
+    return None
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "needs_cc: builds C code (an FMU or the native library); skipped without a C compiler")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    reason = compiler_missing()
+    if reason is None:
+        return
+    skip = pytest.mark.skip(reason=f"needs a C compiler to build the FMU / native code: {reason}")
+    for item in items:
+        if item.get_closest_marker("needs_cc") or FMU_TESTS in Path(str(item.path)).resolve().parents:
+            item.add_marker(skip)
