@@ -130,6 +130,12 @@ BAD = [
     ("[model]\nkind = 'rigid'\n[input]\ntau3 = 1.0\n", ["[input] tau3 = 1.0", "'tau1'"]),
     ("[scene]\nauthor = 'me'\n[model]\nkind = 'rigid'\n", ["[scene] author = 'me'", "'name'"]),
     ("scene = 3\n[model]\nkind = 'rigid'\n", ["[scene] = 3", "table"]),
+    ("[model]\nkind = 'rigid'\n[initial]\nstart = 'quasi-static'\n", ["[initial] start = 'quasi-static'", "'static'"]),
+    ("[model]\nkind = 'elastic'\n[initial]\nstart = 'relaxed'\n", ["[initial] start = 'relaxed'", "'rest-length'"]),
+    ("[model]\nkind = 'elastic'\n[initial]\nstart = 'quasi-static'\nr1 = 1.0\n", ["[initial] start", "no stated r1, r2"]),
+    ("[model]\nkind = 'rigid'\n[input.sine]\namplitude = [1.0]\nfrequency = 1.0\n", ["[input.sine] amplitude = [1.0]", "2"]),
+    ("[model]\nkind = 'rigid'\n[input.sine]\namplitude = [1.0, 0.0]\n", ["[input.sine] frequency", "missing"]),
+    ("[model]\nkind = 'rigid'\n[input.sine]\namplitude = [1.0, 0.0]\nfrequency = 1\nphase = 0\n", ["phase"]),
 ]
 
 
@@ -172,3 +178,46 @@ def test_seed_paper_starts_rigid_and_elastic_identically():
     np.testing.assert_allclose(rigid.positions(x0r), scene.model.positions(scene.x0), rtol=0, atol=1e-15)
     assert rigid.energy(x0r) == pytest.approx(scene.model.energy(scene.x0), abs=1e-12)
     assert rigid_counterpart(rigid) is rigid
+
+
+def test_start_rules_set_unstated_spring_lengths(tmp_path):
+    """static: hanging stretch; rest-length: r = L; quasi-static: zero radial acceleration at the start."""
+    base = "[model]\nkind = 'elastic'\n[model.params]\nk1 = 1e4\nk2 = 1e4\n[initial]\ntheta1 = 0.3\ntheta2 = 0.5\n"
+    static = load_scene(write(tmp_path, base, name="a.toml"))
+    rest = load_scene(write(tmp_path, base + "start = 'rest-length'\n", name="b.toml"))
+    qs = load_scene(write(tmp_path, base + "start = 'quasi-static'\n", name="c.toml"))
+    m = static.model
+    p = m.params
+    np.testing.assert_allclose(static.x0[2:4], [p.L1 + (p.m1 + p.m2) * p.g / p.k1, p.L2 + p.m2 * p.g / p.k2], rtol=1e-15)
+    np.testing.assert_allclose(rest.x0[2:4], [p.L1, p.L2], rtol=0, atol=0)
+    # Quasi-static: the radial accelerations vanish (to the root finder's accuracy) and the angles are kept.
+    assert np.max(np.abs(m.rhs(qs.x0)[6:8])) < 1e-9
+    np.testing.assert_array_equal(qs.x0[[0, 1, 4, 5]], [0.3, 0.5, 0.0, 0.0])
+    # A changed stiffness keeps the rule: the quasi-static lengths follow it.
+    stiffer = qs.with_settings(k1=1e5, k2=1e5)
+    assert stiffer.start == "quasi-static" and np.max(np.abs(stiffer.model.rhs(stiffer.x0)[6:8])) < 1e-9
+
+
+def test_sine_input_is_held_on_the_output_grid(tmp_path):
+    text = "[model]\nkind = 'rigid'\n[simulation]\nt_final = 1.0\ndt = 0.1\n[input]\ntau2 = 0.2\n"
+    text += "[input.sine]\namplitude = [0.5, 0.0]\nfrequency = 0.5\n"
+    scene = load_scene(write(tmp_path, text))
+    t = scene.grid()
+    u = scene.inputs()
+    np.testing.assert_allclose(u[:, 0], 0.5 * np.sin(np.pi * t), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(u[:, 1], 0.2, rtol=0, atol=0)
+    traj = scene.simulate(rtol=1e-10, atol=1e-10)
+    # simulate holds row k over [t_k, t_k+1): the applied torques are the scene's samples.
+    np.testing.assert_allclose(traj.u[:-1], u[:-1], rtol=0, atol=0)
+
+
+def test_bench_and_validation_groups_are_scenes():
+    bench, validation = list_scenes("bench"), list_scenes("validation")
+    assert "bench/rigid_chaotic_10s" in bench and "validation/elastic_stiff_forced" in validation
+    assert not set(list_scenes()) & {n.split("/")[1] for n in validation}  # validation names are their own
+    case = load_scene("bench/elastic_stiff_1e6_qs")
+    assert case.start == "quasi-static" and case.model.params.k1 == 1e6
+    with pytest.raises(ValueError, match="unknown scene group 'tasks'"):
+        list_scenes("tasks")
+    with pytest.raises(FileNotFoundError):
+        load_scene("nogroup/rigid_chaotic_10s")
