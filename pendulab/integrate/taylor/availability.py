@@ -1,0 +1,37 @@
+"""heyoka is optional: its import, and the error that names the extra when it is missing."""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+__all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module"]
+
+#: How to install heyoka with pendulab (the optional dependency group "taylor").
+EXTRA_HINT = 'pip install "pendulab[taylor]"'
+
+
+class TaylorUnavailableError(ImportError):
+    """heyoka is not importable; the message names the method and the extra to install."""
+
+
+def heyoka_module() -> Any:
+    """The heyoka module (imported on each call; cheap once imported).
+
+    Returns
+    -------
+    module
+        ``heyoka``.
+
+    Raises
+    ------
+    TaylorUnavailableError
+        heyoka is not importable; the message names ``method='taylor'`` and the extra to install.
+    """
+    try:
+        return importlib.import_module("heyoka")
+    except ImportError as exc:
+        raise TaylorUnavailableError(
+            f"method 'taylor' needs the heyoka package, which is not importable ({exc}); "
+            f"install it with: {EXTRA_HINT} (heyoka's wheels are Linux-only: x86-64, aarch64)"
+        ) from exc

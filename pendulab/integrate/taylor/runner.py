@@ -1,0 +1,126 @@
+"""The runner of ``method="taylor"`` (the registry contract of :mod:`pendulab.integrate.registry`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..registry import STIFF_HINT, MethodSpec, RunRequest, RunResult
+from .availability import heyoka_module
+from .cache import _Borrowed, _entry, compile_count, structure_key
+
+_OPTIONS = {"compact_mode": bool, "high_accuracy": bool, "max_steps": int}
+
+
+# -- runner ---------------------------------------------------------------------
+def _options(req: RunRequest) -> dict[str, Any]:
+    opts: dict[str, Any] = {"compact_mode": False, "high_accuracy": False, "max_steps": 0}
+    for name, value in req.options.items():
+        if name not in _OPTIONS:
+            raise ValueError(f"unknown option {name!r} for method 'taylor'; expected some of {sorted(_OPTIONS)}")
+        kind = _OPTIONS[name]
+        if kind is bool and not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"option {name!r} of method 'taylor' must be a bool, got {value!r}")
+        if kind is int and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
+            raise ValueError(f"option {name!r} of method 'taylor' must be an int >= 0, got {value!r}")
+        opts[name] = kind(value)
+    return opts
+
+
+def _segments(schedule: np.ndarray) -> list[tuple[int, int]]:
+    """Runs ``[a, b)`` of equal consecutive rows of the held-input schedule."""
+    change = np.flatnonzero(np.any(schedule[1:] != schedule[:-1], axis=1)) + 1
+    bounds = [0, *change.tolist(), len(schedule)]
+    return list(zip(bounds[:-1], bounds[1:], strict=True))
+
+
+def run_taylor(req: RunRequest) -> RunResult:
+    """Runner of the Taylor family (see the module docstring).
+
+    Parameters
+    ----------
+    req : RunRequest
+        A validated run.
+
+    Returns
+    -------
+    RunResult
+        States on the grid, held inputs; stats ``n_steps``, ``taylor_order``, ``tol``,
+        ``compiled`` (True when this run compiled its integrator).
+
+    Raises
+    ------
+    TaylorUnavailableError
+        heyoka is not importable (an ``ImportError``).
+    SimulationError
+        heyoka stopped early (non-finite state, step limit).
+    ValueError
+        Unknown or ill-typed option.
+    """
+    hy = heyoka_module()
+    opts = _options(req)
+    model, t, sched = req.model, req.t, req.schedule
+    tol = min(req.rtol, req.atol)
+    zero_u = tuple(int(i) for i in np.flatnonzero(np.all(sched == 0.0, axis=0))) if sched is not None else ()
+    key = structure_key(model.kind, model.p, zero_u, tol, opts["compact_mode"], opts["high_accuracy"])
+    before = compile_count()
+    entry = _entry(key)
+    system = entry.system
+    pars = system.pars(np.zeros(model.nu), model.p)
+    kw: dict[str, Any] = {"max_steps": opts["max_steps"]}
+    if req.max_step is not None:
+        kw["max_delta_t"] = req.max_step
+    ok = hy.taylor_outcome.time_limit
+    n_steps = 0
+    with _Borrowed(entry) as ta:
+        ta.time = float(t[0])
+        ta.state[:] = req.x0
+        ta.pars[:] = pars
+        X = np.empty((len(t), model.nx))
+        if sched is not None:
+            # One dense-output propagation per run of equal inputs; heyoka's last step of each
+            # lands exactly on the run's last grid time, where the input may jump.
+            for a, b in _segments(sched):
+                ta.pars[: model.nu] = sched[a]
+                res = ta.propagate_grid(t[a : b + 1], **kw)
+                n_steps += int(res[3])
+                if res[0] != ok:
+                    raise req.fail(ta.time, _reason(res[0], hy), _hint(res[0], hy))
+                X[a : b + 1] = res[-1]
+            U = sched
+        else:
+            U = np.empty((req.n_intervals, model.nu))
+            X[0] = req.x0
+            for k in range(req.n_intervals):
+                U[k] = req.feedback_input(float(t[k]), X[k])
+                ta.pars[: model.nu] = U[k]
+                res = ta.propagate_until(float(t[k + 1]), **kw)
+                n_steps += int(res[3])
+                if res[0] != ok:
+                    raise req.fail(ta.time, _reason(res[0], hy), _hint(res[0], hy))
+                X[k + 1] = ta.state
+        order = int(ta.order)
+    if not np.all(np.isfinite(X)):
+        k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
+        raise req.fail(t[max(k - 1, 0)], "the state became non-finite")
+    stats = {"n_steps": n_steps, "taylor_order": order, "tol": tol, "compiled": compile_count() != before}
+    return RunResult(X, U, stats)
+
+
+def _reason(outcome: Any, hy: Any) -> str:
+    if outcome == hy.taylor_outcome.err_nf_state:
+        return "heyoka: the state became non-finite (err_nf_state)"
+    if outcome == hy.taylor_outcome.step_limit:
+        return "heyoka: the step limit max_steps was reached (step_limit)"
+    return f"heyoka stopped with outcome {outcome}"
+
+
+def _hint(outcome: Any, hy: Any) -> str:
+    if outcome == hy.taylor_outcome.step_limit:
+        return "raise options={'max_steps': ...} or use an implicit method for stiff springs"
+    return STIFF_HINT
+
+
+#: The Taylor method.
+METHOD_SPECS: tuple[MethodSpec, ...] = (MethodSpec("taylor", "taylor", "heyoka adaptive Taylor series (LLVM JIT)", run_taylor),)
