@@ -21,6 +21,13 @@ COMMAND_MODULES: tuple[str, ...] = ("simulate", "demo", "modes", "fmu", "cosim",
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """Build the ``pendulab`` parser with one sub-command per :data:`COMMAND_MODULES` entry.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Parser whose parsed namespace carries ``command`` and ``func``.
+    """
     parser = argparse.ArgumentParser(
         prog="pendulab",
         description="Rigid and elastic double pendulum: simulation, modes, FMU export, co-simulation, control.",
@@ -33,7 +40,28 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status."""
+    """Run the command line; return the exit status.
+
+    Errors raised by a command (``ValueError``, ``KeyError``, ``TypeError``,
+    ``FileNotFoundError``, ``RuntimeError``, ``OSError``) are printed as one
+    line on stderr instead of a traceback.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        0 on success (or the command's own status), 2 after an error, 130 on
+        ``KeyboardInterrupt``.
+
+    Raises
+    ------
+    SystemExit
+        From argparse, on invalid arguments (status 2) or ``--help`` (status 0).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -125,14 +125,32 @@ class Scene:
         return self.model.kind
 
     def grid(self) -> np.ndarray:
-        """The output grid of :func:`pendulab.simulate` for this scene, shape (N,) [s]."""
+        """The output grid of :func:`pendulab.simulate` for this scene.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Equally spaced times [s] from 0 to ``t_final`` with step at most
+            ``dt``, ``N = ceil(t_final / dt) + 1``.
+        """
         return time_grid(self.t_final, self.dt)
 
     def inputs(self, t: np.ndarray | None = None) -> np.ndarray:
         """Torques (tau1, tau2) [N.m] at times ``t`` (default :meth:`grid`), shape (N, 2).
 
-        Constant ``u`` (zero without ``[input]``) plus the ``[input.sine]`` term;
-        :meth:`simulate` holds row k over ``[t_k, t_k+1)``.
+        Constant ``u`` (zero without ``[input]``) plus the ``[input.sine]`` term
+        ``u_amplitude * sin(2 pi u_frequency t)``; :meth:`simulate` holds row k
+        over ``[t_k, t_k+1)``.
+
+        Parameters
+        ----------
+        t : array_like, shape (N,), optional
+            Times [s]; default the scene's output grid :meth:`grid`.
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+            Torques (tau1, tau2) [N.m], one row per time.
         """
         t = self.grid() if t is None else np.asarray(t, dtype=float)
         u = np.zeros((len(t), self.model.nu)) + (0.0 if self.u is None else self.u)
@@ -146,6 +164,17 @@ class Scene:
         Parameter changes rebuild the model; the initial state is rebuilt from
         the explicit values, so unstated spring lengths follow a changed
         stiffness (static hanging length).
+
+        Parameters
+        ----------
+        **settings : float
+            Parameter values in SI units (e.g. ``k1=1e4`` [N/m]) and/or initial
+            state values (e.g. ``theta1=2.0`` [rad]) by name.
+
+        Returns
+        -------
+        Scene
+            Copy with the new model, ``initial`` and ``x0``; other settings kept.
 
         Raises
         ------
@@ -186,6 +215,15 @@ class Scene:
         Returns
         -------
         Trajectory
+            States, inputs and outputs on the output grid.
+
+        Raises
+        ------
+        ValueError
+            An override that is not one of the keywords above, or bad
+            arguments (from :func:`pendulab.simulate`).
+        SimulationError
+            The integrator failed (from :func:`pendulab.simulate`).
         """
         kwargs: dict[str, Any] = {
             "x0": self.x0,
@@ -221,6 +259,7 @@ def initial_state(model: Model, initial: Mapping[str, float], start: str = "stat
     Returns
     -------
     ndarray, shape (nx,)
+        Initial state in ``model.state_names`` order.
 
     Raises
     ------
@@ -251,6 +290,23 @@ def default_scene(kind: str) -> Scene:
 
     Used when a model is chosen without a scene file (``pendulab simulate --model rigid``);
     set the initial state with :meth:`Scene.with_settings`.
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
+
+    Returns
+    -------
+    Scene
+        Named ``"<kind>_default"``: hanging at rest, ``t_final`` = 10 s,
+        ``dt`` = 0.01 s, method ``"cvodes"``, ``rtol = atol = 1e-8``, outputs
+        theta1, theta2, no input.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``kind`` (from :func:`~pendulab.model.model.make_model`).
     """
     model = make_model(kind)
     d = _SIMULATION_DEFAULTS
@@ -296,6 +352,17 @@ def list_scenes(group: str | None = None) -> tuple[str, ...]:
 
 def scene_path(path_or_name: str | Path) -> Path:
     """Resolve a file path or the name of a shipped scene to an existing file.
+
+    Parameters
+    ----------
+    path_or_name : str or Path
+        An existing file, or a shipped scene name with or without ``.toml``,
+        e.g. ``"seed_paper"`` or ``"bench/rigid_chaotic_10s"``.
+
+    Returns
+    -------
+    Path
+        ``path_or_name`` itself when it is a file, else the file in ``SCENE_DIR``.
 
     Raises
     ------
@@ -371,6 +438,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
     Returns
     -------
     Scene
+        The validated scene.
 
     Raises
     ------

@@ -74,7 +74,15 @@ class Equilibrium:
         return "stable" if self.stable else f"unstable ({self.n_unstable} mode{'s' if self.n_unstable > 1 else ''})"
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-friendly summary (state by name, torques, eigenvalues as [re, im])."""
+        """JSON-friendly summary of the equilibrium.
+
+        Returns
+        -------
+        dict
+            ``name``, ``kind``, ``state`` by name (SI units), ``u`` as
+            ``{"tau1", "tau2"}`` [N.m], ``stable``, ``n_unstable`` and
+            ``eigenvalues`` as a list of [re, im] [1/s].
+        """
         return {
             "name": self.name,
             "kind": self.kind,

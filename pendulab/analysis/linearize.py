@@ -90,7 +90,23 @@ class Linearization:
 
 
 def check_actuation(actuation: Any) -> tuple[int, ...]:
-    """Indices into (tau1, tau2) driven by ``actuation``; ValueError for an unknown name."""
+    """Indices into (tau1, tau2) of the torques driven by an actuation.
+
+    Parameters
+    ----------
+    actuation : {"full", "pendubot", "acrobot"}
+        Both torques, ``tau1`` only (pendubot) or ``tau2`` only (acrobot).
+
+    Returns
+    -------
+    tuple of int
+        ``(0, 1)``, ``(0,)`` or ``(1,)``.
+
+    Raises
+    ------
+    ValueError
+        ``actuation`` is not one of the names above.
+    """
     if not isinstance(actuation, str) or actuation not in ACTUATIONS:
         raise ValueError(f"unknown actuation {actuation!r}; expected one of {list(ACTUATIONS)}")
     return ACTUATIONS[actuation]
@@ -102,6 +118,7 @@ def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
     Parameters
     ----------
     model : Model
+        Model whose states and outputs are named.
     outputs : str or sequence of str
         ``"states"`` (full state), ``"positions"`` (x1, y1, x2, y2),
         ``"energy"``, ``"stretch"`` (elastic only), ``"outputs"`` (all model
@@ -111,6 +128,12 @@ def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
     -------
     tuple of str
         Signal names, each a model state or model output.
+
+    Raises
+    ------
+    ValueError
+        ``"stretch"`` for the rigid model, an unknown or repeated name, an
+        empty list, or ``outputs`` neither a string nor iterable.
     """
     groups = {
         "states": model.state_names,
@@ -159,7 +182,28 @@ def _output_function(kind: str, names: tuple[str, ...]) -> ca.Function:
 
 
 def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...], ca.Function]:
-    """Resolved output names and the CasADi Function ``(y, C, D)(x, u, p)`` for them."""
+    """Resolve output names and build the CasADi Function that evaluates them.
+
+    Parameters
+    ----------
+    model : Model
+        Model whose states and outputs are selected.
+    outputs : str or sequence of str
+        Output specification, as in :func:`resolve_outputs`.
+
+    Returns
+    -------
+    names : tuple of str
+        Resolved signal names (ny of them).
+    function : casadi.Function
+        ``(y, C, D) = function(x, u, p)`` with y (ny, 1), C = dy/dx (ny, nx)
+        and D = dy/du (ny, 2); cached per model kind and names.
+
+    Raises
+    ------
+    ValueError
+        Invalid ``outputs`` (see :func:`resolve_outputs`).
+    """
     names = resolve_outputs(model, outputs)
     return names, _output_function(model.kind, names)
 
@@ -167,10 +211,28 @@ def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...]
 def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """Check an operating point: an Equilibrium (its own u unless ``u`` is given) or arrays.
 
+    Parameters
+    ----------
+    model : Model
+        Model the operating point belongs to.
+    x : array_like, shape (nx,), or Equilibrium
+        Operating-point state in ``model.state_names`` order, or a solved
+        equilibrium.
+    u : array_like, shape (2,), optional
+        Torques (tau1, tau2) [N.m]; default zero, or the equilibrium's own
+        torques when ``x`` is an Equilibrium.
+
     Returns
     -------
     x : ndarray, shape (nx,)
-    u : ndarray, shape (2,) [N.m]
+        Validated state.
+    u : ndarray, shape (2,)
+        Validated torques [N.m].
+
+    Raises
+    ------
+    ValueError
+        ``x`` or ``u`` is not a single finite vector of the right size.
     """
     if isinstance(x, Equilibrium):
         if u is None:
@@ -197,6 +259,7 @@ def linearize(
     Parameters
     ----------
     model : Model
+        Model to linearize, at its parameters ``model.p``.
     x : array_like, shape (nx,), or Equilibrium
         Operating-point state in ``model.state_names`` order (SI units). Need
         not be an equilibrium (time-varying linearization along a trajectory).
@@ -250,16 +313,20 @@ def linearize_along(model: Model, X: Any, U: Any = None, inputs: str = "full") -
     Parameters
     ----------
     model : Model
+        Model to linearize, at its parameters ``model.p``.
     X : array_like, shape (N, nx)
         States along the trajectory.
     U : array_like, shape (N, 2) or (2,), optional
         Torques (tau1, tau2) [N.m]; default zero.
     inputs : {"full", "pendubot", "acrobot"}
+        Which torques are the columns of B.
 
     Returns
     -------
     A : ndarray, shape (N, nx, nx)
+        df/dx at each sample (SI units).
     B : ndarray, shape (N, nx, m)
+        df/du at each sample, m = 2 for ``full`` and 1 otherwise.
     """
     idx = list(check_actuation(inputs))
     Xv = np.atleast_2d(model.check_state(X, "X"))

@@ -68,7 +68,16 @@ class Mode:
     label: str
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-friendly record (``inf`` time constants become ``None``)."""
+        """JSON-friendly record (``inf`` time constants become ``None``).
+
+        Returns
+        -------
+        dict
+            ``label``, ``kind``, ``eigenvalue`` as [re, im] [1/s],
+            ``omega_n_rad_s``, ``freq_hz``, ``omega_d_rad_s``,
+            ``damping_ratio``, ``time_constant_s``, ``shape`` by coordinate
+            name and ``spring_share``.
+        """
         return {
             "label": self.label,
             "kind": self.kind,
@@ -123,6 +132,7 @@ def modes(model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None
     Parameters
     ----------
     model : Model
+        Model to analyse, at its parameters.
     at : str, Equilibrium or array_like of shape (nx,)
         Equilibrium name (solved at torque ``u``), a solved Equilibrium, or a state.
     u : array_like, shape (2,), optional
@@ -178,7 +188,20 @@ def modes(model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None
 
 
 def mode_table(mode_list: Sequence[Mode]) -> str:
-    """Plain-text table: label, kind, frequency, damping, time constant and shape."""
+    """Format modes as a plain-text table.
+
+    Parameters
+    ----------
+    mode_list : sequence of Mode
+        Modes, e.g. from :func:`modes`; the first one gives the shape columns.
+
+    Returns
+    -------
+    str
+        One row per mode: label, kind, omega_n [rad/s], f [Hz], damping
+        ratio, time constant [s] (``-`` if infinite) and shape; ``"(no modes)"``
+        for an empty list.
+    """
     if not mode_list:
         return "(no modes)"
     names = mode_list[0].shape_names
@@ -212,6 +235,11 @@ def stiffness_sweep(k_values: Sequence[float], **params: float) -> dict[str, np.
         ``k`` (n,) [N/m]; ``pendular`` (n, 2) and ``spring`` (n, 2) natural
         frequencies [rad/s], ascending; ``rigid`` (2,) [rad/s] of the rigid
         pendulum with the same masses and lengths.
+
+    Raises
+    ------
+    ValueError
+        ``k_values`` is empty or has a non-positive or non-finite entry.
     """
     from ..model.model import elastic, rigid
 

@@ -49,7 +49,23 @@ _S3 = math.sqrt(3.0)
 
 @dataclass(frozen=True)
 class FixedMethod:
-    """A Runge-Kutta method given by its Butcher tableau (A, b, c)."""
+    """A Runge-Kutta method given by its Butcher tableau (A, b, c).
+
+    Attributes
+    ----------
+    name : str
+        Method name, the key in ``FIXED_METHODS``.
+    A : tuple of tuple of float, shape (s, s)
+        Stage coefficients; strictly lower triangular for an explicit method.
+    b : tuple of float, shape (s,)
+        Weights of the stage derivatives in the step.
+    c : tuple of float, shape (s,)
+        Stage times as fractions of the step.
+    order : int
+        Order of accuracy.
+    description : str
+        One line for tables and messages.
+    """
 
     name: str
     A: tuple[tuple[float, ...], ...]
@@ -60,10 +76,12 @@ class FixedMethod:
 
     @property
     def explicit(self) -> bool:
+        """True when ``A`` is strictly lower triangular (no stage equations to solve)."""
         return all(self.A[i][j] == 0.0 for i in range(len(self.b)) for j in range(i, len(self.b)))
 
     @property
     def stages(self) -> int:
+        """Number of stages s."""
         return len(self.b)
 
 
@@ -125,6 +143,7 @@ def step_function(kind: str, method: str) -> ca.Function:
     Parameters
     ----------
     kind : {"rigid", "elastic"}
+        Model kind.
     method : str
         A key of ``FIXED_METHODS``.
 
@@ -132,6 +151,11 @@ def step_function(kind: str, method: str) -> ca.Function:
     -------
     casadi.Function
         Inputs x (nx,), u (2,) [N.m], p (np,), h [s]; output x after one step.
+
+    Raises
+    ------
+    ValueError
+        ``method`` is not a key of ``FIXED_METHODS``.
     """
     spec = _get_method(method)
     tag = _tag(method)
@@ -217,6 +241,7 @@ def integrate_fixed(
     Parameters
     ----------
     model : Model
+        Model to integrate, at its parameters.
     method : str
         A key of ``FIXED_METHODS``.
     x0 : array_like, shape (nx,)
@@ -227,13 +252,20 @@ def integrate_fixed(
         Number of steps, a positive multiple of ``record_every``.
     u : array_like, shape (2,), optional
         Constant torques [N.m] (default zero).
-    record_every : int
+    record_every : int, default 1
         Record the state every this many steps.
 
     Returns
     -------
     ndarray, shape (n_steps // record_every + 1, nx)
         States at t = 0, record_every h, ...; non-finite entries mean the method blew up.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``method``; invalid ``x0`` or ``u``; ``h`` not a positive
+        finite number; ``n_steps`` or ``record_every`` not a positive integer,
+        or ``n_steps`` not a multiple of ``record_every``.
     """
     _get_method(method)
     x0 = model.check_state(x0, "x0")

@@ -122,12 +122,25 @@ class RunRequest:
         return self.schedule is not None and bool(np.all(self.schedule == self.schedule[0]))
 
     def feedback_input(self, t: float, x: np.ndarray) -> np.ndarray:
-        """Evaluate the feedback at ``(t, x)`` and validate it, shape (nu,) [N.m].
+        """Evaluate the feedback at ``(t, x)`` and validate it.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        x : ndarray, shape (nx,)
+            State at ``t`` (passed to the feedback as a float copy).
+
+        Returns
+        -------
+        ndarray, shape (nu,)
+            Torques (tau1, tau2) [N.m].
 
         Raises
         ------
         ValueError
-            The feedback returned a wrong shape or a non-finite torque.
+            The run has no feedback, or the feedback returned a wrong shape or
+            a non-finite torque.
         """
         if self.feedback is None:
             raise ValueError("this run has no feedback; use the input schedule")
@@ -138,7 +151,22 @@ class RunRequest:
             raise ValueError(f"feedback u(t, x) at t = {t:.6g} s returned an invalid torque: {exc}") from exc
 
     def fail(self, t_reached: float, reason: str, hint: str = STIFF_HINT) -> SimulationError:
-        """A :class:`SimulationError` for this run (raise it)."""
+        """Build a :class:`SimulationError` for this run (the caller raises it).
+
+        Parameters
+        ----------
+        t_reached : float
+            Last time [s] the integration reached.
+        reason : str
+            What went wrong (solver message).
+        hint : str, default STIFF_HINT
+            What to try instead; ``""`` for none.
+
+        Returns
+        -------
+        SimulationError
+            Error naming this run's method and horizon ``t_final``.
+        """
         return SimulationError(self.spec.name, float(t_reached), self.t_final, reason, hint)
 
 
@@ -162,10 +190,30 @@ class RunResult:
 
 
 class Runner(Protocol):
-    """A method family's entry point: ``runner(request) -> RunResult``."""
+    """A method family's entry point: ``runner(request) -> RunResult``.
+
+    Any callable with this signature satisfies the protocol; the class itself
+    is only a type and is never instantiated.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Not used (a ``Protocol`` cannot be instantiated).
+    """
 
     def __call__(self, request: RunRequest) -> RunResult:
-        """Integrate ``request`` over its grid; raise :class:`SimulationError` on failure."""
+        """Integrate ``request`` over its grid; raise :class:`SimulationError` on failure.
+
+        Parameters
+        ----------
+        request : RunRequest
+            The validated run.
+
+        Returns
+        -------
+        RunResult
+            States on the output grid, held inputs and solver statistics.
+        """
 
 
 @dataclass(frozen=True)
@@ -216,6 +264,11 @@ class Registry(Mapping[str, MethodSpec]):
     def add(self, spec: MethodSpec) -> None:
         """Register a method (a name may be registered once).
 
+        Parameters
+        ----------
+        spec : MethodSpec
+            The method; its ``name`` must be new (and not a deprecated alias).
+
         Raises
         ------
         ValueError
@@ -235,7 +288,17 @@ class Registry(Mapping[str, MethodSpec]):
         return len(self._specs)
 
     def resolve(self, method: Any) -> MethodSpec:
-        """The spec of ``method`` (case-insensitive; deprecated names warn).
+        """Look up a method by name (case-insensitive; deprecated names warn).
+
+        Parameters
+        ----------
+        method : str
+            Method name, or a deprecated alias (emits ``DeprecationWarning``).
+
+        Returns
+        -------
+        MethodSpec
+            The registered method; an exact match wins over a case-insensitive one.
 
         Raises
         ------
@@ -256,7 +319,13 @@ class Registry(Mapping[str, MethodSpec]):
         raise ValueError(f"unknown method {method!r}; expected one of {list(self._specs)}")
 
     def by_family(self) -> Mapping[str, tuple[str, ...]]:
-        """Method names grouped by family."""
+        """Method names grouped by family.
+
+        Returns
+        -------
+        mapping of str to tuple of str
+            Read-only mapping family -> method names, in registration order.
+        """
         out: dict[str, list[str]] = {}
         for spec in self._specs.values():
             out.setdefault(spec.family, []).append(spec.name)

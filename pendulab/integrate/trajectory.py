@@ -64,11 +64,29 @@ class Trajectory:
         raise KeyError(f"unknown column {name!r}; available: {list(self.names)}")
 
     def table(self) -> np.ndarray:
-        """All columns side by side: t, states, inputs, outputs; shape (N, 1 + nx + nu + ny)."""
+        """All columns side by side.
+
+        Returns
+        -------
+        ndarray, shape (N, 1 + nx + nu + ny)
+            Columns t [s], states, inputs, outputs (SI units), in the order
+            ``("t",) + names``.
+        """
         return np.column_stack([self.t, self.x, self.u, self.y])
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write a CSV with header ``t, <states>, <inputs>, <outputs>`` (SI units)."""
+        """Write a CSV with header ``t, <states>, <inputs>, <outputs>`` (SI units).
+
+        Parameters
+        ----------
+        path : str or Path
+            Output file; missing parent directories are created.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         with path.open("w", newline="") as fh:
@@ -79,7 +97,21 @@ class Trajectory:
         return path
 
     def to_npz(self, path: str | Path) -> Path:
-        """Write all arrays, names and statistics to a NumPy ``.npz`` archive."""
+        """Write the arrays, names, method, success flag and message to a NumPy ``.npz`` archive.
+
+        ``stats`` is not written.
+
+        Parameters
+        ----------
+        path : str or Path
+            Output file; missing parent directories are created. NumPy appends
+            ``.npz`` when the name lacks it.
+
+        Returns
+        -------
+        Path
+            ``path`` as given (without any suffix NumPy appended).
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savez(

@@ -36,6 +36,8 @@ class SymbolicModel:
 
     Attributes
     ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
     x, u, p : casadi.SX
         State (nx,), input (2,) = (tau1, tau2) and parameter (np,) symbols.
     q, qd : casadi.SX
@@ -55,6 +57,8 @@ class SymbolicModel:
         x1, y1, x2, y2 of the link ends / bobs [m], y up.
     stretch : casadi.SX, shape (2, 1)
         Spring extensions r - L [m] (zero for the rigid model).
+    state_names : tuple of str
+        Names of the entries of ``x`` (see ``STATE_NAMES``).
     """
 
     kind: str

@@ -35,6 +35,11 @@ def rigid_counterpart(model: Model) -> Model:
     Model
         Rigid model with point masses at the link ends; link lengths equal the
         spring rest lengths.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a :class:`~pendulab.model.model.Model`.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
@@ -51,6 +56,7 @@ def rigid_state(model: Model, x: Any) -> np.ndarray:
     model : Model
         The model ``x`` belongs to.
     x : array_like, shape (nx,) or (N, nx)
+        State(s) of ``model``.
 
     Returns
     -------

@@ -65,6 +65,13 @@ def lagrange_equations(q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.
     Returns
     -------
     LagrangeSystem
+        Mass matrix, right-hand side, accelerations and bias terms.
+
+    Raises
+    ------
+    ValueError
+        ``q`` and ``qd`` are not column vectors of equal size, or ``Q`` does
+        not have the shape of ``q``.
     """
     if q.shape != qd.shape or q.shape[1] != 1:
         raise ValueError(f"q and qd must be column vectors of equal size, got {q.shape} and {qd.shape}")

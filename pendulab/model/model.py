@@ -68,7 +68,19 @@ def _state_unit(name: str) -> str:
 
 @cache
 def model_functions(kind: str) -> dict[str, ca.Function]:
-    """CasADi Functions of one model kind, built once per process."""
+    """CasADi Functions of one model kind, built once per process.
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind (anything other than ``"rigid"`` builds the elastic model).
+
+    Returns
+    -------
+    dict of str to casadi.Function
+        The functions listed under :class:`Model` ``functions``, each taking the
+        parameter vector ``p`` as an explicit input.
+    """
     sym: SymbolicModel = build_rigid() if kind == "rigid" else build_elastic()
     x, u, p = sym.x, sym.u, sym.p
     energy = sym.kinetic + sym.potential
@@ -184,11 +196,50 @@ class Model:
         return self.params.as_vector()
 
     def with_params(self, **changes: float) -> Model:
-        """Return a model with some parameters changed (validated)."""
+        """Return a copy of the model with some parameters changed.
+
+        The CasADi functions are shared with ``self``, not rebuilt.
+
+        Parameters
+        ----------
+        **changes : float
+            New parameter values by name, in SI units (see :attr:`param_info`).
+
+        Returns
+        -------
+        Model
+            Model of the same kind with the changed, validated parameters.
+
+        Raises
+        ------
+        ValueError
+            An unknown parameter name, or a value that is non-finite or out of
+            its admissible range.
+        TypeError
+            A value that is not a real number.
+        """
         return Model(self.kind, self.params.replace(**changes), self.functions)
 
     def signal_index(self, name: str) -> tuple[str, int]:
-        """Locate a named signal: ("state"|"input"|"output", index)."""
+        """Locate a named state, input or output signal.
+
+        Parameters
+        ----------
+        name : str
+            Signal name, e.g. ``"theta1"``, ``"tau2"`` or ``"energy"``.
+
+        Returns
+        -------
+        group : {"state", "input", "output"}
+            Which vector the signal belongs to (searched in that order).
+        index : int
+            Position in ``state_names``, ``input_names`` or ``output_names``.
+
+        Raises
+        ------
+        KeyError
+            ``name`` is not a state, input or output of this model.
+        """
         for group, names in (("state", self.state_names), ("input", self.input_names), ("output", self.output_names)):
             if name in names:
                 return group, names.index(name)
@@ -199,11 +250,47 @@ class Model:
 
     # -- argument checks -------------------------------------------------------
     def check_state(self, x: Any, name: str = "x") -> np.ndarray:
-        """Return x as float array of shape (nx,) or (N, nx); raise ValueError otherwise."""
+        """Validate a state or a batch of states.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order [rad, m, rad/s, m/s].
+        name : str, default "x"
+            Argument name used in error messages.
+
+        Returns
+        -------
+        ndarray of float, shape (nx,) or (N, nx)
+            ``x`` as a float array.
+
+        Raises
+        ------
+        ValueError
+            ``x`` is not numeric, has the wrong shape or a non-finite entry.
+        """
         return _check_array(x, self.nx, name, self.state_names)
 
     def check_input(self, u: Any, name: str = "u") -> np.ndarray:
-        """Return u as float array of shape (nu,) or (N, nu); ``None`` means zero torque."""
+        """Validate an input or a batch of inputs.
+
+        Parameters
+        ----------
+        u : array_like, shape (nu,) or (N, nu), or None
+            Torques (tau1, tau2) [N.m]; ``None`` means zero torque.
+        name : str, default "u"
+            Argument name used in error messages.
+
+        Returns
+        -------
+        ndarray of float, shape (nu,) or (N, nu)
+            ``u`` as a float array (zeros of shape (nu,) for ``None``).
+
+        Raises
+        ------
+        ValueError
+            ``u`` is not numeric, has the wrong shape or a non-finite entry.
+        """
         if u is None:
             return np.zeros(self.nu)
         return _check_array(u, self.nu, name, self.input_names)
@@ -225,57 +312,196 @@ class Model:
         return np.asarray(f.map(X.shape[0])(X.T, self.p)).T
 
     def rhs(self, x: Any, u: Any = None) -> np.ndarray:
-        """State derivative f(x, u), shape (nx,) or (N, nx)."""
+        """Evaluate the state derivative dx/dt = f(x, u) at ``model.params``.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+        u : array_like, shape (nu,) or (N, nu), optional
+            Torques (tau1, tau2) [N.m] (default zero); broadcast against ``x``.
+
+        Returns
+        -------
+        ndarray, shape (nx,) or (N, nx)
+            State derivative(s) [rad/s, m/s, rad/s2, m/s2].
+        """
         return self._eval("rhs", x, u, with_u=True)
 
     def outputs(self, x: Any, u: Any = None) -> np.ndarray:
-        """Outputs y(x, u) in ``output_names`` order, shape (ny,) or (N, ny)."""
+        """Evaluate the outputs y(x, u) at ``model.params``.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+        u : array_like, shape (nu,) or (N, nu), optional
+            Torques (tau1, tau2) [N.m] (default zero); broadcast against ``x``.
+
+        Returns
+        -------
+        ndarray, shape (ny,) or (N, ny)
+            Outputs in ``output_names`` order: x1, y1, x2, y2 [m], energy [J]
+            and, for the elastic model, stretch1, stretch2 [m].
+        """
         return self._eval("outputs", x, u, with_u=True)
 
     def mass_matrix(self, x: Any) -> np.ndarray:
-        """Mass matrix M(q), shape (nq, nq) (x must be a single state)."""
+        """Evaluate the mass matrix M(q) of ``M(q) q'' = rhs``.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            A single state (only q is used).
+
+        Returns
+        -------
+        ndarray, shape (nq, nq)
+            Symmetric mass matrix in SI units (kg.m2 on angle entries, kg on
+            spring-length entries).
+        """
         return np.asarray(self.functions["mass_matrix"](self.check_state(x), self.p))
 
     def energy(self, x: Any) -> float | np.ndarray:
-        """Total mechanical energy incl. springs [J]; float, or shape (N,) for a batch."""
+        """Total mechanical energy: kinetic + gravity + springs.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Energy [J]; a float for a single state. Gravity potential is zero
+            at the pivot height.
+        """
         e = self._eval("energy", x)
         return float(e) if e.ndim == 0 else e.ravel()
 
     def kinetic_energy(self, x: Any) -> float | np.ndarray:
-        """Kinetic energy [J]."""
+        """Kinetic energy.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Kinetic energy [J]; a float for a single state.
+        """
         e = self._eval("kinetic", x)
         return float(e) if e.ndim == 0 else e.ravel()
 
     def potential_energy(self, x: Any) -> float | np.ndarray:
-        """Gravitational plus spring potential energy [J]."""
+        """Gravitational plus spring potential energy.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Potential energy [J], zero gravity potential at the pivot height;
+            a float for a single state.
+        """
         e = self._eval("potential", x)
         return float(e) if e.ndim == 0 else e.ravel()
 
     def spring_energy(self, x: Any) -> float | np.ndarray:
-        """Spring potential energy [J] (zero for the rigid model)."""
+        """Spring potential energy ``k1 (r1 - L1)**2 / 2 + k2 (r2 - L2)**2 / 2``.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Spring energy [J] (zero for the rigid model); a float for a single
+            state.
+        """
         e = self._eval("spring_energy", x)
         return float(e) if e.ndim == 0 else e.ravel()
 
     def positions(self, x: Any) -> np.ndarray:
-        """x1, y1, x2, y2 [m], shape (4,) or (N, 4)."""
+        """Cartesian positions of the link ends (bobs), y up, origin at the pivot.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        ndarray, shape (4,) or (N, 4)
+            x1, y1, x2, y2 [m].
+        """
         return self._eval("positions", x)
 
     def stretch(self, x: Any) -> np.ndarray:
-        """Spring extensions r - L [m], shape (2,) or (N, 2)."""
+        """Spring extensions beyond the rest lengths.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (N, 2)
+            ``r1 - L1, r2 - L2`` [m] (zeros for the rigid model).
+        """
         return self._eval("stretch", x)
 
     def dissipation(self, x: Any) -> float | np.ndarray:
-        """Power dissipated by all dampers [W]."""
+        """Power dissipated by all dampers (joints, and springs when elastic).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Dissipated power [W], non-negative; a float for a single state.
+        """
         e = self._eval("dissipation", x)
         return float(e) if e.ndim == 0 else e.ravel()
 
     def power_in(self, x: Any, u: Any = None) -> float | np.ndarray:
-        """Power delivered by the torques tau1 w1 + tau2 (w2 - w1) [W]."""
+        """Power delivered by the torques, ``tau1 omega1 + tau2 (omega2 - omega1)``.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order.
+        u : array_like, shape (nu,) or (N, nu), optional
+            Torques (tau1, tau2) [N.m] (default zero); broadcast against ``x``.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            Input power [W]; a float when there is a single value.
+        """
         e = self._eval("power_in", x, u, with_u=True)
         return float(e[0]) if e.size == 1 else e.ravel()
 
     def rest_state(self) -> np.ndarray:
-        """Hanging straight down at rest, springs at their static length, shape (nx,)."""
+        """Equilibrium hanging straight down at rest.
+
+        Returns
+        -------
+        ndarray, shape (nx,)
+            Zero angles and rates; for the elastic model the spring lengths
+            r1, r2 [m] carry the static gravity load.
+        """
         x = np.zeros(self.nx)
         if self.kind == "elastic":
             x[2:4] = static_spring_lengths(self.params)
@@ -286,6 +512,22 @@ class Model:
 
         For the elastic model, unspecified spring lengths default to the static
         hanging lengths.
+
+        Parameters
+        ----------
+        **values : float
+            State entries by name, e.g. ``theta1=3.0`` [rad], ``omega2=0.5``
+            [rad/s], ``r1=1.02`` [m].
+
+        Returns
+        -------
+        ndarray, shape (nx,)
+            State in ``state_names`` order.
+
+        Raises
+        ------
+        ValueError
+            An unknown state name, or a non-finite value.
         """
         x = self.rest_state()
         for name, value in values.items():
@@ -311,7 +553,28 @@ def _check_array(a: Any, n: int, name: str, names: tuple[str, ...]) -> np.ndarra
 
 
 def make_model(kind: str, **params: float) -> Model:
-    """Build a ``Model`` of kind ``"rigid"`` or ``"elastic"`` with parameters by name."""
+    """Build a ``Model`` of the given kind with parameters by name.
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
+    **params : float
+        Parameter values by name in SI units (see :class:`RigidParams` and
+        :class:`ElasticParams`); others keep their defaults.
+
+    Returns
+    -------
+    Model
+        The model, sharing the per-process cached CasADi functions of ``kind``.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``kind`` or parameter name, or an invalid parameter value.
+    TypeError
+        A parameter value that is not a real number.
+    """
     classes = {"rigid": RigidParams, "elastic": ElasticParams}
     if kind not in classes:
         raise ValueError(f"unknown model kind {kind!r}; expected one of {sorted(classes)}")
@@ -323,10 +586,44 @@ def make_model(kind: str, **params: float) -> Model:
 
 
 def rigid(**params: float) -> Model:
-    """Rigid double pendulum (2 DOF); parameters as in :class:`RigidParams`."""
+    """Rigid double pendulum (2 DOF), state (theta1, theta2, omega1, omega2).
+
+    Parameters
+    ----------
+    **params : float
+        Parameter values by name in SI units, as in :class:`RigidParams`.
+
+    Returns
+    -------
+    Model
+        Model of kind ``"rigid"``.
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter name or an invalid value (via :func:`make_model`).
+    """
     return make_model("rigid", **params)
 
 
 def elastic(**params: float) -> Model:
-    """Elastic (spring-link) double pendulum (4 DOF); parameters as in :class:`ElasticParams`."""
+    """Elastic (spring-link) double pendulum (4 DOF).
+
+    The state is (theta1, theta2, r1, r2, omega1, omega2, v1, v2).
+
+    Parameters
+    ----------
+    **params : float
+        Parameter values by name in SI units, as in :class:`ElasticParams`.
+
+    Returns
+    -------
+    Model
+        Model of kind ``"elastic"``.
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter name or an invalid value (via :func:`make_model`).
+    """
     return make_model("elastic", **params)

@@ -56,7 +56,18 @@ def _p(default: Any, unit: str, description: str, *, positive: bool) -> Any:
 
 
 def param_table(params_or_cls: Any) -> tuple[ParamInfo, ...]:
-    """Return the name/unit/description table of a parameter class or instance."""
+    """Return the name/unit/description table of a parameter class or instance.
+
+    Parameters
+    ----------
+    params_or_cls : RigidParams or ElasticParams, or either class
+        Parameter dataclass (instance or type) whose fields carry the metadata.
+
+    Returns
+    -------
+    tuple of ParamInfo
+        One entry per field, in parameter-vector order.
+    """
     out = []
     for f in dataclasses.fields(params_or_cls):
         out.append(
@@ -133,6 +144,34 @@ class RigidParams(_ParamsBase):
     parameter sets use distributed mass: set the pivot-to-centre-of-mass
     distances ``lc1, lc2`` and the inertias ``I1, I2`` about the centres of mass.
     ``lc1 = None`` means ``lc1 = L1`` (likewise for ``lc2``).
+
+    Attributes
+    ----------
+    m1, m2 : float, default 1.0
+        Masses of links 1 and 2 [kg] (> 0).
+    L1, L2 : float, default 1.0
+        Lengths of links 1 and 2 [m] (> 0).
+    g : float, default 9.81
+        Gravitational acceleration [m/s2] (>= 0).
+    b1 : float, default 0.0
+        Viscous damping of joint 1, ground-link 1 [N.m.s/rad] (>= 0).
+    b2 : float, default 0.0
+        Viscous damping of joint 2, link 1-link 2 [N.m.s/rad] (>= 0).
+    lc1 : float or None, default None
+        Distance from the pivot to the centre of mass of link 1 [m]; ``None``
+        means ``L1``.
+    lc2 : float or None, default None
+        Distance from joint 2 to the centre of mass of link 2 [m]; ``None``
+        means ``L2``.
+    I1, I2 : float, default 0.0
+        Inertias of links 1 and 2 about their centres of mass [kg.m2] (>= 0).
+
+    Raises
+    ------
+    TypeError
+        On construction, a value that is not a real number.
+    ValueError
+        On construction, a non-finite value or one out of its range.
     """
 
     m1: float = _p(1.0, "kg", "mass of link 1", positive=True)
@@ -148,6 +187,13 @@ class RigidParams(_ParamsBase):
     I2: float = _p(0.0, "kg.m2", "inertia of link 2 about its centre of mass", positive=False)
 
     def resolved(self) -> dict[str, float]:
+        """Parameter values with ``lc1, lc2 = None`` replaced by ``L1, L2``.
+
+        Returns
+        -------
+        dict of str to float
+            Every parameter by name, in SI units.
+        """
         values = super().resolved()
         values["lc1"] = self.L1 if self.lc1 is None else self.lc1
         values["lc2"] = self.L2 if self.lc2 is None else self.lc2
@@ -159,6 +205,30 @@ class ElasticParams(_ParamsBase):
     """Parameters of the elastic double pendulum (SI units).
 
     Point masses on massless Hooke springs whose rest lengths are ``L1, L2``.
+
+    Attributes
+    ----------
+    m1, m2 : float, default 1.0
+        Masses of bobs 1 and 2 [kg] (> 0).
+    L1, L2 : float, default 1.0
+        Rest lengths of springs 1 and 2 [m] (> 0).
+    g : float, default 9.81
+        Gravitational acceleration [m/s2] (>= 0).
+    b1 : float, default 0.0
+        Viscous damping of joint 1, ground-spring 1 [N.m.s/rad] (>= 0).
+    b2 : float, default 0.0
+        Viscous damping of joint 2, spring 1-spring 2 [N.m.s/rad] (>= 0).
+    k1, k2 : float, default 500.0
+        Stiffnesses of springs 1 and 2 [N/m] (> 0).
+    c1, c2 : float, default 0.0
+        Damping of springs 1 and 2 along their axes [N.s/m] (>= 0).
+
+    Raises
+    ------
+    TypeError
+        On construction, a value that is not a real number.
+    ValueError
+        On construction, a non-finite value or one out of its range.
     """
 
     m1: float = _p(1.0, "kg", "mass of bob 1", positive=True)

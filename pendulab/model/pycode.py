@@ -62,6 +62,18 @@ def to_python(f: ca.Function) -> Callable[..., np.ndarray]:
     The generated function takes one flat float sequence per input of ``f`` and
     returns the first output as a 1-D NumPy array (dense, column-major).
 
+    Parameters
+    ----------
+    f : casadi.Function
+        An SX Function, e.g. ``model.functions["rhs"]``.
+
+    Returns
+    -------
+    callable
+        ``g(*inputs) -> ndarray`` with one flat float sequence per input of
+        ``f``; the result has shape (size1 * size2,) of the first output,
+        structural zeros included.
+
     Raises
     ------
     TypeError

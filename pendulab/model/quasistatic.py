@@ -118,6 +118,14 @@ def quasi_static_state(model: Any, theta: Any, omega: Any = (0.0, 0.0), u: Any =
     -------
     ndarray, shape (8,)
         theta1, theta2, r1, r2, omega1, omega2, v1 = 0, v2 = 0.
+
+    Raises
+    ------
+    ValueError
+        ``theta`` or ``omega`` does not have shape (2,), or ``model`` is not
+        elastic.
+    RuntimeError
+        Newton did not converge (see :func:`quasi_static_lengths`).
     """
     th = np.asarray(theta, dtype=float)
     om = np.asarray(omega, dtype=float)

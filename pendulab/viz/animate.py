@@ -46,16 +46,16 @@ def animate(
         All runs must share the same output times.
     path : str or Path
         GIF file to write.
-    fps : float
+    fps : float, default 20.0
         Frames per second; playback is real time (one frame per ``1/fps`` s simulated).
     duration : float, optional
         Simulated time shown [s] (default: the whole trajectory).
-    trail : float
+    trail : float, default 1.5
         Length of the fading trace of each bob [s].
-    width : float
+    width : float, default 7.2
         Figure width [in]; the height follows the motion's aspect ratio. With
         ``dpi`` it sets the GIF size in pixels.
-    dpi : int
+    dpi : int, default 80
         Resolution [dots per inch].
     progress : callable(done, total), optional
         Called after each rendered frame (the CLI prints progress with it).
@@ -63,7 +63,13 @@ def animate(
     Returns
     -------
     Path
-        The written file.
+        The written file (parent directories created).
+
+    Raises
+    ------
+    ValueError
+        The runs do not share the same output times, ``fps <= 0`` or
+        ``trail < 0``, or ``runs`` is empty or malformed.
     """
     runs = as_runs(runs)
     t = runs[0].traj.t

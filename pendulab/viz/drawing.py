@@ -18,13 +18,34 @@ RUN_COLORS = ("tab:blue", "tab:red", "tab:green", "tab:purple")
 
 
 def run_colors(n: int) -> list[str]:
-    """Colours of ``n`` runs, cycling through :data:`RUN_COLORS`."""
+    """Colours of ``n`` runs, cycling through :data:`RUN_COLORS`.
+
+    Parameters
+    ----------
+    n : int
+        Number of runs.
+
+    Returns
+    -------
+    list of str
+        ``n`` matplotlib colour names.
+    """
     return [RUN_COLORS[i % len(RUN_COLORS)] for i in range(n)]
 
 
 @dataclass(frozen=True)
 class Run:
-    """One simulated pendulum: its model and trajectory, with a label for legends."""
+    """One simulated pendulum: its model and trajectory, with a label for legends.
+
+    Attributes
+    ----------
+    label : str
+        Name shown in legends and titles.
+    model : Model
+        The simulated pendulum (its kind selects straight links or springs).
+    traj : Trajectory
+        The simulation result; must have the outputs x1, y1, x2, y2.
+    """
 
     label: str
     model: Model
@@ -37,7 +58,23 @@ class Run:
 
 
 def as_runs(runs: Mapping[str, tuple[Model, Trajectory]] | list[Run] | tuple[Run, ...]) -> tuple[Run, ...]:
-    """Normalize ``{label: (model, traj)}`` or a sequence of :class:`Run` to a tuple of runs."""
+    """Normalize ``{label: (model, traj)}`` or a sequence of :class:`Run` to a tuple of runs.
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        The runs, in order.
+
+    Returns
+    -------
+    tuple of Run
+        The runs (a sequence of Run is returned as a tuple, unchanged).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or a sequence with an entry that is not a Run.
+    """
     if isinstance(runs, Mapping):
         out = tuple(Run(label, model, traj) for label, (model, traj) in runs.items())
     else:
@@ -48,10 +85,25 @@ def as_runs(runs: Mapping[str, tuple[Model, Trajectory]] | list[Run] | tuple[Run
 
 
 def spring_polyline(p0: np.ndarray, p1: np.ndarray, coils: int = 7, width: float = 0.05) -> np.ndarray:
-    """Zig-zag from ``p0`` to ``p1`` (straight ends), shape (M, 2) [m].
+    """Zig-zag from ``p0`` to ``p1`` (straight ends).
 
     The zig-zag keeps its width and coil count, so a longer spring looks
     stretched and a shorter one compressed.
+
+    Parameters
+    ----------
+    p0, p1 : array_like, shape (2,)
+        End points (x, y) [m].
+    coils : int, default 7
+        Number of coils; the zig-zag spans the middle 70 % of the length.
+    width : float, default 0.05
+        Offset of the zig-zag corners from the spring axis [m].
+
+    Returns
+    -------
+    ndarray, shape (M, 2)
+        Polyline vertices [m], M = 2 coils + 3 (just ``p0, p1`` when they
+        coincide).
     """
     p0 = np.asarray(p0, dtype=float)
     p1 = np.asarray(p1, dtype=float)
@@ -68,9 +120,21 @@ def spring_polyline(p0: np.ndarray, p1: np.ndarray, coils: int = 7, width: float
 
 
 def link_polylines(model: Model, pos: np.ndarray) -> list[np.ndarray]:
-    """Polylines of both links for one configuration ``pos = (x1, y1, x2, y2)`` [m].
+    """Polylines of both links for one configuration.
 
     Rigid links are straight; elastic links are drawn as springs.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum (only its kind is used).
+    pos : array_like, shape (4,)
+        Bob positions x1, y1, x2, y2 [m], pivot at the origin.
+
+    Returns
+    -------
+    list of ndarray, shape (M, 2)
+        Two polylines [m]: pivot to bob 1, bob 1 to bob 2.
     """
     origin = np.zeros(2)
     b1, b2 = np.asarray(pos[:2], dtype=float), np.asarray(pos[2:4], dtype=float)
@@ -85,6 +149,18 @@ def view_limits(runs: tuple[Run, ...], margin: float = 0.15) -> tuple[tuple[floa
     Horizontally symmetric about the pivot; vertically from the lowest bob to
     the highest point reached (at least the pivot), so a pendulum that never
     rises above its pivot does not waste half the picture.
+
+    Parameters
+    ----------
+    runs : tuple of Run
+        The runs to fit.
+    margin : float, default 0.15
+        Space added on every side [m].
+
+    Returns
+    -------
+    xlim, ylim : tuple of (float, float)
+        Lower and upper axis limits [m].
     """
     pos = np.vstack([r.positions for r in runs])
     half = float(np.max(np.abs(pos[:, [0, 2]]))) + margin

@@ -62,12 +62,23 @@ def fig_snapshots(runs: Any, n_snapshots: int = 5, t_max: float | None = None) -
 
     Parameters
     ----------
-    runs : mapping label -> (Model, Trajectory), or list of Run
-    n_snapshots : int
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+    n_snapshots : int, default 5
         Configurations drawn, evenly spaced over ``[0, t_max]``; later ones darker.
     t_max : float, optional
         Last instant drawn [s] (default: 2 s or the horizon, whichever is shorter),
         short enough that the configurations stay readable.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
     """
     runs = as_runs(runs)
     xlim, ylim = view_limits(runs)
@@ -99,7 +110,23 @@ def fig_snapshots(runs: Any, n_snapshots: int = 5, t_max: float | None = None) -
 
 
 def fig_angles(runs: Any) -> Figure:
-    """Fig. 3: theta1 and theta2 against time, one panel per run."""
+    """Fig. 3: theta1 and theta2 [rad] against time, one panel per run.
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     runs = as_runs(runs)
     fig, axes = _figure(len(runs), 1, sharex=True)
     for ax, run in zip(axes[:, 0], runs, strict=True):
@@ -131,17 +158,67 @@ def _overlay(runs: tuple[Run, ...], names: tuple[str, ...], ncols: int, what: st
 
 
 def fig_angles_compare(runs: Any) -> Figure:
-    """Fig. 4: theta1 and theta2 of every run overlaid (rigid vs elastic)."""
+    """Fig. 4: theta1 and theta2 [rad] of every run overlaid (rigid vs elastic).
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     return _overlay(as_runs(runs), ("theta1", "theta2"), 1, "Angles")
 
 
 def fig_positions(runs: Any) -> Figure:
-    """Fig. 5: bob positions x1, y1, x2, y2 of every run overlaid (y up, pivot at the origin)."""
+    """Fig. 5: bob positions x1, y1, x2, y2 [m] of every run overlaid (y up, pivot at the origin).
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     return _overlay(as_runs(runs), ("x1", "y1", "x2", "y2"), 2, "Bob positions")
 
 
 def fig_phase(runs: Any) -> Figure:
-    """Fig. 6: phase portraits theta-omega of link 1 and link 2, every run overlaid."""
+    """Fig. 6: phase portraits (theta [rad], omega [rad/s]) of both links, every run overlaid.
+
+    A dot marks each run's initial state.
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     runs = as_runs(runs)
     fig, axes = _figure(1, 2, width=11.0, height=4.6)
     for ax, (th, om, link) in zip(axes[0], (("theta1", "omega1", 1), ("theta2", "omega2", 2)), strict=True):
@@ -159,7 +236,25 @@ def fig_phase(runs: Any) -> Figure:
 
 
 def fig_stretch(runs: Any) -> Figure | None:
-    """Spring extension r - L of both springs against time (elastic runs only; None without any)."""
+    """Spring extension r - L of both springs against time, one panel per elastic run.
+
+    Plotted in cm, with the static hanging stretch of each spring dotted.
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        The figure, or None when no run is elastic.
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     runs = tuple(r for r in as_runs(runs) if r.model.kind == "elastic")
     if not runs:
         return None
@@ -182,7 +277,20 @@ def fig_stretch(runs: Any) -> Figure | None:
 
 
 def energy_components(run: Run) -> dict[str, np.ndarray]:
-    """Kinetic (pendular), gravitational, spring and total energy [J] along a run, each shape (N,)."""
+    """Energy components along a run.
+
+    Parameters
+    ----------
+    run : Run
+        One simulated pendulum.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (N,)
+        ``kinetic`` (all motion, spring stretching included), ``gravitational``
+        (zero at the pivot height), ``spring`` (zero for rigid) and ``total``
+        energy [J] at every output time.
+    """
     x = run.traj.x
     kinetic = np.atleast_1d(run.model.kinetic_energy(x))
     spring = np.atleast_1d(run.model.spring_energy(x))
@@ -191,7 +299,25 @@ def energy_components(run: Run) -> dict[str, np.ndarray]:
 
 
 def fig_energy(runs: Any) -> Figure:
-    """Energy exchange: kinetic, gravitational, spring (elastic only) and total energy, one panel per run."""
+    """Energy exchange: kinetic, gravitational, spring (elastic only) and total energy [J], one panel per run.
+
+    The legend reports the largest drift of the total energy from its initial value.
+
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; close it when done).
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
+    """
     runs = as_runs(runs)
     fig, axes = _figure(len(runs), 1, sharex=True, height=3.2)
     for ax, run in zip(axes[:, 0], runs, strict=True):
@@ -229,10 +355,24 @@ def save_figures(runs: Any, out_dir: str | Path, dpi: int = 110) -> dict[str, Pa
 
     Figures that do not apply (spring stretch without an elastic run) are skipped.
 
+    Parameters
+    ----------
+    runs : mapping of str to (Model, Trajectory), or sequence of Run
+        Runs by label (see :func:`~pendulab.viz.drawing.as_runs`).
+    out_dir : str or Path
+        Output directory, created if missing.
+    dpi : int, default 110
+        Resolution [dots per inch].
+
     Returns
     -------
     dict of str to Path
         Figure name -> written file.
+
+    Raises
+    ------
+    ValueError
+        ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
     """
     runs = as_runs(runs)
     out = Path(out_dir)

@@ -48,13 +48,16 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
     Parameters
     ----------
     model : Model
-    at : str or Equilibrium
-    amplitude : float
+        The pendulum.
+    at : str or Equilibrium, default "down-down"
+        Equilibrium name (solved at zero torque) or a solved Equilibrium.
+    amplitude : float, default 0.25
         Largest bob displacement as a fraction of L1 + L2.
 
     Returns
     -------
     matplotlib.figure.Figure
+        One panel per oscillatory or unstable mode.
     """
     eq = equilibrium(model, at) if isinstance(at, str) else at
     shown = [m for m in modes(model, eq) if m.kind in ("oscillatory", "unstable")]
@@ -108,6 +111,7 @@ def plot_frequency_vs_stiffness(k_values: Sequence[float] | None = None, **param
     Returns
     -------
     matplotlib.figure.Figure
+        Log-log chart of natural frequency [rad/s] against k [N/m].
     """
     k = np.logspace(1, 5, 40) if k_values is None else np.asarray(k_values, dtype=float)
     data = stiffness_sweep(k, **params)
@@ -137,10 +141,25 @@ def plot_frequency_vs_stiffness(k_values: Sequence[float] | None = None, **param
 def save_mode_figures(model: Model, directory: str | Path, at: Sequence[str | Equilibrium], **sweep_params: Any) -> list[Path]:
     """Write mode-shape snapshots per equilibrium (and, for the elastic model, the stiffness chart) as PNG.
 
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+    directory : str or Path
+        Output directory, created if missing.
+    at : sequence of str or Equilibrium
+        Equilibria; one file ``modes_<kind>_<name>.png`` each (see
+        :func:`plot_mode_shapes`).
+    **sweep_params
+        Keywords of :func:`plot_frequency_vs_stiffness` (``k_values`` or
+        elastic parameters) overriding the model's m1, m2, L1, L2, g; used
+        for the elastic model only.
+
     Returns
     -------
     list of Path
-        Files written.
+        Files written, the stiffness chart
+        ``modes_frequency_vs_stiffness.png`` last (elastic model only).
     """
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,20 @@ def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     """Save ``fig`` to ``path`` (parent directories created), close it and return the path.
 
     Closing matters: pyplot keeps every open figure alive, and sweeps draw many.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure to save.
+    path : str or Path
+        Output file; the format follows its suffix.
+    dpi : int, default 110
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    Path
+        The file written.
     """
     import matplotlib.pyplot as plt
 

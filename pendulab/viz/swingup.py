@@ -17,11 +17,24 @@ __all__ = ["plot_episode", "animate_episode"]
 
 
 def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
-    """Write PNG figures of one episode; returns their paths.
+    """Write PNG figures of one episode.
 
     Figures: angles, rates, torques with limits, phase portraits, spring stretch
     (elastic models), and the end-effector height against the success threshold.
     Optimal (open-loop plan) and closed-loop curves are overlaid.
+
+    Parameters
+    ----------
+    ep : Episode
+        The episode; without a closed loop only the optimal curves are drawn.
+    out_dir : str or Path
+        Output directory, created if missing.
+
+    Returns
+    -------
+    list of Path
+        ``states_torques.png``, ``phase.png``, then ``height.png`` (when the
+        closed loop and its height check exist) and ``stretch.png`` (elastic).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -120,7 +133,32 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
 
 
 def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: float | None = None) -> Path:
-    """Animated GIF of the closed-loop episode (swing-up and hold), real time at ``fps``."""
+    """Animated GIF of the closed-loop episode (swing-up and hold), real time at ``fps``.
+
+    The links are drawn straight from the pivot through both bobs, with a trace
+    of bob 2 over the last 2 s and, when checked, the success height dotted.
+
+    Parameters
+    ----------
+    ep : Episode
+        The episode; it must have a closed-loop trajectory.
+    path : str or Path
+        GIF file to write (parent directories created).
+    fps : int, default 25
+        Frames per second of simulated time.
+    max_seconds : float, optional
+        Simulated time shown [s] (default: the whole closed loop).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        The episode has no closed-loop trajectory (the solve failed).
+    """
     cl = ep.closed_loop
     if cl is None:
         raise ValueError("episode has no closed-loop trajectory to animate (the solve failed)")
