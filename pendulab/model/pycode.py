@@ -15,6 +15,18 @@ import numpy as np
 
 __all__ = ["to_python"]
 
+# Element-wise (NumPy) versions of the templates that are scalar-only in plain Python.
+_VECTOR = {
+    ca.OP_FMIN: "_np.minimum({0}, {1})",
+    ca.OP_FMAX: "_np.maximum({0}, {1})",
+    ca.OP_LT: "(({0} < {1}) * 1.0)",
+    ca.OP_LE: "(({0} <= {1}) * 1.0)",
+    ca.OP_EQ: "(({0} == {1}) * 1.0)",
+    ca.OP_NE: "(({0} != {1}) * 1.0)",
+    ca.OP_IF_ELSE_ZERO: "_np.where({0}, {1}, 0.0)",
+    ca.OP_SIGN: "_np.sign({0})",
+}
+
 _BINARY = {
     ca.OP_ADD: "{0} + {1}",
     ca.OP_SUB: "{0} - {1}",
@@ -56,16 +68,28 @@ _UNARY = {
 }
 
 
-def to_python(f: ca.Function) -> Callable[..., np.ndarray]:
+class _NumpyMath:
+    """The ``math`` functions the templates use, element-wise."""
+
+    sqrt, sin, cos, tan, exp, log = np.sqrt, np.sin, np.cos, np.tan, np.exp, np.log
+    asin, acos, atan, sinh, cosh, tanh = np.arcsin, np.arccos, np.arctan, np.sinh, np.cosh, np.tanh
+    atan2, copysign, hypot = np.arctan2, np.copysign, np.hypot
+
+
+def to_python(f: ca.Function, vectorized: bool = False) -> Callable[..., np.ndarray]:
     """Return a Python function equivalent to the SX Function ``f``.
 
     The generated function takes one flat float sequence per input of ``f`` and
-    returns the first output as a 1-D NumPy array (dense, column-major).
+    returns the first output as a 1-D NumPy array (dense, column-major). With
+    ``vectorized=True`` an input may instead be an array of shape (n_in, N)
+    (N points at once, element-wise NumPy); the result then has shape (n_out, N).
 
     Parameters
     ----------
     f : casadi.Function
         An SX Function, e.g. ``model.functions["rhs"]``.
+    vectorized : bool, optional
+        Generate element-wise NumPy code for many points per call (default: scalar ``math`` code).
 
     Returns
     -------
@@ -98,6 +122,8 @@ def to_python(f: ca.Function) -> Callable[..., np.ndarray]:
                 out_slots[outs[1]] = f"o{outs[1]}"
         elif op == ca.OP_CONST:
             lines.append(f"    w{outs[0]} = {float(f.instruction_constant(k))!r}")
+        elif vectorized and op in _VECTOR:
+            lines.append(f"    w{outs[0]} = " + _VECTOR[op].format(*(f"w{i}" for i in ins)))
         elif op in _BINARY:
             lines.append(f"    w{outs[0]} = " + _BINARY[op].format(f"w{ins[0]}", f"w{ins[1]}"))
         elif op in _UNARY:
@@ -109,8 +135,11 @@ def to_python(f: ca.Function) -> Callable[..., np.ndarray]:
     rows, cols = sp_out.get_triplet()
     for nz, (r, c) in enumerate(zip(rows, cols, strict=True)):
         dense[r + c * sp_out.size1()] = out_slots.get(nz, "0.0")
-    lines.append(f"    return _np.array([{', '.join(dense)}])")
-    namespace: dict[str, object] = {"_m": __import__("math"), "_np": np}
+    if vectorized:
+        lines.append(f"    return _np.stack(_np.broadcast_arrays({', '.join(dense)}))")
+    else:
+        lines.append(f"    return _np.array([{', '.join(dense)}])")
+    namespace: dict[str, object] = {"_m": _NumpyMath if vectorized else __import__("math"), "_np": np}
     exec(compile("\n".join(lines), f"<pendulab:{f.name()}>", "exec"), namespace)  # noqa: S102
     generated = namespace["_generated"]
     generated.__doc__ = f"Plain-Python translation of CasADi function {f.name()!r} ({n_out} nonzero outputs)."
