@@ -48,7 +48,7 @@ SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
 _PARAM_CLASSES = {"rigid": RigidParams, "elastic": ElasticParams}
 _SIMULATION_DEFAULTS: Mapping[str, Any] = MappingProxyType(
-    {"t_final": 10.0, "dt": 0.01, "method": "cvodes", "rtol": 1e-8, "atol": 1e-8}
+    {"t_final": 10.0, "dt": 0.01, "method": "auto", "rtol": 1e-8, "atol": 1e-8}
 )
 _DEFAULT_OUTPUTS = ("theta1", "theta2")
 _KNOWN_SECTIONS = ("scene", "model", "initial", "simulation", "outputs", "input")
@@ -79,7 +79,7 @@ class Scene:
     t_final, dt : float
         Horizon and output step [s].
     method : str
-        Integration method (a key of ``pendulab.METHODS``).
+        Integration method: ``"auto"`` or a key of ``pendulab.METHODS``.
     rtol, atol : float
         Integrator tolerances.
     outputs : tuple of str
@@ -300,7 +300,7 @@ def default_scene(kind: str) -> Scene:
     -------
     Scene
         Named ``"<kind>_default"``: hanging at rest, ``t_final`` = 10 s,
-        ``dt`` = 0.01 s, method ``"cvodes"``, ``rtol = atol = 1e-8``, outputs
+        ``dt`` = 0.01 s, method ``"auto"``, ``rtol = atol = 1e-8``, outputs
         theta1, theta2, no input.
 
     Raises
@@ -488,7 +488,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
     sim = rd.table("simulation")
     rd.only("simulation", sim, tuple(_SIMULATION_DEFAULTS), "keys")
     settings = {**_SIMULATION_DEFAULTS, **sim}
-    method = rd.string("simulation", "method", settings["method"], tuple(METHODS))
+    method = rd.string("simulation", "method", settings["method"], ("auto", *METHODS))
     t_final, dt, rtol, atol = (rd.real("simulation", k, settings[k], positive=True) for k in ("t_final", "dt", "rtol", "atol"))
     if dt > t_final:
         raise rd.error("simulation", "dt", dt, f"an output step <= t_final = {t_final}")

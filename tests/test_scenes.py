@@ -66,7 +66,7 @@ def test_round_trip_every_field(tmp_path):
 def test_defaults_when_sections_are_omitted(tmp_path):
     scene = load_scene(write(tmp_path, '[model]\nkind = "rigid"\n', name="bare.toml"))
     assert scene.name == "bare" and scene.u is None and scene.tolerance is None
-    assert (scene.t_final, scene.dt, scene.method) == (10.0, 0.01, "cvodes")
+    assert (scene.t_final, scene.dt, scene.method) == (10.0, 0.01, "auto")
     np.testing.assert_array_equal(scene.x0, [0, 0, 0, 0])
 
 

@@ -69,6 +69,7 @@ def summarize(label: str, model: Model, traj: Trajectory) -> dict[str, Any]:
         "model": model.kind,
         "params": {k: float(v) for k, v in model.params.resolved().items()},
         "method": traj.method,
+        "method_choice": traj.stats["auto"]["reason"] if "auto" in traj.stats else "given",
         "t_final_s": float(traj.t[-1]),
         "n_points": int(traj.t.size),
         "wall_time_s": float(traj.stats.get("wall_time", float("nan"))),
@@ -98,7 +99,7 @@ def format_summary(summaries: Sequence[dict[str, Any]]) -> str:
     """A plain-text table, one column per run."""
     rows: list[tuple[str, list[str]]] = [
         ("model", [s["model"] for s in summaries]),
-        ("method", [s["method"] for s in summaries]),
+        ("method", [s["method"] + (" (auto)" if s.get("method_choice", "given") != "given" else "") for s in summaries]),
         ("horizon [s]", [_fmt(s["t_final_s"]) for s in summaries]),
         ("wall time [s]", [_fmt(s["wall_time_s"], ".3f") for s in summaries]),
         ("RHS evaluations", [_fmt(s["n_rhs"]) for s in summaries]),

@@ -45,7 +45,10 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--t-final", metavar="S", help="horizon [s]")
     p.add_argument("--dt", metavar="S", help="output step [s]")
-    p.add_argument("--method", help="integration method (see pendulab.METHODS), e.g. cvodes, RK45, Radau")
+    p.add_argument(
+        "--method",
+        help="integration method: auto (default; chosen from stiffness and tolerance) or one of pendulab.METHODS, e.g. taylor, cvodes",
+    )
     p.add_argument("--rtol", metavar="TOL", help="relative tolerance")
     p.add_argument("--atol", metavar="TOL", help="absolute tolerance")
     p.add_argument("--out", metavar="FILE", help="write the trajectory: .csv (header t, states, inputs, outputs) or .npz")

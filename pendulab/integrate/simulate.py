@@ -27,6 +27,7 @@ import numpy as np
 
 from .._checks import positive_float
 from ..model.model import Model
+from .auto import choose_method
 from .methods import METHODS
 from .registry import STIFF_HINT, RunRequest, SimulationError
 from .trajectory import Trajectory
@@ -100,7 +101,7 @@ def simulate(
     x0: Any,
     t_final: float,
     dt: float = 0.01,
-    method: str = "cvodes",
+    method: str = "auto",
     rtol: float = 1e-8,
     atol: float = 1e-8,
     u: InputSpec = None,
@@ -122,7 +123,8 @@ def simulate(
     dt : float
         Output step [s]; the grid is uniform with step ``t_final / ceil(t_final / dt)``.
     method : str
-        A key of :data:`pendulab.METHODS`.
+        ``"auto"`` (default: the rule of :mod:`pendulab.integrate.auto`, reported in
+        ``stats["auto"]``) or a key of :data:`pendulab.METHODS` (never overridden).
     rtol, atol : float
         Error tolerances of the adaptive methods.
     u : None, array_like or callable
@@ -148,7 +150,8 @@ def simulate(
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
-    spec = METHODS.resolve(method)
+    auto = isinstance(method, str) and method.lower() == "auto"
+    spec = None if auto else METHODS.resolve(method)
     x0 = model.check_state(x0, "x0")
     if x0.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got {x0.shape}")
@@ -161,12 +164,17 @@ def simulate(
     if model.kind == "elastic" and np.any(x0[2:4] <= 0):
         raise ValueError(f"x0: spring lengths r1, r2 must be > 0 m, got {x0[2:4].tolist()}")
     t = time_grid(t_final, dt)
+    schedule = input_schedule(model, u, t)
+    choice = None
+    if auto:
+        choice = choose_method(model, x0, schedule[0] if schedule is not None else np.zeros(model.nu), rtol, atol)
+        spec = METHODS[choice.method]
     request = RunRequest(
         model=model,
         spec=spec,
         x0=x0,
         t=t,
-        schedule=input_schedule(model, u, t),
+        schedule=schedule,
         feedback=u if callable(u) else None,
         rtol=rtol,
         atol=atol,
@@ -193,5 +201,5 @@ def simulate(
         method=spec.name,
         success=True,
         message=f"{spec.description}: reached t = {t_final:.6g} s",
-        stats={"wall_time": wall, **stats},
+        stats={"wall_time": wall, **stats, **({"auto": choice.as_dict()} if choice else {})},
     )

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from typing import Any
 
-__all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module"]
+__all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module", "unavailable_reason"]
 
 #: How to install heyoka with pendulab (the optional dependency group "taylor").
 EXTRA_HINT = 'pip install "pendulab[taylor]"'
@@ -35,3 +36,16 @@ def heyoka_module() -> Any:
             f"method 'taylor' needs the heyoka package, which is not importable ({exc}); "
             f"install it with: {EXTRA_HINT} (heyoka's wheels are Linux-only: x86-64, aarch64)"
         ) from exc
+
+
+def unavailable_reason() -> str | None:
+    """Why ``method="taylor"`` cannot run here, without importing heyoka.
+
+    Returns
+    -------
+    str or None
+        None when heyoka is installed, else a one-line reason naming the extra.
+    """
+    if importlib.util.find_spec("heyoka") is None:
+        return f"heyoka is not installed ({EXTRA_HINT})"
+    return None
