@@ -18,8 +18,8 @@ import casadi as ca
 import numpy as np
 
 from .builders import SymbolicModel, build_elastic, build_rigid
-from .pycode import to_python
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
+from .pycode import to_python
 from .statics import static_spring_lengths
 
 __all__ = ["Model", "rigid", "elastic", "make_model", "model_functions", "INPUT_NAMES", "ACTUATIONS"]
