@@ -67,10 +67,27 @@ def _unpacked_fmu(model: Model) -> tuple[str, Any]:
 
 
 def fmu_runner(solver: int) -> Callable[[Model, np.ndarray, float, float, float], Trajectory]:
-    """Runner ``run(model, x0, t_final, dt, tol) -> Trajectory`` for the FMU's embedded ``solver`` (0 or 1).
+    """Runner ``run(model, x0, t_final, dt, tol) -> Trajectory`` for the FMU's embedded ``solver``.
 
-    Raises ``SimulationError`` when the FMU reports an error (e.g. a solver
-    failure) or returns a non-finite state.
+    Parameters
+    ----------
+    solver : int
+        Value of the FMU's ``solver`` parameter: 0 (dopri5) or 1 (rodas4).
+
+    Returns
+    -------
+    callable
+        ``run(model, x0, t_final, dt, tol) -> Trajectory``: one unforced
+        Co-Simulation run of the (cached) FMI 2 FMU of ``model.kind`` with the
+        model's parameters and ``x0`` as start values, communication step =
+        output step ``dt`` [s] and rtol = atol = ``tol``. It raises
+        ``SimulationError`` when the FMU reports an error (e.g. a solver
+        failure), returns the wrong number of samples or a non-finite state.
+
+    Raises
+    ------
+    ValueError
+        ``solver`` is not 0 or 1.
     """
     if solver not in FMU_SOLVERS.values():
         raise ValueError(f"solver must be one of {sorted(FMU_SOLVERS.values())}, got {solver!r}")

@@ -81,13 +81,42 @@ class ModelLevel:
     run: Callable[[Any], np.ndarray] = field(repr=False)
 
     def simulate(self, scene: Scene) -> Trajectory:
-        """Trajectory of the scene with this level, in the scene model's signals."""
+        """Trajectory of the scene with this level, in the scene model's signals.
+
+        Parameters
+        ----------
+        scene : Scene
+            The scene (model, start, horizon, output step, constant torque).
+
+        Returns
+        -------
+        Trajectory
+            States in the scene model's state order on the scene's output
+            grid, with the constant torques and the scene model's outputs.
+        """
         return _as_trajectory(scene, self.run(scene), self.name)
 
 
 @dataclass(frozen=True)
 class LevelResult:
-    """Error and cost of one level on a scene."""
+    """Error and cost of one level on a scene.
+
+    Attributes
+    ----------
+    name : str
+        Level name (one of ``LEVELS``).
+    error : float
+        Max abs error over the grid and the scene outputs, in their units
+        (inf when the level failed or went non-finite; 0 for the reference).
+    errors : dict of str to float
+        The same per output.
+    wall_time : float
+        Median wall time [s] (nan when the level failed).
+    within : bool
+        ``error`` is within the tolerance.
+    note : str
+        ``"reference"``, the failure message, or empty.
+    """
 
     name: str
     error: float  # max abs error over the grid and the scene outputs (their units)
@@ -99,7 +128,23 @@ class LevelResult:
 
 @dataclass(frozen=True)
 class HierarchyReport:
-    """Outcome of :func:`check_scene`."""
+    """Outcome of :func:`check_scene`.
+
+    Attributes
+    ----------
+    scene : str
+        Scene name.
+    outputs : tuple of str
+        Signals compared (state or output names).
+    tolerance : float
+        Accepted max abs error, in the outputs' units.
+    reference : str
+        The reference level with its method and rtol.
+    levels : tuple of LevelResult
+        One per level, cheapest model first, the reference last.
+    chosen : str
+        Name of the chosen level.
+    """
 
     scene: str
     outputs: tuple[str, ...]
@@ -109,6 +154,15 @@ class HierarchyReport:
     chosen: str
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly form of the report.
+
+        Returns
+        -------
+        dict
+            ``scene``, ``outputs``, ``tolerance``, ``reference``, ``chosen`` and
+            ``levels``: a list of dicts with ``name``, ``error``, ``errors``,
+            ``wall_time_s``, ``within_tolerance`` and ``note``.
+        """
         return {
             "scene": self.scene,
             "outputs": list(self.outputs),
@@ -129,7 +183,14 @@ class HierarchyReport:
         }
 
     def table(self) -> str:
-        """Plain-text table of the levels."""
+        """Plain-text table of the levels.
+
+        Returns
+        -------
+        str
+            A header, one line per level (max error, wall time [s], within
+            tolerance, note) and the chosen level.
+        """
         lines = [
             f"scene {self.scene}: outputs {', '.join(self.outputs)}; tolerance {self.tolerance:g}; reference {self.reference}",
             f"{'model':<20} {'max error':>11} {'wall time [s]':>14}  within",
@@ -226,7 +287,19 @@ def _run_full(scene: Scene) -> np.ndarray:
 
 
 def levels_for(model: Model) -> tuple[ModelLevel, ...]:
-    """The hierarchy for a scene model, cheapest first; the last level is the reference."""
+    """The hierarchy for a scene model, cheapest first; the last level is the reference.
+
+    Parameters
+    ----------
+    model : Model
+        The scene's model.
+
+    Returns
+    -------
+    tuple of ModelLevel
+        Rigid model: ``linearized``, ``rigid`` (the reference). Elastic model:
+        ``linearized``, ``rigid``, ``rigid+quasi-static``, ``elastic``.
+    """
     if model.kind == "rigid":
         return (ModelLevel("linearized", model, _run_linearized), ModelLevel("rigid", model, _run_full))
     rm = rigid_counterpart(model)
@@ -350,12 +423,25 @@ def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = Non
 def choose_model(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
     """The cheapest model level within the scene's tolerance, and the report.
 
+    Parameters
+    ----------
+    scene : Scene
+        A loaded scene with an ``[outputs] tolerance``.
+    repeats : int
+        Timed runs per level (see :func:`check_scene`).
+
     Returns
     -------
     level : ModelLevel
         ``level.simulate(scene)`` gives the scene's trajectory with that level
         (in the scene model's signal names); ``level.model`` is the Model it integrates.
     report : HierarchyReport
+        The check behind the choice.
+
+    Raises
+    ------
+    ValueError
+        As :func:`check_scene`: no positive tolerance, or ``repeats`` < 1.
     """
     report = check_scene(scene, repeats=repeats)
     level = next(lv for lv in levels_for(scene.model) if lv.name == report.chosen)
@@ -377,10 +463,26 @@ def stiffness_amplitude_study(
     Scenes: m = 1 kg, L = 1 m, undamped, springs at their static length, outputs
     theta1, theta2, x2, y2 over ``t_final`` [s] with CVODES BDF at 1e-10.
 
+    Parameters
+    ----------
+    ks : tuple of float
+        Spring stiffnesses k1 = k2 [N/m].
+    amplitudes : tuple of float
+        Release angles [rad].
+    t_final : float
+        Horizon of each scene [s].
+    tolerance : float
+        Accepted max abs error of the outputs ([rad] and [m]).
+    repeats : int
+        Timed runs per level.
+    progress : callable(int, int, str), optional
+        Called as ``progress(done, total, message)`` after each scene.
+
     Returns
     -------
     list of dict
-        One per (k, amplitude): chosen level, and error and wall time per level.
+        One per (k, amplitude): ``k``, ``amplitude``, ``chosen``, and
+        ``error[<level>]`` and ``time[<level>]`` [s] per level.
     """
     rows = []
     total, done = len(ks) * len(amplitudes), 0

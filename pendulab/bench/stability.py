@@ -63,7 +63,18 @@ Progress = Callable[[int, int, str], None]
 
 
 def omega_max(model: Model) -> float:
-    """Fastest linearized mode [rad/s]: max |Im(eig(A))| of ``jac_rhs`` at the static equilibrium."""
+    """Fastest linearized mode: max |Im(eig(A))| of ``jac_rhs`` at the static equilibrium.
+
+    Parameters
+    ----------
+    model : Model
+        Linearized at ``model.rest_state()`` with zero torque.
+
+    Returns
+    -------
+    float
+        Largest oscillation frequency [rad/s].
+    """
     x = model.rest_state()
     A = np.asarray(model.functions["jac_rhs"](x, np.zeros(model.nu), model.p)[0])
     return float(np.max(np.abs(np.linalg.eigvals(A).imag)))
@@ -79,13 +90,32 @@ def _blows_up(model: Model, method: str, h: float, n_steps: int) -> bool:
 
 
 def rk4_blowup_step(k: float, *, n_steps: int = 2000, rel_tol: float = 2e-3) -> tuple[float, float]:
-    """Measured and predicted RK4 blow-up step [s] for springs of stiffness k [N/m].
+    """Measured and predicted RK4 blow-up step for springs of stiffness k.
+
+    Bisects h in [0.7, 1.5] times the prediction; a step blows up when the
+    deviation from rest of a tiny perturbation grows 1000-fold (or goes
+    non-finite) in ``n_steps`` steps.
+
+    Parameters
+    ----------
+    k : float
+        Stiffness of both springs, k1 = k2 [N/m] (other parameters default).
+    n_steps : int
+        RK4 steps per trial.
+    rel_tol : float
+        Bisection stops when the bracket is narrower than ``rel_tol`` times
+        the predicted step.
 
     Returns
     -------
     h_measured, h_predicted : float
         Bisection bracket midpoint of the smallest step that blows up, and
-        ``2 sqrt(2) / omega_max``.
+        ``2 sqrt(2) / omega_max``, both [s].
+
+    Raises
+    ------
+    RuntimeError
+        The blow-up step is not inside the initial bracket.
     """
     model = elastic(k1=k, k2=k)
     h_pred = IMAG_AXIS_LIMIT["rk4"] / omega_max(model)
@@ -105,9 +135,29 @@ def _start(model: Model, start: str) -> np.ndarray:
 
 
 def classify(model: Model, method: str, n_steps: int, ref_positions: np.ndarray) -> tuple[int, float]:
-    """Class (UNSTABLE / INACCURATE / ACCURATE) and position error [m] of one map cell.
+    """Class and position error of one map cell.
 
-    ``ref_positions`` has shape (11, 4): bob positions at t = 0, 0.1, ..., 1 s.
+    The run starts at theta1 = theta2 = 0.3 rad with the springs at rest
+    length and lasts 1 s. Unstable: a non-finite state, |x| > 1e6, or the
+    energy above the static equilibrium grew tenfold.
+
+    Parameters
+    ----------
+    model : Model
+        Elastic pendulum (the stiffness of the cell).
+    method : str
+        Fixed-step method (a key of ``FIXED_METHODS``).
+    n_steps : int
+        Steps over the 1 s horizon (h = 1 / n_steps [s]); a multiple of 10.
+    ref_positions : ndarray, shape (11, 4)
+        Reference bob positions (x1, y1, x2, y2) [m] at t = 0, 0.1, ..., 1 s.
+
+    Returns
+    -------
+    cls : int
+        ``UNSTABLE``, ``INACCURATE`` or ``ACCURATE``.
+    error : float
+        Max abs bob-position error [m] (inf when unstable).
     """
     x0 = _start(model, "rest-length")
     X = integrate_fixed(model, method, x0, _HORIZON / n_steps, n_steps, record_every=n_steps // 10)
@@ -123,7 +173,27 @@ def classify(model: Model, method: str, n_steps: int, ref_positions: np.ndarray)
 
 @dataclass
 class StabilityResult:
-    """Everything ``pendulab bench stability`` measured."""
+    """Everything ``pendulab bench stability`` measured.
+
+    Attributes
+    ----------
+    ks : ndarray, shape (nk,)
+        Spring stiffnesses [N/m] of the map.
+    n_steps : ndarray, shape (nh,)
+        Steps over the 1 s horizon; h = 1 / n_steps [s] (see ``hs``).
+    omega_max : ndarray, shape (nk,)
+        Fastest linearized mode per k [rad/s].
+    maps : dict of str to ndarray
+        Method -> classes, shape (nk, nh) (``UNSTABLE``, ``INACCURATE``, ``ACCURATE``).
+    errors : dict of str to ndarray
+        Method -> bob-position errors [m], shape (nk, nh).
+    blowup : list of (float, float, float)
+        (k [N/m], measured, predicted RK4 blow-up step [s]).
+    step_counts : list of dict
+        ``k``, ``start``, ``method`` and accepted ``steps`` over 1 s.
+    energy : dict of str to (ndarray, ndarray)
+        Label -> (t [s], E(t) - E(0) [J]) of the energy study.
+    """
 
     ks: np.ndarray
     n_steps: np.ndarray  # steps over the 1 s horizon; h = 1 / n_steps
@@ -139,6 +209,15 @@ class StabilityResult:
         return _HORIZON / self.n_steps
 
     def summary(self) -> dict[str, Any]:
+        """JSON-friendly summary of the blow-up, step-count and energy studies.
+
+        Returns
+        -------
+        dict
+            ``rk4_blowup`` (k, measured and predicted step [s], relative
+            difference), ``step_counts``, and ``energy_change_J``: the final
+            energy change [J] per run.
+        """
         return {
             "rk4_blowup": [
                 {"k": k, "h_measured": hm, "h_predicted": hp, "relative_difference": hm / hp - 1} for k, hm, hp in self.blowup
@@ -166,7 +245,20 @@ def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
 
 
 def run_stability(*, quick: bool = False, progress: Progress | None = None) -> StabilityResult:
-    """Run the four stability studies (3-9 min on 2 cores; ``quick``: a few seconds)."""
+    """Run the four stability studies (3-9 min on 2 cores; ``quick``: a few seconds).
+
+    Parameters
+    ----------
+    quick : bool
+        Fewer stiffnesses, steps and methods, and a 2 s energy run.
+    progress : callable(int, int, str), optional
+        Called as ``progress(done, total, label)`` after each unit of work.
+
+    Returns
+    -------
+    StabilityResult
+        The map, the RK4 blow-up steps, the step counts and the energy study.
+    """
     ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
     n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
     methods = ["forward-euler", "rk4", "implicit-midpoint"] if quick else list(FIXED_METHODS)
@@ -231,7 +323,22 @@ def _energy_study(quick: bool) -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
-    """Write CSVs and charts of a stability run to ``out``; return the paths."""
+    """Write CSVs and charts of a stability run.
+
+    Parameters
+    ----------
+    res : StabilityResult
+        As returned by :func:`run_stability`.
+    out : str or Path
+        Output directory (created).
+
+    Returns
+    -------
+    list of Path
+        ``stability_map.csv``, ``rk4_limit.csv``, ``step_counts.csv`` and the
+        charts ``stability_map.png``, ``stability_steps.png``,
+        ``stability_energy.png``.
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "stability_map.csv", out / "rk4_limit.csv", out / "step_counts.csv"]

@@ -69,7 +69,45 @@ BENCH_METHODS: dict[str, BenchMethod] = {
 
 @dataclass
 class Row:
-    """One (case, method, setting) measurement."""
+    """One (case, method, setting) measurement.
+
+    Errors are max-abs state differences from the stored reference (mixed
+    state units: rad, m, rad/s, m/s); nan unless ``status`` is ``"ok"``.
+
+    Attributes
+    ----------
+    case : str
+        Case name.
+    method : str
+        Method name (a key of ``BENCH_METHODS``).
+    sweep : str
+        ``"tol"`` (rtol = atol = setting) or ``"step"`` (fixed step [s]).
+    setting : float
+        The tolerance or step of this point.
+    status : str
+        ``"ok"``, ``"failed"``, ``"unstable"`` (non-finite or blown-up state)
+        or ``"skipped"`` (a looser setting was already too slow).
+    final_error : float
+        Max-abs state error at t_final.
+    grid_error : float
+        Max-abs state error over the output grid.
+    energy_drift : float
+        Max over the grid of |E(t) - E(0)| [J].
+    wall_median, wall_min : float
+        Median and smallest wall time of the timed runs [s].
+    cpu_median : float
+        Median CPU time (``time.process_time``) of the timed runs [s].
+    first_run : float
+        Wall time of the untimed warm-up run [s].
+    repeats : int
+        Number of timed runs.
+    n_steps, n_rhs : float
+        Steps and right-hand-side evaluations reported by the method (nan if not).
+    reference_accuracy : float
+        Accuracy of the reference; smaller errors are not resolved.
+    message : str
+        Why a point failed or was skipped.
+    """
 
     case: str
     method: str
@@ -163,6 +201,14 @@ def run_work_precision(
     Returns
     -------
     list of Row
+        One per (case, method, setting), in case, method, setting order.
+
+    Raises
+    ------
+    ValueError
+        ``repeats`` < 1, or an unknown method or case name.
+    ReferenceMissingError
+        A case has no stored (or only a stale) reference.
     """
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
@@ -197,7 +243,21 @@ _FIELDS = [f for f in Row.__dataclass_fields__]
 
 
 def write_csv(rows: Iterable[Row], path: str | Path) -> Path:
-    """Write rows to CSV (one line per case, method and setting)."""
+    """Write rows to CSV (one line per case, method and setting).
+
+    Parameters
+    ----------
+    rows : iterable of Row
+        The measurements.
+    path : str or Path
+        CSV file (parent directories are created); columns are the fields of
+        :class:`Row`, floats with 6 significant digits.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
@@ -209,7 +269,18 @@ def write_csv(rows: Iterable[Row], path: str | Path) -> Path:
 
 
 def read_csv(path: str | Path) -> list[Row]:
-    """Read rows written by :func:`write_csv`."""
+    """Read rows written by :func:`write_csv`.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV file with the fields of :class:`Row` as columns.
+
+    Returns
+    -------
+    list of Row
+        In file order.
+    """
     out = []
     with Path(path).open() as fh:
         for d in csv.DictReader(fh):
@@ -224,8 +295,19 @@ def read_csv(path: str | Path) -> list[Row]:
 def merge_rows(old: Iterable[Row], new: Iterable[Row]) -> list[Row]:
     """Rows of ``old`` whose (case, method) was not re-measured, plus ``new``.
 
-    Sorted by case order of ``CASES`` and method order of ``BENCH_METHODS`` (unknown names last), so a partial re-run
-    merged into a complete CSV gives the same layout as a full run.
+    Parameters
+    ----------
+    old : iterable of Row
+        Earlier results (e.g. from :func:`read_csv`).
+    new : iterable of Row
+        Re-measured results; they replace every old row of the same (case, method).
+
+    Returns
+    -------
+    list of Row
+        Sorted by case order of ``CASES`` and method order of ``BENCH_METHODS``
+        (unknown names last), so a partial re-run merged into a complete CSV
+        gives the same layout as a full run.
     """
     from .cases import CASES
 
@@ -256,7 +338,34 @@ def _family(method: str) -> str:
 def plot_work_precision(
     rows: Sequence[Row], path: str | Path, metric: str = "grid_error", title: str = "", time_metric: str = "wall_median"
 ) -> Path:
-    """Median wall (or CPU) time against achieved error (log-log), one panel per case."""
+    """Median wall (or CPU) time against achieved error (log-log), one panel per case.
+
+    Only rows with status ``"ok"`` are drawn; a dotted line marks the
+    reference accuracy (error metrics only).
+
+    Parameters
+    ----------
+    rows : sequence of Row
+        The measurements.
+    path : str or Path
+        Image file to write (parent directories are created).
+    metric : {"grid_error", "final_error", "energy_drift"}
+        Error on the horizontal axis.
+    title : str
+        Figure title; default describes the line styles.
+    time_metric : {"wall_median", "cpu_median"}
+        Time on the vertical axis [s].
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``metric`` or ``time_metric``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -313,8 +422,22 @@ def plot_work_precision(
 def fastest_table(rows: Sequence[Row], case: str, levels: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) -> list[dict]:
     """For each error level, the method reaching it (grid error) in the least median time.
 
-    Returns a list of dicts: level, method, setting, grid_error, wall_median, and
-    the runner-up with its time ratio, or method None when nobody reaches it.
+    Parameters
+    ----------
+    rows : sequence of Row
+        The measurements (only status ``"ok"`` counts).
+    case : str
+        Case to rank.
+    levels : sequence of float
+        Grid-error levels to reach.
+
+    Returns
+    -------
+    list of dict
+        One per level: ``level``, ``method``, ``setting``, ``sweep``,
+        ``grid_error``, ``wall_median`` [s], and ``runner_up`` with its time
+        ``ratio`` when there is one; ``method`` is None when nobody reaches
+        the level.
     """
     ok = [r for r in rows if r.case == case and r.status == "ok"]
     table = []

@@ -73,6 +73,16 @@ def simulate_balance(
     Returns
     -------
     Trajectory
+        Closed-loop states on the uniform grid of step ``dt``; the torque is
+        held over each step.
+
+    Raises
+    ------
+    ValueError
+        ``design`` is for another model kind, or ``dt`` is not positive or
+        differs from a discrete design's sample time.
+    SimulationError
+        The integrator failed (see :func:`pendulab.simulate`).
     """
     if design.kind != model.kind:
         raise ValueError(f"design is for the {design.kind} model, got a {model.kind} model")
@@ -86,6 +96,20 @@ def balanced(design: LQRDesign, x: Any, tol: float = 1e-2) -> bool:
 
     Spring coordinates are not judged: at vertical equilibria the torques cannot
     reach them to first order, and undamped springs keep ringing.
+
+    Parameters
+    ----------
+    design : LQRDesign
+        Provides the equilibrium ``x_eq`` and the state names.
+    x : array_like, shape (nx,)
+        State to judge; angles are compared modulo 2 pi.
+    tol : float
+        Threshold on each angle error [rad] and angular velocity error [rad/s].
+
+    Returns
+    -------
+    bool
+        True when all errors are finite and every theta/omega error is below ``tol``.
     """
     dx = wrap_state_error(np.asarray(x, dtype=float) - design.x_eq, design.state_names)
     judged = [i for i, n in enumerate(design.state_names) if n.startswith(("theta", "omega"))]
@@ -156,6 +180,13 @@ def region_of_attraction(
     Returns
     -------
     list of ROAResult
+        One per direction, in the order of ``directions``.
+
+    Raises
+    ------
+    ValueError
+        Non-positive ``amplitude_max`` or ``tol``, or a direction that is not
+        a finite non-zero 2-vector.
     """
     if not (amplitude_max > 0 and tol > 0):
         raise ValueError(f"amplitude_max and tol must be positive, got {amplitude_max!r} and {tol!r}")
@@ -194,7 +225,22 @@ def region_of_attraction(
 
 
 def format_roa(rows: Sequence[ROAResult], title: str = "") -> str:
-    """Plain-text table of region-of-attraction estimates."""
+    """Plain-text table of region-of-attraction estimates.
+
+    Parameters
+    ----------
+    rows : sequence of ROAResult
+        As returned by :func:`region_of_attraction`.
+    title : str
+        Optional first line.
+
+    Returns
+    -------
+    str
+        One line per direction: largest converging amplitude [rad] and [deg]
+        (prefixed ``>=`` when ``amplitude_max`` converged) and the number of
+        simulations.
+    """
     lines = [title] if title else []
     lines.append(f"{'direction':<11} {'largest converging [rad]':>25} {'[deg]':>7} {'sims':>5}")
     for r in rows:

@@ -72,9 +72,24 @@ def controllable_subspace(A: np.ndarray, B: np.ndarray, rtol: float = 1e-9) -> t
 
 
 def finite_gramian(A: np.ndarray, B: np.ndarray, horizon: float) -> np.ndarray:
-    """Finite-horizon controllability Gramian ``int_0^T e^(At) B B^T e^(A^T t) dt``, shape (n, n).
+    """Finite-horizon controllability Gramian ``int_0^T e^(At) B B^T e^(A^T t) dt``.
 
-    For observability pass ``A.T`` and ``C.T``.
+    Computed with Van Loan's block exponential, so ``A`` may be unstable. For
+    the observability Gramian pass ``A.T`` and ``C.T``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+        State matrix [1/s].
+    B : ndarray, shape (n, m)
+        Input matrix.
+    horizon : float
+        Horizon T [s].
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        The symmetric Gramian W(T).
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
@@ -128,7 +143,14 @@ class ReportRow:
     outputs: tuple[str, ...]
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-friendly row."""
+        """JSON-friendly row.
+
+        Returns
+        -------
+        dict
+            One entry per field; tuples become lists and
+            ``uncontrollable_eigenvalues`` a list of ``[real, imag]`` pairs [1/s].
+        """
         d = {k: getattr(self, k) for k in self.__dataclass_fields__}
         d["uncontrollable_eigenvalues"] = [[float(e.real), float(e.imag)] for e in self.uncontrollable_eigenvalues]
         d["ctrb_weakest"] = list(self.ctrb_weakest)
@@ -179,6 +201,12 @@ def controllability_report(
     Returns
     -------
     list of ReportRow
+        One row per (equilibrium, actuation), equilibria in the outer loop.
+
+    Raises
+    ------
+    ValueError
+        ``horizon`` is not a finite positive number.
     """
     if not (isinstance(horizon, (int, float)) and np.isfinite(horizon) and horizon > 0):
         raise ValueError(f"horizon must be a positive number of seconds, got {horizon!r}")
@@ -211,7 +239,19 @@ def controllability_report(
 
 
 def format_report(rows: Sequence[ReportRow]) -> str:
-    """Plain-text table of a controllability report."""
+    """Plain-text table of a controllability report.
+
+    Parameters
+    ----------
+    rows : sequence of ReportRow
+        As returned by :func:`controllability_report`.
+
+    Returns
+    -------
+    str
+        A header, a rule and one line per row (ranks as ``rank/n``, smallest
+        Gramian eigenvalues and the weakest states), newline-separated.
+    """
     head = (
         f"{'equilibrium':<11} {'actuation':<9} {'ctrb':>5} {'min eig Wc':>10}  {'weakest (ctrb)':<22} "
         f"{'obsv':>5} {'min eig Wo':>10}  weakest (obsv)"

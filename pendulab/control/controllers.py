@@ -58,7 +58,15 @@ def make_controller(
     Returns
     -------
     controller : SampledController
+        The sampled-data controller.
     x0 : ndarray, shape (nx,)
+        Start state for ``model`` (see ``name``).
+
+    Raises
+    ------
+    ValueError
+        Unknown ``name``, non-positive ``sample_time`` (or ``t_ref``), or
+        ``swingup`` with an actuation other than ``"full"``.
     """
     h = positive_float("sample_time", sample_time)
     if name == "lqr":

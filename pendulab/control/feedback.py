@@ -60,6 +60,12 @@ class SampledController(Protocol):
         Sample period [s]; the output is held constant in between.
     input_names : tuple of str
         The plant inputs driven, a subset of ("tau1", "tau2"), in output order.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Not used (a ``Protocol`` cannot be instantiated; any object with these
+        attributes and methods satisfies it).
     """
 
     sample_time: float
@@ -76,11 +82,21 @@ class SampledController(Protocol):
 
 
 def upright_state(model: Model) -> np.ndarray:
-    """The up-up equilibrium (theta1 = theta2 = pi, at rest), shape (nx,).
+    """The up-up equilibrium (theta1 = theta2 = pi, at rest).
 
     A thin wrapper of ``pendulab.analysis.equilibria.equilibrium(model, "up-up").x``:
     for the elastic model the springs carry the weight above them, so they are
     compressed (r1 = L1 - (m1 + m2) g / k1, r2 = L2 - m2 g / k2).
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum.
+
+    Returns
+    -------
+    ndarray, shape (nx,)
+        A fresh copy of the equilibrium state (angles [rad], lengths [m], zero rates).
     """
     return equilibrium(model, "up-up").x.copy()
 
@@ -186,7 +202,18 @@ class LinearStateFeedback:
         return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
 
     def cost(self, x: np.ndarray) -> float:
-        """Quadratic cost-to-go ``e' P e`` of the deviation from ``x_eq``."""
+        """Quadratic cost-to-go ``e' P e`` of the deviation from ``x_eq``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (nx,)
+            Plant state; ``e = x - x_eq`` with angles wrapped into (-pi, pi].
+
+        Returns
+        -------
+        float
+            ``e' P e``, or ``e' e`` when ``P`` is None.
+        """
         e = wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.model.state_names)
         return float(e @ self.P @ e) if self.P is not None else float(e @ e)
 
@@ -227,6 +254,15 @@ def balance_controller(
     Returns
     -------
     LinearStateFeedback
+        Zero feed-forward torque; the gain acts on the angles and link rates only.
+
+    Raises
+    ------
+    ValueError
+        Non-positive ``sample_time``, unknown ``design`` or ``actuation``, or a
+        ``Q`` of the wrong shape.
+    UncontrollableError
+        The actuation cannot balance the upright equilibrium.
     """
     h = positive_float("sample_time", sample_time)
     if design not in ("continuous", "discrete"):
@@ -242,6 +278,22 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
     Below 1 the sampled linear closed loop is asymptotically stable. For the
     elastic model only the angular block is used: its spring modes are
     decoupled (and uncontrollable) at the upright equilibrium.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum, linearized at up-up.
+    K : array_like, shape (m, nx)
+        State-feedback gain [N.m per state unit]; only its angular columns are used.
+    h : float
+        Sample (hold) period [s], > 0.
+    input_names : sequence of str
+        The m torques the rows of ``K`` drive, from ("tau1", "tau2").
+
+    Returns
+    -------
+    float
+        Largest eigenvalue modulus of the sampled angular closed loop.
     """
     cols = [INPUT_NAMES.index(n) for n in input_names]
     lin = linearize(model, equilibrium(model, "up-up"))
@@ -258,7 +310,33 @@ class EnergySwingUp:
     (power ``tau1 omega1`` has the sign of the energy deficit) and ``tau2 =
     -kp (theta2 - theta1) - kd (omega2 - omega1)`` keeps the pair close to a
     single pendulum. When the LQR cost-to-go falls below ``catch_cost`` the
-    controller switches to ``balance`` for good (until :meth:`reset`).
+    controller switches to ``balance`` for good (until :meth:`reset`). All
+    torques are clipped to ``[-u_max, u_max]``. Build it with :func:`energy_swingup`.
+
+    Attributes
+    ----------
+    model : Model
+        Plant (energy, state layout).
+    balance : LinearStateFeedback
+        Upright LQR that takes over at the catch.
+    sample_time : float
+        Sample period [s].
+    k_energy : float
+        Pumping gain [N.m / (J rad/s)].
+    kp : float
+        Alignment stiffness on ``theta2 - theta1`` [N.m/rad].
+    kd : float
+        Alignment damping on ``omega2 - omega1`` [N.m s/rad].
+    u_max : float
+        Symmetric torque limit [N.m].
+    catch_cost : float
+        Switch to ``balance`` once ``balance.cost(x)`` is below this.
+    input_names : tuple of str
+        Driven torques, ("tau1", "tau2").
+    e_up : float
+        Energy of the upright equilibrium [J] (set at construction).
+    caught_at : float or None
+        Time of the switch to ``balance`` [s]; None while pumping.
     """
 
     model: Model
@@ -316,6 +394,12 @@ def energy_swingup(
         Torque limit [N.m].
     catch_cost : float
         Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this.
+
+    Returns
+    -------
+    EnergySwingUp
+        Pumping controller whose ``balance`` is the continuous-design upright
+        LQR (:func:`balance_controller`) saturated at ``u_max``.
     """
     h = positive_float("sample_time", sample_time)
     balance = balance_controller(model, h, u_max=u_max)
@@ -326,7 +410,20 @@ def energy_swingup(
 
 
 def full_input(controller: SampledController, u: np.ndarray) -> np.ndarray:
-    """Scatter a controller output into (tau1, tau2), zeros elsewhere, shape (2,)."""
+    """Scatter a controller output into (tau1, tau2), zeros elsewhere.
+
+    Parameters
+    ----------
+    controller : SampledController
+        Gives the names of the driven inputs.
+    u : array_like, shape (len(controller.input_names),)
+        The controller's torques [N.m].
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        (tau1, tau2) [N.m], zero on the undriven input.
+    """
     full = np.zeros(len(INPUT_NAMES))
     for name, value in zip(controller.input_names, np.atleast_1d(u), strict=True):
         full[INPUT_NAMES.index(name)] = value
@@ -338,6 +435,19 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
 
     Run ``simulate`` with ``dt = controller.sample_time`` so the output grid is
     the sample grid: simulate holds each value over its output step.
+
+    Parameters
+    ----------
+    controller : SampledController
+        Reset once, now.
+    model : Model
+        The plant (not used by the wrapper itself).
+
+    Returns
+    -------
+    callable
+        ``feedback(t, x) -> ndarray, shape (2,)``: the controller output at
+        time ``t`` [s] and state ``x``, scattered by :func:`full_input` [N.m].
     """
     controller.reset()
 

@@ -88,14 +88,44 @@ class LQRDesign:
     P: np.ndarray | None = None
 
     def torque(self, x: Any) -> np.ndarray:
-        """Full torque vector (tau1, tau2) [N.m] commanded at state ``x`` (angles compared modulo 2 pi)."""
+        """Full torque vector commanded at state ``x`` (angles compared modulo 2 pi).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            State in ``state_names`` order (angles [rad], lengths [m], rates
+            [rad/s], [m/s]).
+
+        Returns
+        -------
+        ndarray, shape (2,)
+            ``u_eq - K (x - x_eq)`` on the driven inputs, ``u_eq`` on the
+            others: (tau1, tau2) [N.m], unsaturated.
+        """
         dx = wrap_state_error(np.asarray(x, dtype=float) - self.x_eq, self.state_names)
         u = self.u_eq.copy()
         u[list(self.input_indices)] += -self.K @ dx
         return u
 
     def controller(self, u_max: float | None = None) -> Callable[[float, np.ndarray], np.ndarray]:
-        """Feedback ``u(t, x) -> (tau1, tau2)`` for :func:`pendulab.simulate`, saturated at ``|tau| <= u_max`` [N.m]."""
+        """Feedback ``u(t, x) -> (tau1, tau2)`` for :func:`pendulab.simulate`.
+
+        Parameters
+        ----------
+        u_max : float, optional
+            Saturation ``|tau| <= u_max`` [N.m] on each torque; None: no limit.
+
+        Returns
+        -------
+        callable
+            ``feedback(t, x) -> ndarray, shape (2,)``: :meth:`torque` clipped
+            to ``[-u_max, u_max]`` [N.m]; ``t`` [s] is ignored.
+
+        Raises
+        ------
+        ValueError
+            ``u_max`` is not None and not a finite positive number.
+        """
         if u_max is not None and not (np.isfinite(u_max) and u_max > 0):
             raise ValueError(f"u_max must be a positive torque in N.m or None, got {u_max!r}")
 
@@ -109,7 +139,18 @@ class LQRDesign:
 def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray:
     """Wrap the angle entries (names starting with ``theta``) of a state difference into (-pi, pi].
 
-    ``dx`` has shape (..., nx); the result has the same shape.
+    Parameters
+    ----------
+    dx : array_like, shape (..., nx)
+        State differences.
+    state_names : tuple of str
+        Names of the nx state entries; those starting with ``theta`` are wrapped.
+
+    Returns
+    -------
+    ndarray, shape (..., nx)
+        A copy of ``dx`` with the angle differences [rad] in (-pi, pi]; other
+        entries unchanged.
     """
     dx = np.array(dx, dtype=float)
     for i, n in enumerate(state_names):
@@ -119,7 +160,30 @@ def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray
 
 
 def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
-    """A validated symmetric (n, n) weight from ``W`` (None: identity; 1-D: diagonal); positive (semi-)definite."""
+    """A validated symmetric (n, n) weight matrix.
+
+    Parameters
+    ----------
+    W : None or array_like, shape (n, n) or (n,)
+        The weight; None gives the identity, a length-n vector a diagonal.
+    n : int
+        Required size.
+    name : str
+        Name used in error messages (e.g. ``"Q"``).
+    definite : bool
+        Require positive definite (True) rather than positive semi-definite.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        The weight as a float matrix.
+
+    Raises
+    ------
+    ValueError
+        Wrong shape or non-finite entries, not symmetric, or not positive
+        (semi-)definite.
+    """
     if W is None:
         return np.eye(n)
     W = np.atleast_2d(np.asarray(W, dtype=float))
@@ -139,7 +203,21 @@ def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
 def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold discretization: ``Ad = e^{A dt}``, ``Bd = int_0^dt e^{As} ds B``.
 
-    Shapes (n, n), (n, m) in and out; ``dt`` [s].
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+        Continuous state matrix [1/s].
+    B : ndarray, shape (n, m)
+        Continuous input matrix.
+    dt : float
+        Hold (sample) time [s].
+
+    Returns
+    -------
+    Ad : ndarray, shape (n, n)
+        Discrete state matrix.
+    Bd : ndarray, shape (n, m)
+        Discrete input matrix for an input held over ``dt``.
     """
     n, m = B.shape
     M = np.zeros((n + m, n + m))
@@ -150,7 +228,18 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
 
 
 def actuation_name(actuation: str | Sequence[str]) -> str:
-    """Actuation name from a name (``"full"``, ``"pendubot"``, ``"acrobot"``) or the driven input names.
+    """Actuation name from a name or from the driven input names.
+
+    Parameters
+    ----------
+    actuation : str or sequence of str
+        ``"full"``, ``"pendubot"`` or ``"acrobot"``, or the driven inputs,
+        e.g. ``("tau1",)`` (pendubot) or ``("tau1", "tau2")`` (full).
+
+    Returns
+    -------
+    str
+        ``"full"``, ``"pendubot"`` (tau1 only) or ``"acrobot"`` (tau2 only).
 
     Raises
     ------

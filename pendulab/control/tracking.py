@@ -213,8 +213,32 @@ def swingup_reference(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A swing-up reference from the native energy-pumping loop: ``(t, x_ref, u_ref)``.
 
-    Shapes (N,), (N, nx), (N, 2). Stands in for an optimized swing-up when none
-    is at hand; any reference on the sample grid can be tracked the same way.
+    Simulates :func:`~pendulab.control.feedback.energy_swingup` on ``model``
+    (tolerances 1e-10) with the output grid equal to the sample grid. Stands in
+    for an optimized swing-up when none is at hand; any reference on the sample
+    grid can be tracked the same way.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum.
+    sample_time : float
+        Controller sample time and output step [s].
+    t_final : float
+        Horizon [s].
+    x0 : ndarray, shape (nx,), optional
+        Start state; default hanging with theta1 = 0.1 rad.
+    u_max : float
+        Torque limit [N.m] of the swing-up.
+
+    Returns
+    -------
+    t : ndarray, shape (N,)
+        Sample times [s].
+    x_ref : ndarray, shape (N, nx)
+        Closed-loop states.
+    u_ref : ndarray, shape (N, 2)
+        Torques (tau1, tau2) [N.m] held from each sample.
     """
     from ..integrate import simulate
 
@@ -251,6 +275,14 @@ def resample_reference(
     Returns
     -------
     t_s, x_s, u_s : ndarrays, shapes (M,), (M, nx), (M, 2)
+        Sample times [s], states and held torques [N.m].
+
+    Raises
+    ------
+    ValueError
+        Non-positive ``sample_time``; times not increasing from 0 or fewer
+        than 2; row counts of ``x`` or ``u`` not matching ``t``; or a reference
+        shorter than one sample.
     """
     h = positive_float("sample_time", sample_time)
     t = np.asarray(t, dtype=float)
@@ -282,6 +314,27 @@ def load_reference_csv(path: str, model: Model) -> tuple[np.ndarray, np.ndarray,
 
     Trajectory CSVs (``Trajectory.to_csv``, ``pendulab cosim``, ``pendulab simulate``) and the
     optimal trajectory of ``pendulab swingup`` (``optimal.csv``) have these columns.
+
+    Parameters
+    ----------
+    path : str
+        CSV file; other columns are ignored.
+    model : Model
+        Names the state columns to read (``model.state_names``).
+
+    Returns
+    -------
+    t : ndarray, shape (N,)
+        Times [s].
+    x : ndarray, shape (N, nx)
+        States in ``model.state_names`` order.
+    u : ndarray, shape (N, 2)
+        Torques (tau1, tau2) [N.m].
+
+    Raises
+    ------
+    ValueError
+        A required column is missing or there are fewer than 2 data rows.
     """
     import csv
 

@@ -269,6 +269,16 @@ def cosim_many(
     -------
     list of Trajectory
         One per FMU, on the same time grid with identical ``u``.
+
+    Raises
+    ------
+    ValueError
+        No FMU, ``feedback_from`` out of range, ``x0`` or ``params`` not one
+        entry per FMU, non-positive steps, or the errors of :func:`cosim`.
+    StepRejectedError
+        A step could not be completed even at the smallest retry step.
+    RuntimeError
+        An FMU reported an error.
     """
     h = positive_float("comm_step", comm_step, "[s]")
     n = _n_steps(positive_float("t_final", t_final, "[s]"), h)

@@ -73,7 +73,20 @@ class FmuInfo:
         return tuple(v.name for v in self.model_description.modelVariables if v.causality in ("parameter", "structuralParameter"))
 
     def model(self, params: Mapping[str, float] | None = None) -> Model:
-        """The native pendulab ``Model`` with the FMU's parameter start values, overridden by ``params``."""
+        """The native pendulab ``Model`` with the FMU's parameter start values, overridden by ``params``.
+
+        Parameters
+        ----------
+        params : mapping of str to float, optional
+            Parameter values by name (e.g. ``{"m1": 1.2}``); names that are not
+            model parameters of this kind are ignored.
+
+        Returns
+        -------
+        Model
+            A rigid or elastic model (``kind``); parameters without a start
+            value in the FMU keep the model defaults.
+        """
         names = _PARAMS[self.kind].names()
         values = {n: float(self.variables[n].start) for n in names if n in self.variables and self.variables[n].start is not None}
         values.update({k: float(v) for k, v in (params or {}).items() if k in names})
@@ -82,6 +95,17 @@ class FmuInfo:
 
 def inspect_fmu(fmu_path: str | Path) -> FmuInfo:
     """Read and check an FMU's model description: a pendulab plant with Co-Simulation.
+
+    Parameters
+    ----------
+    fmu_path : str or Path
+        The ``.fmu`` file.
+
+    Returns
+    -------
+    FmuInfo
+        Version, kind, state/input names and the Real outputs, with the
+        model description.
 
     Raises
     ------
@@ -247,17 +271,39 @@ class FmuPlant:
 
     # -- stepping ----------------------------------------------------------------
     def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """States (nx,) and outputs (ny,) at the current communication point."""
+        """States and outputs at the current communication point.
+
+        Returns
+        -------
+        x : ndarray, shape (nx,)
+            States in ``info.state_names`` order.
+        y : ndarray, shape (ny,)
+            Outputs in ``info.output_names`` order.
+        """
         values = np.array(self._get_real(self._read_vrs))
         nx = len(self.info.state_names)
         return values[:nx], values[nx:]
 
     def set_inputs(self, u: np.ndarray) -> None:
-        """Set (tau1, tau2) [N.m], held constant over the next step(s)."""
+        """Set the inputs, held constant over the next step(s).
+
+        Parameters
+        ----------
+        u : array_like, shape (2,)
+            Torques (tau1, tau2) [N.m].
+        """
         self._set_real(self._input_vrs, [float(v) for v in u])
 
     def do_step(self, h: float, *, allow_restore: bool = False) -> None:
-        """Advance by ``h`` [s] from ``self.time``.
+        """Advance by ``h`` from ``self.time``; on success ``self.time`` increases by ``h``.
+
+        Parameters
+        ----------
+        h : float
+            Communication step [s].
+        allow_restore : bool
+            Tell the FMU a state saved before the current point may be
+            restored (``noSetFMUStatePriorToCurrentPoint`` false).
 
         Raises
         ------
@@ -287,17 +333,42 @@ class FmuPlant:
         self.time += h
 
     def get_state(self) -> Any:
-        """Save the complete FMU state (needs canGetAndSetFMUstate)."""
+        """Save the complete FMU state (needs canGetAndSetFMUstate).
+
+        Returns
+        -------
+        object
+            Opaque FMU state handle; release it with :meth:`free_state`.
+
+        Raises
+        ------
+        ValueError
+            The FMU cannot get and set its state.
+        """
         self._require_state_access()
         return self._fmu.getFMUState() if self._fmi3 else self._fmu.getFMUstate()
 
     def set_state(self, state: Any, t: float) -> None:
-        """Restore a state saved at time ``t`` [s]."""
+        """Restore a state saved with :meth:`get_state`.
+
+        Parameters
+        ----------
+        state : object
+            The saved FMU state handle.
+        t : float
+            Time [s] at which it was saved; becomes ``self.time``.
+        """
         (self._fmu.setFMUState if self._fmi3 else self._fmu.setFMUstate)(state)
         self.time = t
 
     def free_state(self, state: Any) -> None:
-        """Release a state saved with :meth:`get_state`."""
+        """Release a state saved with :meth:`get_state`.
+
+        Parameters
+        ----------
+        state : object
+            The saved FMU state handle; not usable afterwards.
+        """
         (self._fmu.freeFMUState if self._fmi3 else self._fmu.freeFMUstate)(state)
 
     def _require_state_access(self) -> None:
@@ -305,7 +376,31 @@ class FmuPlant:
             raise ValueError(f"FMU {self.info.path.name!r} cannot get and set its state (canGetAndSetFMUstate is false)")
 
     def step_with_retry(self, h: float, check: StepCheck | None, max_halvings: int, stats: dict) -> None:
-        """Advance by ``h``; on rejection restore the saved state and cover ``h`` in two halves, recursively."""
+        """Advance by ``h``; on rejection restore the saved state and cover ``h`` in two halves, recursively.
+
+        A step is rejected when the FMU discards it, a state is not finite, or
+        ``check`` returns False.
+
+        Parameters
+        ----------
+        h : float
+            Communication step [s].
+        check : callable or None
+            ``check(t, x_before, x_after) -> bool``; False rejects the step.
+        max_halvings : int
+            How many more times a rejected step may be halved.
+        stats : dict
+            Updated in place: ``n_rejected`` counts rejected attempts.
+
+        Raises
+        ------
+        StepRejectedError
+            A step was rejected with no halvings left.
+        ValueError
+            The FMU cannot get and set its state.
+        RuntimeError
+            The FMU reported an error.
+        """
         x_before, _ = self.read()
         t0 = self.time
         state = self.get_state()

@@ -21,7 +21,26 @@ def _plt():
 
 
 def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
-    """Angles, torques (held per communication step), energy and, for elastic plants, spring stretch vs time."""
+    """Angles, torques (held per communication step), energy and, for elastic plants, spring stretch vs time.
+
+    Angles are shown as the deviation from upright (angle mod 2 pi - pi) when
+    both stay within 0.5 rad of it, else as absolute angles from hanging.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A co-simulation result with outputs ``energy`` (and ``stretch1``,
+        ``stretch2`` for an elastic plant).
+    path : str or Path
+        Image file to write (parent directories are created).
+    title : str
+        Figure title; default ``traj.message``.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     plt = _plt()
     elastic = "stretch1" in traj.output_names
     fig, axes = plt.subplots(4 if elastic else 3, 1, figsize=(8, 9 if elastic else 7.5), sharex=True)
@@ -59,7 +78,26 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
 
 
 def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_frames: int = 160, title: str = "") -> Path:
-    """Animated GIF of the links (from the FMU outputs x1, y1, x2, y2) with the bob-2 trace and the torques."""
+    """Animated GIF of the links (from the FMU outputs x1, y1, x2, y2) with the bob-2 trace and the torques.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A co-simulation result with outputs ``x1``, ``y1``, ``x2``, ``y2`` [m].
+    path : str or Path
+        GIF file to write (parent directories are created).
+    fps : int
+        Frames per second of real time (frames are picked evenly from the samples).
+    max_frames : int
+        Upper bound on the number of frames.
+    title : str
+        Prefix of each frame's caption (time [s] and torques [N.m]).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     from PIL import Image
 
     plt = _plt()
@@ -96,7 +134,25 @@ def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_fram
 
 
 def plot_side_by_side(trajs: list[Trajectory], labels: list[str], path: str | Path, title: str = "") -> Path:
-    """Plants stepped in one master with the same torques: theta1, and |angle difference| to the first plant (log)."""
+    """Plants stepped in one master with the same torques: theta1, and |angle difference| to the first plant (log).
+
+    Parameters
+    ----------
+    trajs : list of Trajectory
+        Results of :func:`pendulab.cosim.cosim_many`, on the same time grid; the
+        first is the reference and gives the torque panel.
+    labels : list of str
+        One legend label per trajectory.
+    path : str or Path
+        Image file to write (parent directories are created).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     ref = trajs[0]

@@ -83,7 +83,31 @@ class SweepPoint:
 
 @dataclass(frozen=True)
 class SweepResult:
-    """Sweep for one plant kind."""
+    """Sweep for one plant kind.
+
+    Attributes
+    ----------
+    kind : str
+        "rigid" or "elastic".
+    points : tuple of SweepPoint
+        One per communication step, increasing.
+    h_crit_pred : float
+        Predicted critical step [s] (:func:`predicted_critical_step`); nan if none.
+    h_crit_meas : float
+        Step [s] where the measured contraction crosses 1 (linear
+        interpolation); nan if it never does.
+    h_crit_large : float
+        Step [s] from which the large perturbation is lost (refined by
+        bisection); nan if it always recovers.
+    small, large : float
+        Perturbation amplitudes [rad].
+    runner : str
+        Label of the loop runner (e.g. native or FMU).
+    K : ndarray, shape (m, nx)
+        The fixed continuous LQR gain [N.m per state unit].
+    curve : (ndarray, ndarray)
+        Predicted spectral radius on a fine grid: steps [s] and radii, shape (300,) each.
+    """
 
     kind: str
     points: tuple[SweepPoint, ...]
@@ -97,7 +121,15 @@ class SweepResult:
     curve: tuple[np.ndarray, np.ndarray] = field(repr=False, default=(np.empty(0), np.empty(0)))
 
     def table(self) -> str:
-        """Markdown table of the sweep."""
+        """Markdown table of the sweep.
+
+        Returns
+        -------
+        str
+            One row per point: h [s], predicted and measured rho, final
+            angular errors [rad] of both runs (``diverged`` / ``(unstable)``
+            where lost).
+        """
         rows = [
             "| h [s] | rho predicted | rho measured | small: final err [rad] | large: final err [rad] |",
             "|---:|---:|---:|---:|---:|",
@@ -116,7 +148,27 @@ def _fmt_err(err: float, stable: bool) -> str:
 
 
 def predicted_critical_step(model: Model, K: np.ndarray, input_names: Sequence[str], h_max: float = 1.0) -> float:
-    """Smallest ``h`` [s] at which the linear sampled closed loop's spectral radius reaches 1 (nan if none below h_max)."""
+    """Smallest ``h`` at which the linear sampled closed loop's spectral radius reaches 1.
+
+    Scans 200 steps up to ``h_max`` and refines the first crossing with Brent's method.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum (upright linearization).
+    K : ndarray, shape (m, nx)
+        Continuous gain applied with a zero-order hold [N.m per state unit].
+    input_names : sequence of str
+        The m torques the rows of ``K`` drive.
+    h_max : float
+        Largest step searched [s].
+
+    Returns
+    -------
+    float
+        Critical step [s]; ``h_max / 200`` if already unstable there; nan if
+        the loop stays stable up to ``h_max``.
+    """
     hs = np.linspace(h_max / 200, h_max, 200)
     rho = np.array([closed_loop_spectral_radius(model, K, h, input_names) for h in hs])
     above = np.nonzero(rho >= 1.0)[0]
@@ -139,7 +191,22 @@ def contraction_factor(err: np.ndarray, floor: float = 1e-7, ceiling: float = 0.
 
     Only samples between ``floor`` (above solver noise) and ``ceiling`` (linear
     regime) count, and of those the last two thirds (the dominant mode has
-    taken over); nan if fewer than 8 remain.
+    taken over).
+
+    Parameters
+    ----------
+    err : array_like, shape (n,)
+        Error norms, one per step.
+    floor : float
+        Smallest error used.
+    ceiling : float
+        Largest error used.
+
+    Returns
+    -------
+    float
+        Estimated per-step factor (< 1: contracting); nan if fewer than 8
+        samples remain.
     """
     err = np.asarray(err, dtype=float)
     idx = np.nonzero(np.isfinite(err) & (err > floor) & (err < ceiling))[0]
@@ -208,6 +275,12 @@ def comm_step_sweep(
     Returns
     -------
     SweepResult
+        Per-step predictions and measurements and the three critical steps.
+
+    Raises
+    ------
+    ValueError
+        ``steps`` is empty or not all positive.
     """
     steps = sorted(float(h) for h in steps)
     if not steps or steps[0] <= 0:
@@ -275,7 +348,22 @@ def _first_unstable(h: Sequence[float], stable: Sequence[bool]) -> float:
 
 
 def native_runner(model: Model, method: str = "cvodes", rtol: float = 1e-10, atol: float = 1e-10) -> LoopRunner:
-    """The native sampled loop: ``simulate(model, x0, t_final, dt=h, u=controller)``."""
+    """The native sampled loop: ``simulate(model, x0, t_final, dt=h, u=controller)``.
+
+    Parameters
+    ----------
+    model : Model
+        The plant.
+    method : str
+        Integration method (see :func:`pendulab.simulate`).
+    rtol, atol : float
+        Integrator tolerances.
+
+    Returns
+    -------
+    callable
+        ``run(controller, h, x0, t_final) -> Trajectory``, a ``LoopRunner``.
+    """
     from ..integrate import simulate
 
     def run(ctrl: LinearStateFeedback, h: float, x0: np.ndarray, t_final: float) -> Trajectory:
@@ -285,7 +373,25 @@ def native_runner(model: Model, method: str = "cvodes", rtol: float = 1e-10, ato
 
 
 def fmu_runner(fmu_path: str | Path, *, tolerance: float | None = 1e-10, solver: Any = None, params: Any = None) -> LoopRunner:
-    """The co-simulation loop through an FMU: :func:`pendulab.cosim.cosim`."""
+    """The co-simulation loop through an FMU: :func:`pendulab.cosim.cosim`.
+
+    Parameters
+    ----------
+    fmu_path : str or Path
+        A pendulab Co-Simulation FMU.
+    tolerance : float or None
+        Relative tolerance of the embedded solver.
+    solver : str or int, optional
+        Embedded solver (the FMU's ``solver`` parameter).
+    params : mapping, optional
+        FMU parameters by name.
+
+    Returns
+    -------
+    callable
+        ``run(controller, h, x0, t_final) -> Trajectory``, a ``LoopRunner``
+        (one ``cosim`` call with communication step ``h``).
+    """
     from .master import cosim
 
     def run(ctrl: LinearStateFeedback, h: float, x0: np.ndarray, t_final: float) -> Trajectory:
@@ -295,7 +401,20 @@ def fmu_runner(fmu_path: str | Path, *, tolerance: float | None = 1e-10, solver:
 
 
 def plot_sweep(results: Sequence[SweepResult], path: str | Path) -> Path:
-    """Spectral radius (predicted line, measured markers) vs communication step, one panel per plant kind."""
+    """Spectral radius (predicted line, measured markers) vs communication step, one panel per plant kind.
+
+    Parameters
+    ----------
+    results : sequence of SweepResult
+        One panel each.
+    path : str or Path
+        Image file to write (parent directories are created).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -214,7 +214,31 @@ def model_description(
     stop_time: float = 10.0,
     step_size: float = 0.01,
 ) -> bytes:
-    """The ``modelDescription.xml`` bytes; ``timestamp`` (ISO 8601 UTC) is omitted when None."""
+    """The ``modelDescription.xml`` of a pendulab FMU (Model Exchange and Co-Simulation).
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic pendulum; gives variable names, units, descriptions
+        and start values.
+    lay : ModelLayout
+        Value references and the dependency sparsity of the generated code.
+    fmi_version : int
+        2 or 3 (FMI 2.0 or 3.0 schema).
+    token : str
+        GUID (FMI 2) or instantiation token (FMI 3).
+    timestamp : str, optional
+        ``generationDateAndTime`` (ISO 8601 UTC); omitted when None.
+    stop_time : float
+        ``DefaultExperiment`` stop time [s].
+    step_size : float
+        ``DefaultExperiment`` communication step [s].
+
+    Returns
+    -------
+    bytes
+        UTF-8 XML with declaration, indented, ending in a newline.
+    """
     v3 = fmi_version == 3
     ident = lay.identifier
     root = ET.Element(
@@ -301,7 +325,18 @@ def model_description(
 
 
 def build_description(lay: ModelLayout) -> bytes:
-    """FMI 3 ``sources/buildDescription.xml``: what ``fmpy compile`` (or any build tool) compiles."""
+    """FMI 3 ``sources/buildDescription.xml``: what ``fmpy compile`` (or any build tool) compiles.
+
+    Parameters
+    ----------
+    lay : ModelLayout
+        Gives the model identifier.
+
+    Returns
+    -------
+    bytes
+        UTF-8 XML listing the C99 sources of the FMI 3 build.
+    """
     root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
     bc = ET.SubElement(root, "BuildConfiguration", modelIdentifier=lay.identifier)
     sfs = ET.SubElement(bc, "SourceFileSet", language="C99")

@@ -87,6 +87,24 @@ SCENES: tuple[ValidationScene, ...] = _load_validation_scenes()
 
 @dataclass(frozen=True)
 class ValidationRow:
+    """Error of one signal in one FMU run against the native reference.
+
+    Attributes
+    ----------
+    scene : str
+        Validation scene name.
+    run : str
+        ``"CS-<solver>"`` (Co-Simulation with that embedded solver) or
+        ``"ME-CVode"`` (Model Exchange under fmpy's CVode).
+    signal : str
+        ``theta1``, ``theta2`` or a model output.
+    max_error : float
+        Max-abs error over the grid divided by ``max(1, max |reference|)``
+        of the signal [-]; nan when the run failed.
+    bound : float
+        The scene's accepted normalised error.
+    """
+
     scene: str
     run: str  # "CS-dopri5", "CS-rodas4", "ME-CVode"
     signal: str
@@ -95,11 +113,30 @@ class ValidationRow:
 
     @property
     def passed(self) -> bool:
+        """Finite error within the bound."""
         return bool(np.isfinite(self.max_error) and self.max_error <= self.bound)
 
 
 @dataclass
 class ValidationReport:
+    """Outcome of :func:`validate` for one FMU.
+
+    Attributes
+    ----------
+    fmu : Path
+        The validated FMU.
+    kind : str
+        "rigid" or "elastic".
+    problems : list of str
+        Findings of fmpy's ``validate_fmu`` and runs that raised.
+    rows : list of ValidationRow
+        One per (scene, run, signal).
+    wall_times : dict
+        Wall time [s] of each FMU run by (scene, run).
+    plot : Path or None
+        The overlay plot, when written.
+    """
+
     fmu: Path
     kind: str
     problems: list[str]
@@ -109,10 +146,19 @@ class ValidationReport:
 
     @property
     def passed(self) -> bool:
+        """No problems, at least one row, and every row passed."""
         return not self.problems and bool(self.rows) and all(r.passed for r in self.rows)
 
     def table(self) -> str:
-        """Max normalised error per (scene, run) and signal, with PASS/FAIL."""
+        """Max normalised error per (scene, run) and signal, with PASS/FAIL.
+
+        Returns
+        -------
+        str
+            A header naming the FMU and its problems, one line per (scene,
+            run) with the error of each signal and the bound, and an overall
+            PASS/FAIL line.
+        """
         lines = [
             f"FMU {self.fmu.name} ({self.kind}): fmpy validate_fmu: "
             + ("no problem" if not self.problems else f"{len(self.problems)} problem(s)")
@@ -133,7 +179,24 @@ class ValidationReport:
 
 
 def fmu_kind(model_description) -> str:
-    """Model kind ("rigid" or "elastic") of a pendulab FMU from its model identifier."""
+    """Model kind of a pendulab FMU from its model identifier.
+
+    Parameters
+    ----------
+    model_description : fmpy.model_description.ModelDescription
+        As read by ``fmpy.read_model_description``; the Co-Simulation (else
+        Model Exchange) identifier is used.
+
+    Returns
+    -------
+    str
+        ``"rigid"`` or ``"elastic"``.
+
+    Raises
+    ------
+    ValueError
+        The identifier is neither ``pendulab_rigid`` nor ``pendulab_elastic``.
+    """
     ident = (model_description.coSimulation or model_description.modelExchange).modelIdentifier
     for kind in ("rigid", "elastic"):
         if ident == f"pendulab_{kind}":
@@ -219,6 +282,15 @@ def validate(
     -------
     ValidationReport
         ``.passed``, ``.table()``, ``.rows`` (normalised max errors), ``.plot``.
+        A run that raises is recorded in ``problems`` with nan errors.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``fmu`` is not a file.
+    ValueError
+        Not a pendulab FMU, an unknown scene name, or a scene for the other
+        model kind.
     """
     import time
 

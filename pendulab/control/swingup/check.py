@@ -60,6 +60,13 @@ def replay(result: SwingUpResult, method: str = "cvodes", rtol: float = 1e-10, a
         Any ``pendulab.METHODS`` entry; the default CVODES at 1e-10 is the reference.
     rtol, atol : float
         Integrator tolerances.
+
+    Returns
+    -------
+    ReplayReport
+        Per-interval defects (each interval integrated from the optimal grid
+        state with its held torque) and the open-loop replay from the start
+        on the NLP grid, with its deviation from the optimum.
     """
     model = result.problem.model
     h = result.t[1] - result.t[0]
@@ -106,6 +113,12 @@ def height_success(traj: Trajectory, rest_lengths: tuple[float, float], fraction
         L1, L2 [m] (rest lengths for the elastic model).
     fraction : float
         Fraction of the full reach (0.9 in the acrobot/pendubot benchmarks).
+
+    Returns
+    -------
+    HeightCheck
+        Success if ``y2`` is above the threshold at the last sample; ``t_up``
+        is then the first time of the final stretch above it [s].
     """
     y2 = traj["y2"]
     thr = fraction * (rest_lengths[0] + rest_lengths[1])

@@ -53,7 +53,19 @@ class Episode:
         return bool(self.result.success and self.height is not None and self.height.success)
 
     def summary(self) -> dict[str, Any]:
-        """Flat, JSON-friendly summary (SI units)."""
+        """Flat, JSON-friendly summary (SI units).
+
+        Returns
+        -------
+        dict
+            Task, model, actuation and solver figures (status, iterations,
+            solve and build times [s], horizon [s], cost); the replay defects
+            when replayed; and, when a closed loop ran, ``success``,
+            ``swing_up_time_s``, ``height_threshold_m``, ``max_torque_Nm``,
+            ``torque_limit_Nm``, ``control_energy_N2m2s`` (integral of
+            ``tau1^2 + tau2^2``) and ``final_state_error`` (inf-norm). Otherwise
+            ``success`` is False.
+        """
         r = self.result
         out: dict[str, Any] = {
             "task": self.task.name,
@@ -115,6 +127,14 @@ def run_episode(
         Start of the closed loop (a perturbed start); default the problem's start.
     do_replay : bool
         Run the (slower) open-loop replay check.
+
+    Returns
+    -------
+    Episode
+        When the solve fails, only ``task``, ``result`` and ``x0`` are set.
+        Otherwise the TVLQR tracker (sample time ``task.dt``) is simulated with
+        CVODES from ``x0`` over ``task.t_final`` and scored with
+        :func:`height_success`.
     """
     res = swing_up(task.problem, method or task.method, N or task.N, degree=task.degree, guess=guess)
     start = task.problem.start if x0 is None else task.model.check_state(x0, "x0")

@@ -50,19 +50,57 @@ class Guess:
         return float(self.t[-1])
 
     def states_at(self, ts: np.ndarray, horizon: float) -> np.ndarray:
-        """States at times ``ts`` of a horizon ``horizon`` (time rescaled), shape (len(ts), nx)."""
+        """States at times ``ts`` of a horizon ``horizon`` (time rescaled).
+
+        Parameters
+        ----------
+        ts : array_like, shape (n,)
+            Query times [s] on the new horizon.
+        horizon : float
+            New horizon [s]; the guess is stretched from ``t[-1]`` to it.
+
+        Returns
+        -------
+        ndarray, shape (n, nx)
+            Linearly interpolated states (held constant outside the guess).
+        """
         s = np.asarray(ts) * (self.horizon / horizon)
         return np.column_stack([np.interp(s, self.t, self.x[:, i]) for i in range(self.x.shape[1])])
 
     def inputs_at(self, ts: np.ndarray, horizon: float) -> np.ndarray:
-        """Held torques at times ``ts`` (time rescaled), shape (len(ts), 2)."""
+        """Held torques at times ``ts`` (time rescaled).
+
+        Parameters
+        ----------
+        ts : array_like, shape (n,)
+            Query times [s] on the new horizon.
+        horizon : float
+            New horizon [s]; the guess is stretched from ``t[-1]`` to it.
+
+        Returns
+        -------
+        ndarray, shape (n, 2)
+            Torques (tau1, tau2) [N.m] of the last knot at or before each
+            rescaled time (first/last held outside the guess).
+        """
         s = np.asarray(ts) * (self.horizon / horizon)
         k = np.clip(np.searchsorted(self.t, s, side="right") - 1, 0, len(self.u) - 1)
         return self.u[k]
 
 
 def linear_guess(problem: SwingUpProblem) -> Guess:
-    """Straight line from start to goal over the horizon, zero torque."""
+    """Straight line from start to goal over the horizon, zero torque.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+        Gives the start, target and horizon.
+
+    Returns
+    -------
+    Guess
+        Two knots, ``(0, start)`` and ``(horizon, target)``, with zero torques.
+    """
     t = np.linspace(0.0, problem.horizon, 2)
     x = np.vstack([problem.start, problem.target])
     return Guess(t, x, np.zeros((2, 2)))
@@ -76,6 +114,18 @@ def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
     with 10 % of the energy still missing: effectively bang-bang pumping, no
     tuning per task. The trajectory does not end at the goal; it gives the
     NLP a swing with the right timing and energy scale.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+        Model, actuation, torque limit, start, target and horizon.
+    dt : float
+        Output and feedback sample step [s] of the simulation (CVODES, 1e-6).
+
+    Returns
+    -------
+    Guess
+        The simulated trajectory with its held torques (tau1, tau2) [N.m].
     """
     model = problem.model
     e_goal = float(model.energy(problem.target))
@@ -101,8 +151,27 @@ def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
 
 
 def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
-    """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths
-    (:func:`pendulab.model.counterpart.rigid_counterpart`); spring bounds are dropped."""
+    """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths.
+
+    The model is :func:`pendulab.model.counterpart.rigid_counterpart`; start
+    and goal are mapped to rigid states; spring bounds are dropped.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+        An elastic swing-up problem.
+
+    Returns
+    -------
+    SwingUpProblem
+        Same actuation, limits, horizon settings and objective, named
+        ``problem.name + "-rigid"``.
+
+    Raises
+    ------
+    ValueError
+        ``problem`` is not on the elastic model.
+    """
     if problem.model.kind != "elastic":
         raise ValueError(f"rigid_counterpart needs an elastic problem, got model kind {problem.model.kind!r}")
     model = counterpart.rigid_counterpart(problem.model)
@@ -128,6 +197,23 @@ def lift_to_elastic(problem: SwingUpProblem, t: np.ndarray, x_rigid: np.ndarray,
     Spring lengths carry the gravity load along each link
     (:func:`pendulab.model.statics.static_spring_lengths`, exact at the hanging
     and the inverted equilibrium); v = dr/dt.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+        The elastic problem (its model's parameters give the springs).
+    t : ndarray, shape (K,)
+        Times [s].
+    x_rigid : ndarray, shape (K, 4)
+        Rigid states (theta1, theta2, omega1, omega2).
+    u : ndarray, shape (K, 2) or (K-1, 2)
+        Torques (tau1, tau2) [N.m], passed through.
+
+    Returns
+    -------
+    Guess
+        Elastic states (theta1, theta2, r1, r2, omega1, omega2, v1, v2),
+        shape (K, 8).
     """
     pr = problem.model.params
     theta, omega = x_rigid[:, 0:2], x_rigid[:, 2:4]

@@ -59,6 +59,8 @@ class SwingUpProblem:
         the bang-bang optimum regular); ``mix``: time_weight * T + effort.
     time_weight : float
         Weight on T in the ``mix`` objective [N^2.m^2].
+    name : str
+        Label of the problem (e.g. the task name); not compared for equality.
 
     Raises
     ------
@@ -148,17 +150,36 @@ class SwingUpProblem:
         return np.array(self.goal)
 
     def torque_bounds(self, passive_fraction: float = 0.0, limit_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-        """Lower/upper torque bounds, shape (2,) each [N.m].
+        """Lower/upper bounds on (tau1, tau2).
 
-        ``passive_fraction`` lets the passive joints carry a fraction of the
-        limit and ``limit_scale`` loosens the limit (used by homotopies only).
+        Parameters
+        ----------
+        passive_fraction : float
+            Fraction of the limit the passive joint may carry (0: passive;
+            used by homotopies only).
+        limit_scale : float
+            Factor on ``torque_limit`` (> 1 loosens it; used by homotopies only).
+
+        Returns
+        -------
+        lb, ub : ndarray, shape (2,)
+            ``-ub`` and ``ub`` [N.m]: ``torque_limit * limit_scale`` on the
+            actuated joints, ``passive_fraction`` times that on the others.
         """
         ub = np.full(2, passive_fraction * self.torque_limit * limit_scale)
         ub[list(self.actuated)] = self.torque_limit * limit_scale
         return -ub, ub
 
     def state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower/upper bounds on the state, shape (nx,) each (inf where unbounded)."""
+        """Lower/upper bounds on the state.
+
+        Returns
+        -------
+        lb, ub : ndarray, shape (nx,)
+            +-``velocity_limit`` [rad/s] on omega1, omega2 when set; for the
+            elastic model spring lengths in ``L + stretch_limits`` [m] (lower
+            bound at least 1e-3 L); +-inf elsewhere.
+        """
         nx, nq = self.model.nx, self.model.nq
         lb, ub = np.full(nx, -np.inf), np.full(nx, np.inf)
         if self.velocity_limit is not None:
@@ -173,7 +194,18 @@ class SwingUpProblem:
         return lb, ub
 
     def replace(self, **changes: Any) -> SwingUpProblem:
-        """A validated copy with some fields changed."""
+        """A validated copy with some fields changed.
+
+        Parameters
+        ----------
+        **changes
+            New field values by name (as for the constructor).
+
+        Returns
+        -------
+        SwingUpProblem
+            The copy, validated again by the constructor.
+        """
         from dataclasses import replace
 
         return replace(self, **changes)

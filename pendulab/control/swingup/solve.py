@@ -100,15 +100,34 @@ class SwingUpResult:
         return float(self.t[-1])
 
     def u_at(self, t: float | np.ndarray) -> np.ndarray:
-        """Held torque at time(s) t (zero-order hold, last value after T), shape (2,) or (K, 2)."""
+        """Held torque at time(s) ``t`` (zero-order hold).
+
+        Parameters
+        ----------
+        t : float or array_like, shape (K,)
+            Times [s]; before 0 the first torque, from T on the last.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (K, 2)
+            Torques (tau1, tau2) [N.m] of the interval containing each time.
+        """
         ts = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.t, ts, side="right") - 1, 0, self.N - 1)
         return self.u[k]
 
     def x_at(self, t: float | np.ndarray) -> np.ndarray:
-        """State at time(s) t by cubic Hermite interpolation with the model's f(x, u), shape (nx,) or (K, nx).
+        """State at time(s) ``t`` by cubic Hermite interpolation with the model's f(x, u).
 
-        Outside [0, T] the end states are returned.
+        Parameters
+        ----------
+        t : float or array_like, shape (K,)
+            Times [s]; clipped to [0, T], so outside it the end states are returned.
+
+        Returns
+        -------
+        ndarray, shape (nx,) or (K, nx)
+            Interpolated states (scalar ``t`` gives one state).
         """
         ts = np.asarray(t, dtype=float)
         scalar = ts.ndim == 0
@@ -124,7 +143,13 @@ class SwingUpResult:
         return out[0] if scalar else out
 
     def as_guess(self) -> Guess:
-        """This solution as an initial guess for another solve."""
+        """This solution as an initial guess for another solve.
+
+        Returns
+        -------
+        Guess
+            The grid ``t``, states ``x`` and held torques ``u`` (shape (N, 2)).
+        """
         return Guess(self.t, self.x, self.u)
 
 

@@ -107,7 +107,13 @@ class Task:
 
 
 def task_names() -> tuple[str, ...]:
-    """Names of the shipped tasks (``pendulab/scenes/swingup_<name>.toml``)."""
+    """Names of the shipped tasks (``pendulab/scenes/swingup_<name>.toml``).
+
+    Returns
+    -------
+    tuple of str
+        Sorted task names, without the ``swingup_`` prefix.
+    """
     return tuple(sorted(p.stem[len(_PREFIX) :] for p in SCENE_DIR.glob(_PREFIX + "*.toml")))
 
 
@@ -116,6 +122,20 @@ def load_task(name_or_path: str | Path) -> Task:
 
     The scene itself is read by :func:`pendulab.scene.load_scene` (validated there);
     this function interprets its ``[task]`` section.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A shipped task name (``swingup_<name>.toml`` in the scene directory),
+        or the path of a scene file with a ``[task]`` section.
+
+    Returns
+    -------
+    Task
+        The scene, its :class:`SwingUpProblem` (goal default upright at rest,
+        overridden by ``[task.goal]``) and the solver settings (defaults
+        ``N = 100``, ``method = "radau"``, ``degree = 3``,
+        ``success_fraction = 0.9``).
 
     Raises
     ------

@@ -78,7 +78,25 @@ class Transcription:
 
     # -- decision vector layout: [X (nx, N+1) | Xc (nx, N*d) | U (2, N) | T] ----------
     def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
-        """Split a decision vector into X (N+1, nx), Xc (N*d, nx), U (N, 2), T."""
+        """Split a decision vector into its blocks.
+
+        Parameters
+        ----------
+        w : array_like, shape (nw,)
+            Decision vector laid out as ``[X | Xc | U | T]`` (T only with a
+            free horizon).
+
+        Returns
+        -------
+        X : ndarray, shape (N + 1, nx)
+            Grid states.
+        Xc : ndarray, shape (N * degree, nx)
+            Collocation states (zero rows for shooting).
+        U : ndarray, shape (N, 2)
+            Held torques (tau1, tau2) [N.m].
+        T : float or None
+            Horizon [s] when free, else None.
+        """
         nx, N = self.nx, self.N
         w = np.asarray(w, dtype=float).ravel()
         i = nx * (N + 1)
@@ -91,19 +109,61 @@ class Transcription:
         return X, Xc, U, T
 
     def join(self, X: np.ndarray, Xc: np.ndarray, U: np.ndarray, T: float | None) -> np.ndarray:
+        """Assemble a decision vector from its blocks (the inverse of :meth:`split`).
+
+        Parameters
+        ----------
+        X : array_like, shape (N + 1, nx)
+            Grid states.
+        Xc : array_like, shape (N * degree, nx)
+            Collocation states (empty for shooting).
+        U : array_like, shape (N, 2)
+            Held torques (tau1, tau2) [N.m].
+        T : float or None
+            Horizon [s]; appended only with a free horizon.
+
+        Returns
+        -------
+        ndarray, shape (nw,)
+            ``[X | Xc | U | T]``, each block flattened row by row.
+        """
         parts = [np.ravel(X), np.ravel(Xc), np.ravel(U)]
         if self.free_horizon:
             parts.append([float(T)])
         return np.concatenate(parts)
 
     def collocation_times(self) -> np.ndarray:
-        """Collocation points within the unit interval, shape (degree,)."""
+        """Collocation points within the unit interval.
+
+        Returns
+        -------
+        ndarray, shape (degree,)
+            CasADi's Radau or Legendre points in (0, 1] for ``method``.
+        """
         return np.array(ca.collocation_points(self.degree, self.method))
 
     def bounds(
         self, problem: SwingUpProblem, torque_lb: np.ndarray, torque_ub: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Variable and constraint bounds (lbx, ubx, lbg, ubg) for one problem."""
+        """Variable and constraint bounds for one problem.
+
+        Start and goal fix the first and last grid states; state bounds apply
+        to the other grid and collocation states.
+
+        Parameters
+        ----------
+        problem : SwingUpProblem
+            Start, goal, state bounds and horizon bounds.
+        torque_lb, torque_ub : ndarray, shape (2,)
+            Bounds on (tau1, tau2) [N.m] on every interval.
+
+        Returns
+        -------
+        lbx, ubx : ndarray, shape (nw,)
+            Decision-variable bounds.
+        lbg, ubg : ndarray
+            Zeros: all constraints (defects, continuity) are equalities.
+        """
         nx, N = self.nx, self.N
         slb, sub = problem.state_bounds()
         XL = np.tile(slb, (N + 1, 1))
@@ -116,11 +176,38 @@ class Transcription:
         return lbx, ubx, np.zeros(ng), np.zeros(ng)
 
     def parameters(self, problem: SwingUpProblem) -> np.ndarray:
-        """NLP parameter vector: model parameters, fixed horizon [s], time weight."""
+        """NLP parameter vector of one problem.
+
+        Parameters
+        ----------
+        problem : SwingUpProblem
+            Gives the model parameters, the horizon and the time weight.
+
+        Returns
+        -------
+        ndarray
+            ``[model.p, horizon [s], time_weight]``.
+        """
         return np.concatenate([problem.model.p, [problem.horizon, problem.time_weight]])
 
     def solve(self, problem: SwingUpProblem, w0: np.ndarray, torque_lb: np.ndarray, torque_ub: np.ndarray) -> dict[str, Any]:
-        """Run IPOPT from ``w0``; returns the ``nlpsol`` output plus its ``stats()``."""
+        """Run IPOPT from ``w0`` with the bounds of :meth:`bounds`.
+
+        Parameters
+        ----------
+        problem : SwingUpProblem
+            Bounds and NLP parameters.
+        w0 : ndarray, shape (nw,)
+            Initial guess; clipped into the variable bounds first.
+        torque_lb, torque_ub : ndarray, shape (2,)
+            Bounds on (tau1, tau2) [N.m].
+
+        Returns
+        -------
+        dict
+            ``w`` (solution, shape (nw,)), ``f`` (objective), ``g``
+            (constraint values) and ``stats`` (the solver's ``stats()``).
+        """
         lbx, ubx, lbg, ubg = self.bounds(problem, torque_lb, torque_ub)
         # IPOPT needs a start within the bounds it treats as hard (fixed start and goal).
         w0 = np.clip(w0, lbx, ubx)
@@ -169,6 +256,17 @@ def get_transcription(
         minutes for N = 40).
     ipopt_options : dict or None
         Extra IPOPT options (e.g. ``{"max_iter": 500}``).
+
+    Returns
+    -------
+    Transcription
+        Built on the first call for this structure, then reused (up to 64
+        structures cached).
+
+    Raises
+    ------
+    ValueError
+        Unknown method or integrator, N < 2, or a collocation degree outside 1..9.
     """
     _check_structure(method, N, degree, integrator)
     extra = tuple(sorted((ipopt_options or {}).items()))
