@@ -31,6 +31,7 @@ _STEPS_QUICK = (1e-2, 2e-3)
 #: Native methods in the study (legend order); the step sweep of collocation stops at 2 ms because
 #: CasADi builds one integrator over the whole refined grid (keep it below ~5000 points).
 NATIVE: tuple[str, ...] = (
+    "taylor",
     "cvodes-bdf",
     "cvodes-adams",
     "idas",
