@@ -21,10 +21,16 @@ def _reference(kind):
     return pl.simulate(model, model.state(**START), T_FINAL, dt=0.01, method="DOP853", rtol=1e-13, atol=1e-13).x
 
 
+def _param(method):
+    # The compiled family builds C code: skipped with the reason where no C compiler is found (tests/conftest.py).
+    marks = [pytest.mark.needs_cc] if pl.METHODS[method].family == "compiled" else []
+    return pytest.param(method, marks=marks, id=method)
+
+
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])
 # Butcher-tableau methods of order < 4 (forward/implicit Euler, implicit midpoint, radau3) cannot meet the
 # 1e-6 bound at h = 2 ms; their convergence orders are tested in tests/bench/test_fixed_step.py.
-@pytest.mark.parametrize("method", [m for m in pl.METHODS if getattr(FIXED_METHODS.get(m), "order", 5) >= 4])
+@pytest.mark.parametrize("method", [_param(m) for m in pl.METHODS if getattr(FIXED_METHODS.get(m), "order", 5) >= 4])
 def test_method_agrees_with_reference(method, kind):
     model = pl.make_model(kind)
     fixed = pl.METHODS[method].fixed_step

@@ -7,7 +7,9 @@ import pendulab as pl
 from pendulab.model.pycode import to_python
 
 
-@pytest.mark.parametrize("model", [pl.rigid(b1=0.1, I2=0.01), pl.elastic(k1=300.0, k2=300.0, c1=0.1, b2=0.2)], ids=["rigid", "elastic"])
+@pytest.mark.parametrize(
+    "model", [pl.rigid(b1=0.1, I2=0.01), pl.elastic(k1=300.0, k2=300.0, c1=0.1, b2=0.2)], ids=["rigid", "elastic"]
+)
 def test_vectorized_batch_equals_casadi(model):
     rng = np.random.default_rng(1)
     X = rng.normal(size=(257, model.nx))

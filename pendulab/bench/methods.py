@@ -32,6 +32,8 @@ _STEPS_QUICK = (1e-2, 2e-3)
 #: CasADi builds one integrator over the whole refined grid (keep it below ~5000 points).
 NATIVE: tuple[str, ...] = (
     "taylor",
+    "compiled-dopri5",
+    "compiled-rodas4",
     "cvodes-bdf",
     "cvodes-adams",
     "idas",

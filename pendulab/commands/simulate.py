@@ -47,7 +47,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--dt", metavar="S", help="output step [s]")
     p.add_argument(
         "--method",
-        help="integration method: auto (default; chosen from stiffness and tolerance) or one of pendulab.METHODS, e.g. taylor, cvodes",
+        help="integration method: auto (default; from stiffness and tolerance) or one of pendulab.METHODS, e.g. taylor",
     )
     p.add_argument("--rtol", metavar="TOL", help="relative tolerance")
     p.add_argument("--atol", metavar="TOL", help="absolute tolerance")

@@ -1,16 +1,16 @@
 """C sources of one FMU: CasADi-generated model functions plus the per-model header.
 
-The model functions (right-hand side, outputs, their Jacobians) are CasADi
-Functions of ``model.functions`` evaluated on fresh SX arguments and emitted
-with :class:`casadi.CodeGenerator`; nothing here writes physics. The header
-``model.h`` carries sizes, value references, start values and parameter
-defaults; the hand-written files in ``pendulab/fmu/c`` are shared by all models.
+The model functions (right-hand side, outputs, their Jacobians) and their C
+code come from :mod:`pendulab.native.codegen` (one generator for the FMU and
+the native fast path; nothing here writes physics). The header ``model.h``
+carries sizes, value references, start values and parameter defaults; the
+hand-written FMI layers and model core in ``pendulab/fmu/c`` and the solver
+core in ``pendulab/native/c`` are shared by all models.
 """
 
 from __future__ import annotations
 
 import hashlib
-import tempfile
 import zlib
 from dataclasses import dataclass
 from importlib import resources
@@ -20,9 +20,12 @@ import casadi as ca
 import numpy as np
 
 from ..model.model import Model
+from ..native.codegen import C_DIR as NATIVE_C_DIR
+from ..native.codegen import SOLVER_HEADERS, SOLVER_SOURCES, c_functions, dependency_pattern, model_c_source
 
 __all__ = [
     "C_DIR",
+    "NATIVE_C_DIR",
     "FIXED_SOURCES",
     "SOLVER_NAMES",
     "ModelLayout",
@@ -34,11 +37,12 @@ __all__ = [
 ]
 
 C_DIR = Path(str(resources.files("pendulab.fmu") / "c"))
-#: Hand-written C files compiled into every FMU (plus fmi2.c or fmi3.c).
-FIXED_SOURCES: tuple[str, ...] = ("fmu_core.c", "ode_solver.c")
+#: Hand-written C files compiled into every FMU (plus fmi2.c or fmi3.c); the solver core
+#: (``ode_solver.c``) comes from ``pendulab/native/c``, the rest from ``pendulab/fmu/c``.
+FIXED_SOURCES: tuple[str, ...] = ("fmu_core.c", *SOLVER_SOURCES)
 FIXED_HEADERS: dict[int, tuple[str, ...]] = {
-    2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h", "fmu_core.h", "ode_solver.h"),
-    3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h", "fmu_core.h", "ode_solver.h"),
+    2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h", "fmu_core.h", *SOLVER_HEADERS),
+    3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h", "fmu_core.h", *SOLVER_HEADERS),
 }
 #: Values of the ``solver`` parameter.
 SOLVER_NAMES: tuple[str, ...] = ("dopri5", "rodas4")
@@ -52,7 +56,27 @@ DEFAULT_TOLERANCE = 1e-8
 
 @dataclass(frozen=True)
 class ModelLayout:
-    """Names, value references and dependency structure of one model's FMU variables."""
+    """Names, value references and dependency structure of one model's FMU variables.
+
+    Attributes
+    ----------
+    identifier : str
+        Model identifier (C symbol prefix, binary name), e.g. ``pendulab_rigid``.
+    kind : {"rigid", "elastic"}
+        Model kind.
+    nx, nu, ny, np : int
+        Numbers of states, inputs, outputs and parameters.
+    x_start : ndarray, shape (nx,)
+        State start values [SI].
+    p_default : ndarray, shape (np,)
+        Parameter start values [SI].
+    p_tunable : tuple of bool, length np
+        Whether each parameter may change during a run.
+    p_positive : tuple of bool, length np
+        Whether each parameter must be positive.
+    dependencies : ndarray of bool, shape (nx + ny, nx + nu + np)
+        Structural non-zeros: rows derivatives then outputs; columns states, inputs, then parameters.
+    """
 
     identifier: str
     kind: str
@@ -68,6 +92,20 @@ class ModelLayout:
     dependencies: np.ndarray
 
     def vr(self, group: str, index: int = 0) -> int:
+        """Value reference of a variable.
+
+        Parameters
+        ----------
+        group : {"x", "dx", "u", "y", "p"}
+            States, derivatives, inputs, outputs or parameters.
+        index : int
+            Position in the group.
+
+        Returns
+        -------
+        int
+            The value reference.
+        """
         base = {"x": VR_X, "dx": VR_DX, "u": VR_U, "y": VR_Y, "p": VR_P}[group]
         return base + index
 
@@ -79,39 +117,52 @@ class ModelLayout:
 TUNABLE_PARAMS = frozenset({"g", "b1", "b2", "k1", "k2", "c1", "c2"})
 
 
-def _symbols(model: Model) -> tuple[ca.SX, ca.SX, ca.SX]:
-    # Arguments only: the physics comes from model.functions.
-    return ca.SX.sym("x", model.nx), ca.SX.sym("u", model.nu), ca.SX.sym("p", len(model.p))
-
-
-def _functions(model: Model, identifier: str) -> tuple[list[ca.Function], np.ndarray]:
-    x, u, p = _symbols(model)
-    xdot = model.functions["rhs"](x, u, p)
-    y = model.functions["outputs"](x, u, p)
-    jac_all = ca.jacobian(ca.vertcat(xdot, y), ca.vertcat(x, u))
-    deps = np.array(ca.DM(ca.jacobian(ca.vertcat(xdot, y), ca.vertcat(x, u, p)).sparsity(), 1)) != 0
-    names = ["x", "u", "p"]
-    funcs = [
-        ca.Function(f"{identifier}_rhs", [x, u, p], [xdot], names, ["xdot"]),
-        ca.Function(f"{identifier}_outputs", [x, u, p], [y], names, ["y"]),
-        ca.Function(f"{identifier}_jac_x", [x, u, p], [ca.densify(ca.jacobian(xdot, x))], names, ["A"]),
-        ca.Function(f"{identifier}_jac_all", [x, u, p], [ca.densify(jac_all)], names, ["J"]),
-    ]
-    return funcs, deps
+def _fixed_file(name: str) -> bytes:
+    """A hand-written C file of the FMU: the solver core from pendulab/native/c, the rest from pendulab/fmu/c."""
+    folder = NATIVE_C_DIR if name in (*SOLVER_SOURCES, *SOLVER_HEADERS) else C_DIR
+    return (folder / name).read_bytes()
 
 
 def identifier_for(model: Model) -> str:
-    """Model identifier (C symbol prefix, binary name): ``pendulab_rigid`` or ``pendulab_elastic``."""
+    """Model identifier (C symbol prefix, binary name): ``pendulab_rigid`` or ``pendulab_elastic``.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+
+    Returns
+    -------
+    str
+        ``pendulab_<kind>``.
+    """
     return f"pendulab_{model.kind}"
 
 
 def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
-    """Variable layout of the FMU of ``model``; ``x0`` (shape (nx,)) are the state start values."""
+    """Variable layout of the FMU of ``model``.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum; its parameters become the parameter start values.
+    x0 : ndarray, shape (nx,), optional
+        State start values [SI]; default hanging at rest.
+
+    Returns
+    -------
+    ModelLayout
+
+    Raises
+    ------
+    ValueError
+        ``x0`` has the wrong shape or is not finite.
+    """
     x_start = model.rest_state() if x0 is None else model.check_state(x0, "x0")
     if x_start.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got shape {x_start.shape}")
     identifier = identifier_for(model)
-    _, deps = _functions(model, identifier)
+    deps = dependency_pattern(model.kind)
     names = model.param_names
     return ModelLayout(
         identifier=identifier,
@@ -137,11 +188,24 @@ def _c_ints(values: tuple) -> str:
 
 
 def token(lay: ModelLayout, fmi_version: int) -> str:
-    """Deterministic GUID / instantiation token: a digest of everything that defines the binary."""
+    """Deterministic GUID / instantiation token: a digest of everything that defines the binary.
+
+    Parameters
+    ----------
+    lay : ModelLayout
+        The FMU's layout (kind, start values).
+    fmi_version : {2, 3}
+        FMI standard.
+
+    Returns
+    -------
+    str
+        ``{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}``.
+    """
     h = hashlib.sha256()
     h.update(f"{lay.kind}|{fmi_version}|{lay.p_default.tobytes().hex()}|{lay.x_start.tobytes().hex()}".encode())
     for name in (*FIXED_SOURCES, *FIXED_HEADERS[fmi_version], f"fmi{fmi_version}.c"):
-        h.update((C_DIR / name).read_bytes())
+        h.update(_fixed_file(name))
     d = h.hexdigest()
     return "{" + f"{d[:8]}-{d[8:12]}-{d[12:16]}-{d[16:20]}-{d[20:32]}" + "}"
 
@@ -225,26 +289,52 @@ def generate_sources(model: Model, fmi_version: int, lay: ModelLayout | None = N
 
     The compiled sources are ``fmi{2,3}.c``, ``fmu_core.c``, ``ode_solver.c``
     and ``model_functions.c`` (which includes ``model_casadi.c``).
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+    fmi_version : {2, 3}
+        FMI standard.
+    lay : ModelLayout, optional
+        Layout (default :func:`layout` of ``model``).
+
+    Returns
+    -------
+    dict of str to bytes
+        File name -> contents, sorted by name.
+
+    Raises
+    ------
+    ValueError
+        Bad ``fmi_version``, or a layout of another model kind.
     """
     if fmi_version not in (2, 3):
         raise ValueError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
     lay = layout(model) if lay is None else lay
-    funcs, _ = _functions(model, lay.identifier)
+    funcs = c_functions(model.kind)
+    if funcs[0].name() != f"{lay.identifier}_rhs":
+        raise ValueError(f"layout identifier {lay.identifier!r} does not match the generated functions of {model.kind!r}")
     tok = token(lay, fmi_version)
-    out: dict[str, bytes] = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        cg = ca.CodeGenerator("model_casadi.c", {"casadi_int": "int", "with_export": False, "with_header": False})
-        for f in funcs:
-            cg.add(f)
-        cg.generate(tmp + "/")
-        out["model_casadi.c"] = (Path(tmp) / "model_casadi.c").read_bytes()
+    out: dict[str, bytes] = {"model_casadi.c": model_c_source(model.kind)}
     out["model.h"] = _header(model, lay, funcs, tok).encode()
     out["model_functions.c"] = _WRAPPER.encode()
     for name in (*FIXED_SOURCES, *FIXED_HEADERS[fmi_version], f"fmi{fmi_version}.c"):
-        out[name] = (C_DIR / name).read_bytes()
+        out[name] = _fixed_file(name)
     return dict(sorted(out.items()))
 
 
 def compiled_sources(fmi_version: int) -> tuple[str, ...]:
-    """The translation units of an FMU, in build order."""
+    """The translation units of an FMU, in build order.
+
+    Parameters
+    ----------
+    fmi_version : {2, 3}
+        FMI standard.
+
+    Returns
+    -------
+    tuple of str
+        File names among :func:`generate_sources`.
+    """
     return (f"fmi{fmi_version}.c", *FIXED_SOURCES, "model_functions.c")

@@ -5,8 +5,6 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import platform
-import shutil
-import subprocess
 import tempfile
 import zipfile
 from pathlib import Path
@@ -14,32 +12,35 @@ from pathlib import Path
 import numpy as np
 
 from ..model.model import Model
+from ..native.build import CFLAGS, CompilerNotFoundError, compile_shared, find_compiler, shared_library_suffix
 from .codegen import compiled_sources, generate_sources, layout, token
 from .model_description import build_description, model_description
 
-__all__ = ["export", "find_compiler", "compile_sources", "CFLAGS", "binary_platform"]
+# CFLAGS, CompilerNotFoundError and find_compiler live in pendulab.native.build (shared with the
+# native fast path) and are re-exported here, where they have always been importable.
+__all__ = ["export", "find_compiler", "compile_sources", "CFLAGS", "CompilerNotFoundError", "binary_platform"]
 
-#: Flags of every build; the sources compile warning-free with them (checked in the tests with -Werror).
-CFLAGS: tuple[str, ...] = ("-Wall", "-Wextra", "-std=c99", "-O2", "-fPIC", "-fvisibility=hidden")
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed zip timestamps: same input -> same archive bytes
 
 
-class CompilerNotFoundError(RuntimeError):
-    """No C compiler was found."""
-
-
-def find_compiler(cc: str | None = None) -> str:
-    """Path of the C compiler: ``cc`` if given, else ``$CC``, ``cc``, ``gcc`` or ``clang`` on PATH."""
-    candidates = [cc] if cc else [c for c in (os.environ.get("CC"), "cc", "gcc", "clang") if c]
-    for c in candidates:
-        path = shutil.which(c)
-        if path:
-            return path
-    raise CompilerNotFoundError(f"no C compiler found (tried {candidates}); install gcc or clang, or pass cc=/path/to/compiler")
-
-
 def binary_platform(fmi_version: int) -> str:
-    """Platform folder under ``binaries/``: e.g. ``linux64`` (FMI 2) or ``x86_64-linux`` (FMI 3)."""
+    """Platform folder under ``binaries/``: e.g. ``linux64`` (FMI 2) or ``x86_64-linux`` (FMI 3).
+
+    Parameters
+    ----------
+    fmi_version : {2, 3}
+        FMI standard.
+
+    Returns
+    -------
+    str
+        The folder name for this machine.
+
+    Raises
+    ------
+    RuntimeError
+        Not Linux, macOS or Windows.
+    """
     system = {"Linux": "linux", "Darwin": "darwin", "Windows": "win"}.get(platform.system())
     machine = platform.machine().lower()
     if system is None:
@@ -53,17 +54,34 @@ def binary_platform(fmi_version: int) -> str:
 def compile_sources(
     src_dir: Path, out: Path, fmi_version: int, *, cc: str | None = None, extra_flags: tuple[str, ...] = ()
 ) -> Path:
-    """Compile the FMU sources in ``src_dir`` into the shared library ``out``; raise RuntimeError on failure."""
-    compiler = find_compiler(cc)
-    ext = {"Darwin": ".dylib", "Windows": ".dll"}.get(platform.system(), ".so")
-    if out.suffix != ext:
-        raise ValueError(f"shared library name must end with {ext!r}, got {out.name!r}")
-    cmd = [compiler, *CFLAGS, *extra_flags, "-shared", "-I", str(src_dir), "-o", str(out)]
-    cmd += [str(src_dir / name) for name in compiled_sources(fmi_version)] + ["-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    if proc.returncode != 0:
-        raise RuntimeError(f"C compilation failed ({' '.join(cmd)}):\n{proc.stderr.strip()}")
-    return out
+    """Compile the FMU sources in ``src_dir`` into the shared library ``out``.
+
+    Parameters
+    ----------
+    src_dir : Path
+        Folder with the files of :func:`~pendulab.fmu.codegen.generate_sources`.
+    out : Path
+        Library to write (platform suffix, e.g. ``.so``).
+    fmi_version : {2, 3}
+        FMI standard (which FMI layer to compile).
+    cc : str, optional
+        C compiler; default ``$CC``, then ``cc``, ``gcc``, ``clang``.
+    extra_flags : tuple of str
+        Flags after :data:`CFLAGS`.
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Raises
+    ------
+    CompilerNotFoundError (RuntimeError)
+        No C compiler found.
+    RuntimeError
+        Compilation failed.
+    """
+    return compile_shared(src_dir, compiled_sources(fmi_version), out, cc=cc, extra_flags=extra_flags)
 
 
 def export(
@@ -138,7 +156,7 @@ def export(
         src.mkdir()
         for name, data in sources.items():
             (src / name).write_bytes(data)
-        ext = {"Darwin": ".dylib", "Windows": ".dll"}.get(platform.system(), ".so")
+        ext = shared_library_suffix()
         lib = compile_sources(src, Path(tmp) / f"{lay.identifier}{ext}", fmi_version, cc=cc)
         files[f"binaries/{binary_platform(fmi_version)}/{lib.name}"] = lib.read_bytes()
     path.parent.mkdir(parents=True, exist_ok=True)

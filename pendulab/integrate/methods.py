@@ -8,14 +8,20 @@ Runge-Kutta method with the same steps.
 
 from __future__ import annotations
 
-from . import casadi_methods, fixed_step, scipy_methods, taylor
+from . import casadi_methods, compiled, fixed_step, scipy_methods, taylor
 from .registry import MethodSpec, Registry
 
 __all__ = ["METHODS", "register_method"]
 
 #: All integration methods by name (read-only; see :func:`register_method`).
 METHODS: Registry = Registry(
-    (*casadi_methods.METHOD_SPECS, *scipy_methods.METHOD_SPECS, *fixed_step.METHOD_SPECS, *taylor.METHOD_SPECS),
+    (
+        *casadi_methods.METHOD_SPECS,
+        *scipy_methods.METHOD_SPECS,
+        *fixed_step.METHOD_SPECS,
+        *taylor.METHOD_SPECS,
+        *compiled.METHOD_SPECS,
+    ),
     deprecated={"rk": "rk4"},
 )
 

@@ -7,11 +7,11 @@ import pytest
 
 from pendulab.bench.cases import CASES
 from pendulab.bench.fmu_methods import fmu_runner
-
-pytestmark = pytest.mark.needs_cc  # the FMU is exported (compiled) on first use
 from pendulab.bench.reference import load_reference
 from pendulab.bench.workprecision import BENCH_METHODS, run_work_precision
 from pendulab.integrate import SimulationError
+
+pytestmark = pytest.mark.needs_cc  # the FMU is exported (compiled) on first use
 
 
 def test_fmu_methods_are_registered_tolerance_sweeps():

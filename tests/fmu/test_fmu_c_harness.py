@@ -70,7 +70,7 @@ def test_c_importer_is_clean_under_valgrind(fmu_builds, version, tmp_path):
 
 def test_ode_solvers_converge_and_rodas4_steps_over_a_stiff_spring(tmp_path):
     """The FMI-independent solvers on their own (tests/fmu/c/ode_solver_test.c states each check)."""
-    c_dir = Path(__file__).parents[2] / "pendulab" / "fmu" / "c"
+    c_dir = Path(__file__).parents[2] / "pendulab" / "native" / "c"
     exe = tmp_path / "ode_solver_test"
     cmd = [
         find_compiler(),

@@ -1,4 +1,4 @@
-/* Checks of the FMI-independent solvers in pendulab/fmu/c/ode_solver.c (run by test_fmu_c_harness.py).
+/* Checks of the FMI-independent solvers in pendulab/native/c/ode_solver.c (run by test_fmu_c_harness.py).
  * 1. harmonic oscillator, 10 s: global error follows the tolerance for dopri5 and rodas4, and the step
  *    count grows as tol^(-1/5) (dopri5, local error order 5) and tol^(-1/4) (rodas4, order 4);
  * 2. a slow pendulum coupled to an undamped stiff spring (omega = 1000 rad/s) from a consistent start:
