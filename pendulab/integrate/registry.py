@@ -18,7 +18,6 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from types import MappingProxyType
 from typing import Any, Protocol
 
 import numpy as np
@@ -317,16 +316,3 @@ class Registry(Mapping[str, MethodSpec]):
         if method.lower() in by_lower:
             return by_lower[method.lower()]
         raise ValueError(f"unknown method {method!r}; expected one of {list(self._specs)}")
-
-    def by_family(self) -> Mapping[str, tuple[str, ...]]:
-        """Method names grouped by family.
-
-        Returns
-        -------
-        mapping of str to tuple of str
-            Read-only mapping family -> method names, in registration order.
-        """
-        out: dict[str, list[str]] = {}
-        for spec in self._specs.values():
-            out.setdefault(spec.family, []).append(spec.name)
-        return MappingProxyType({k: tuple(v) for k, v in out.items()})
