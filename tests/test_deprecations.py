@@ -29,7 +29,7 @@ def test_tracking_sampled_names_moved():
 
     with pytest.warns(DeprecationWarning, match="control.tracking.tvlqr_tracker"):
         assert old.tvlqr_tracker is tvlqr_tracker
-    with pytest.warns(DeprecationWarning, match="control.feedback.TVLQRTracker"):
+    with pytest.warns(DeprecationWarning, match="control.tracking.TVLQRTracker"):
         assert old.TVLQRTracker is TVLQRTracker
     with pytest.warns(DeprecationWarning, match="TVLQRTracker"):
         assert pl.control.TrackingController is TVLQRTracker

@@ -20,7 +20,6 @@ from .feedback import (
     EnergySwingUp,
     LinearStateFeedback,
     SampledController,
-    TVLQRTracker,
     actuated_inputs,
     as_feedback,
     balance_controller,
@@ -30,7 +29,15 @@ from .feedback import (
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
 from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, swing_up
 from .swingup.guess import Guess, energy_guess, linear_guess
-from .tracking import default_weights, load_reference_csv, resample_reference, swingup_reference, tvlqr, tvlqr_tracker
+from .tracking import (
+    TVLQRTracker,
+    default_weights,
+    load_reference_csv,
+    resample_reference,
+    swingup_reference,
+    tvlqr,
+    tvlqr_tracker,
+)
 
 __all__ = [
     "CONTROLLERS",

@@ -1,4 +1,4 @@
-"""Time-varying LQR tracking: the one design behind :class:`~pendulab.control.feedback.TVLQRTracker`.
+"""Time-varying LQR tracking: the one TVLQR tracker (:class:`TVLQRTracker`) and its design.
 
 The tracker is sampled-data (zero-order hold at the sample time), as in
 ``pendulab.simulate`` with a callable input and in a co-simulation master, so
@@ -19,19 +19,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._checks import positive_float
 from ..model.model import INPUT_NAMES, Model
-from .feedback import LinearStateFeedback, TVLQRTracker, actuated_inputs, as_feedback, energy_swingup, upright_state
-from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, weight_matrix
+from .feedback import LinearStateFeedback, actuated_inputs, as_feedback, energy_swingup, upright_state
+from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, weight_matrix, wrap_state_error
 
 if TYPE_CHECKING:  # typing only: the swing-up package builds on this module
     from .swingup.solve import SwingUpResult
 
 __all__ = [
+    "TVLQRTracker",
     "default_weights",
     "tvlqr",
     "tvlqr_tracker",
@@ -39,6 +41,86 @@ __all__ = [
     "swingup_reference",
     "load_reference_csv",
 ]
+
+
+@dataclass
+class TVLQRTracker:
+    """Track a reference with time-varying gains, then hand over to ``final``: the one TVLQR tracker.
+
+    ``u = u_ref[k] - K[k] (x - x_ref[k])`` (angles wrapped) on sample ``k``, the
+    last reference sample at or before ``t`` (a time a hair, 1e-6 of a sample,
+    before a grid time belongs to it: masters accumulate time in floating
+    point). After the reference, ``final`` (e.g. LQR balance) takes over.
+    Build it with :func:`pendulab.control.tracking.tvlqr_tracker` (any
+    reference) or :func:`pendulab.control.tracking.tvlqr` (an optimized swing-up).
+
+    Attributes
+    ----------
+    model : Model
+        Plant the gains were designed for.
+    t_ref : ndarray, shape (N,)
+        Reference times [s], increasing.
+    x_ref : ndarray, shape (N, nx)
+        Reference states.
+    u_ref : ndarray, shape (N-1, m) or (N, m)
+        Reference torques [N.m] for ``input_names``.
+    K : ndarray, shape (N-1, m, nx) or (N, m, nx)
+        Gains [N.m per state unit].
+    sample_time : float
+        Sample period [s].
+    input_names : tuple of str
+        The torques driven (m of them); a passive torque in the list gets zero rows.
+    final : SampledController or None
+        Used after ``t_ref[-1]``; holds ``u_ref[-1]`` if None.
+    u_max : float or None
+        Symmetric torque limit [N.m].
+    """
+
+    model: Model
+    t_ref: np.ndarray
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    K: np.ndarray
+    sample_time: float
+    input_names: tuple[str, ...] = INPUT_NAMES
+    final: Any = None
+    u_max: float | None = None
+
+    def __post_init__(self) -> None:
+        self.t_ref = np.asarray(self.t_ref, dtype=float)
+        self.x_ref = np.asarray(self.x_ref, dtype=float)
+        self.u_ref = np.asarray(self.u_ref, dtype=float).reshape(len(self.u_ref), -1)
+        self.K = np.asarray(self.K, dtype=float)
+        n, m = len(self.t_ref), len(self.input_names)
+        if n < 2 or np.any(np.diff(self.t_ref) <= 0):
+            raise ValueError(f"t_ref must be increasing with at least 2 samples, got {self.t_ref[:5]!r}...")
+        if self.x_ref.shape != (n, self.model.nx):
+            raise ValueError(f"x_ref must have shape ({n}, {self.model.nx}), got {self.x_ref.shape}")
+        if self.u_ref.shape[0] not in (n - 1, n) or self.u_ref.shape[1] != m:
+            raise ValueError(f"u_ref must have shape ({n}, {m}) or ({n - 1}, {m}), got {self.u_ref.shape}")
+        if self.K.ndim != 3 or self.K.shape[0] not in (n - 1, n) or self.K.shape[1:] != (m, self.model.nx):
+            raise ValueError(f"K must have shape ({n - 1}, {m}, {self.model.nx}), got {self.K.shape}")
+        self.sample_time = positive_float("sample_time", self.sample_time)
+
+    @property
+    def horizon(self) -> float:
+        """End of the reference [s]; ``final`` acts from then on."""
+        return float(self.t_ref[-1])
+
+    def reset(self) -> None:
+        """Reset the final controller."""
+        if self.final is not None:
+            self.final.reset()
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Torques [N.m] for ``input_names`` at time ``t`` [s] and state ``x``, shape (m,)."""
+        k = int(np.searchsorted(self.t_ref, t + 1e-6 * self.sample_time, side="right")) - 1
+        if k >= min(len(self.K), len(self.u_ref), len(self.t_ref) - 1):
+            u = np.asarray(self.final(t, x), dtype=float) if self.final is not None else self.u_ref[-1].copy()
+        else:
+            k = max(k, 0)
+            u = self.u_ref[k] - self.K[k] @ wrap_state_error(np.asarray(x, dtype=float) - self.x_ref[k], self.model.state_names)
+        return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
 
 
 def default_weights(model: Model, torque_limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:

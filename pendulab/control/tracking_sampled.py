@@ -1,5 +1,5 @@
 """Deprecated module, kept for one release: use :mod:`pendulab.control.tracking` (the one TVLQR design)
-and :class:`pendulab.control.feedback.TVLQRTracker`."""
+and :class:`pendulab.control.tracking.TVLQRTracker`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import warnings
 from typing import Any
 
 _MOVED = {
-    "TVLQRTracker": "feedback",
+    "TVLQRTracker": "tracking",
     "tvlqr_tracker": "tracking",
     "resample_reference": "tracking",
     "swingup_reference": "tracking",

@@ -9,123 +9,21 @@ parameter vector ``p`` as an explicit input so that parameters stay tunable
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from .builders import SymbolicModel, build_elastic, build_rigid
+from .functions import _vectorized, model_functions
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
-from .pycode import to_python
+from .signals import _INPUT_INFO, _OUTPUT_INFO, _STATE_DESCRIPTIONS, ACTUATIONS, INPUT_NAMES, SignalInfo, _state_unit
 from .statics import static_spring_lengths
 
 __all__ = ["Model", "rigid", "elastic", "make_model", "model_functions", "INPUT_NAMES", "ACTUATIONS"]
-
-INPUT_NAMES: tuple[str, ...] = ("tau1", "tau2")
-#: Which of (tau1, tau2) each actuation drives.
-ACTUATIONS: Mapping[str, tuple[int, ...]] = {"full": (0, 1), "pendubot": (0,), "acrobot": (1,)}
-
-_STATE_UNITS = {"theta": "rad", "omega": "rad/s", "r": "m", "v": "m/s"}
-_STATE_DESCRIPTIONS = {
-    "theta1": "absolute angle of link 1 from the downward vertical",
-    "theta2": "absolute angle of link 2 from the downward vertical",
-    "omega1": "angular velocity of link 1",
-    "omega2": "angular velocity of link 2",
-    "r1": "length of spring 1",
-    "r2": "length of spring 2",
-    "v1": "rate of change of spring 1 length",
-    "v2": "rate of change of spring 2 length",
-}
-_OUTPUT_INFO = {
-    "x1": ("m", "horizontal position of the end of link 1 (bob 1)"),
-    "y1": ("m", "vertical position of the end of link 1 (bob 1), up positive"),
-    "x2": ("m", "horizontal position of the end of link 2 (bob 2)"),
-    "y2": ("m", "vertical position of the end of link 2 (bob 2), up positive"),
-    "energy": ("J", "total mechanical energy (kinetic + gravity + springs)"),
-    "stretch1": ("m", "extension of spring 1 beyond its rest length"),
-    "stretch2": ("m", "extension of spring 2 beyond its rest length"),
-}
-_INPUT_INFO = {
-    "tau1": ("N.m", "torque between ground and link 1"),
-    "tau2": ("N.m", "torque between link 1 and link 2"),
-}
-
-
-@dataclass(frozen=True)
-class SignalInfo:
-    """Name, unit and description of a state, input or output."""
-
-    name: str
-    unit: str
-    description: str
-
-
-def _state_unit(name: str) -> str:
-    return _STATE_UNITS[name.rstrip("0123456789")]
-
-
-@cache
-def model_functions(kind: str) -> dict[str, ca.Function]:
-    """CasADi Functions of one model kind, built once per process.
-
-    Parameters
-    ----------
-    kind : {"rigid", "elastic"}
-        Model kind (anything other than ``"rigid"`` builds the elastic model).
-
-    Returns
-    -------
-    dict of str to casadi.Function
-        The functions listed under :class:`Model` ``functions``, each taking the
-        parameter vector ``p`` as an explicit input.
-    """
-    sym: SymbolicModel = build_rigid() if kind == "rigid" else build_elastic()
-    x, u, p = sym.x, sym.u, sym.p
-    energy = sym.kinetic + sym.potential
-    outputs = [sym.positions, energy]
-    if kind == "elastic":
-        outputs.append(sym.stretch)
-    y = ca.vertcat(*outputs)
-    xdot = sym.xdot
-    return {
-        "rhs": ca.Function("rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"]),
-        "outputs": ca.Function("outputs", [x, u, p], [y], ["x", "u", "p"], ["y"]),
-        "jac_rhs": ca.Function(
-            "jac_rhs",
-            [x, u, p],
-            [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
-            ["x", "u", "p"],
-            ["A", "B"],
-        ),
-        "mass_matrix": ca.Function("mass_matrix", [x, p], [sym.eom.M], ["x", "p"], ["M"]),
-        "bias": ca.Function("bias", [x, p], [sym.eom.bias], ["x", "p"], ["bias"]),
-        "kinetic": ca.Function("kinetic", [x, p], [sym.kinetic], ["x", "p"], ["T"]),
-        "potential": ca.Function("potential", [x, p], [sym.potential], ["x", "p"], ["V"]),
-        "spring_energy": ca.Function("spring_energy", [x, p], [sym.spring], ["x", "p"], ["V_spring"]),
-        "energy": ca.Function("energy", [x, p], [energy], ["x", "p"], ["E"]),
-        "positions": ca.Function("positions", [x, p], [sym.positions], ["x", "p"], ["pos"]),
-        "stretch": ca.Function("stretch", [x, p], [sym.stretch], ["x", "p"], ["stretch"]),
-        "dissipation": ca.Function("dissipation", [x, p], [sym.dissipation], ["x", "p"], ["P_diss"]),
-        "power_in": ca.Function("power_in", [x, u, p], [sym.power_in], ["x", "u", "p"], ["P_in"]),
-    }
-
-
-@cache
-def _vectorized(kind: str, fname: str) -> Callable[..., np.ndarray]:
-    """Element-wise NumPy translation of one model function (inputs (n_in, N), output (n_out, N))."""
-    generated = to_python(model_functions(kind)[fname], vectorized=True)
-
-    def evaluate(X: np.ndarray, *rest: np.ndarray) -> np.ndarray:
-        out = generated(X, *rest)
-        if out.ndim == 2 and out.shape[1] == X.shape[1]:
-            return out
-        # Outputs that do not depend on the state (e.g. the rigid model's zero stretch) come back unbroadcast.
-        return np.tile(out.reshape(len(out), 1), (1, X.shape[1]))
-
-    return evaluate
 
 
 @dataclass(frozen=True)

@@ -1,21 +1,4 @@
-"""Scenes: a pendulum, an initial state, a horizon and what the user cares about, as TOML.
-
-A scene file has the sections ``[scene]``, ``[model]`` (with ``[model.params]``),
-``[initial]`` (state values by name, and ``start``: how unstated spring
-lengths are set), ``[simulation]``, ``[outputs]`` and ``[input]`` (constant
-torques, plus an optional ``[input.sine]``); any other
-top-level section (e.g. ``[task]``) is kept verbatim in ``Scene.extra`` for the
-feature that uses it. Every key of the known sections is validated: a typo is
-an error naming the file, the section, the key, the value and what was
-expected, never a silently ignored setting. See ``docs/scenes.md``.
-
-Shipped scenes live in ``pendulab/scenes/*.toml`` and are loaded by name:
-``load_scene("seed_paper")``. Two groups sit in subdirectories: the cases of
-the work-precision study (``"bench/rigid_chaotic_10s"``) and the FMU
-validation scenes (``"validation/rigid_forced"``); ``list_scenes("bench")``
-lists a group. Every scene of the project -- user scenes, benchmark cases,
-validation scenes and swing-up tasks -- is this one type.
-"""
+"""The one scene type: :class:`Scene`, its initial-state rule and the catalogue of shipped scenes."""
 
 from __future__ import annotations
 
@@ -30,21 +13,21 @@ from typing import Any
 
 import numpy as np
 
-from .integrate import METHODS, simulate, time_grid
-from .integrate.trajectory import Trajectory
-from .model.model import Model, make_model
-from .model.params import ElasticParams, RigidParams
-from .model.quasistatic import quasi_static_state
+from ..integrate import simulate, time_grid
+from ..integrate.trajectory import Trajectory
+from ..model.model import Model, make_model
+from ..model.params import ElasticParams, RigidParams
+from ..model.quasistatic import quasi_static_state
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
+    pass
 
-__all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "initial_state", "SCENE_DIR", "STARTS", "GROUPS"]
+__all__ = ["Scene", "list_scenes", "default_scene", "scene_path", "initial_state", "SCENE_DIR", "STARTS", "GROUPS"]
 
 #: Directory of the scenes shipped with the package.
-SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+SCENE_DIR = Path(__file__).resolve().parent.parent / "scenes"
 
 _PARAM_CLASSES = {"rigid": RigidParams, "elastic": ElasticParams}
 _SIMULATION_DEFAULTS: Mapping[str, Any] = MappingProxyType(
@@ -378,167 +361,3 @@ def scene_path(path_or_name: str | Path) -> Path:
     if group in ("", *GROUPS) and leaf and "\\" not in leaf and (SCENE_DIR / f"{stem}.toml").is_file():
         return SCENE_DIR / f"{stem}.toml"
     raise FileNotFoundError(f"scene {text!r}: no such file and no shipped scene of that name; shipped: {list(list_scenes())}")
-
-
-class _Reader:
-    """Validates one parsed file, building messages that name file, section and key."""
-
-    def __init__(self, path: Path, data: Mapping[str, Any]) -> None:
-        self.path = path
-        self.data = data
-
-    def error(self, section: str, key: str | None, value: Any, expected: str) -> ValueError:
-        where = f"[{section}] {key}" if key is not None else f"[{section}]"
-        shown = "missing" if value is _MISSING else repr(value)
-        return ValueError(f"scene file {str(self.path)!r}: {where} = {shown}: expected {expected}")
-
-    def table(self, section: str, required: bool = False) -> Mapping[str, Any]:
-        keys = section.split(".")
-        node: Any = self.data
-        for part in keys:
-            node = node.get(part, _MISSING) if isinstance(node, Mapping) else _MISSING
-            if node is _MISSING:
-                if required:
-                    raise self.error(section, None, _MISSING, "a table (section)")
-                return {}
-        if not isinstance(node, Mapping):
-            raise self.error(section, None, node, "a table (section)")
-        return node
-
-    def only(self, section: str, table: Mapping[str, Any], allowed: tuple[str, ...], what: str) -> None:
-        for key in table:
-            if key not in allowed:
-                raise self.error(section, key, table[key], f"one of the {what} {list(allowed)}")
-
-    def real(self, section: str, key: str, value: Any, *, positive: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise self.error(section, key, value, "a finite number" + (" > 0" if positive else ""))
-        if positive and value <= 0:
-            raise self.error(section, key, value, "a finite number > 0")
-        return float(value)
-
-    def string(self, section: str, key: str, value: Any, choices: tuple[str, ...] | None = None) -> str:
-        if not isinstance(value, str) or (choices is not None and value not in choices):
-            raise self.error(section, key, value, "a string" if choices is None else f"one of {list(choices)}")
-        return value
-
-
-_MISSING = object()
-
-
-def load_scene(path_or_name: str | Path) -> Scene:
-    """Load and validate a scene from a TOML file or the name of a shipped scene.
-
-    Parameters
-    ----------
-    path_or_name : str or Path
-        A file path, or a shipped scene name such as ``"seed_paper"``
-        (see :func:`list_scenes`).
-
-    Returns
-    -------
-    Scene
-        The validated scene.
-
-    Raises
-    ------
-    FileNotFoundError
-        No such file or shipped scene.
-    ValueError
-        Malformed TOML, an unknown key in a known section, a wrong type, an
-        unknown parameter or state name, a non-positive horizon, step or
-        tolerance, an unknown method or output. The message names the file,
-        the section, the key, the value and what was expected.
-    """
-    path = scene_path(path_or_name)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"scene file {str(path)!r}: malformed TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"scene file {str(path)!r}: not UTF-8 text: {exc}") from None
-    rd = _Reader(path, data)
-
-    head = rd.table("scene")
-    rd.only("scene", head, ("name", "description"), "keys")
-    name = rd.string("scene", "name", head.get("name", path.stem))
-    description = rd.string("scene", "description", head.get("description", ""))
-
-    model_table = rd.table("model", required=True)
-    rd.only("model", model_table, ("kind", "params"), "keys")
-    kind = rd.string("model", "kind", model_table.get("kind", _MISSING), tuple(_PARAM_CLASSES))
-    params_table = rd.table("model.params")
-    rd.only("model.params", params_table, _PARAM_CLASSES[kind].names(), f"{kind} parameters")
-    params = {k: rd.real("model.params", k, v) for k, v in params_table.items()}
-    try:
-        model = make_model(kind, **params)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"scene file {str(path)!r}: [model.params]: {exc}") from None
-
-    init_table = dict(rd.table("initial"))
-    start = rd.string("initial", "start", init_table.pop("start", "static"), STARTS if kind == "elastic" else ("static",))
-    rd.only("initial", init_table, model.state_names, f"{kind} state names (or 'start')")
-    initial = {k: rd.real("initial", k, v) for k, v in init_table.items()}
-    if start == "quasi-static" and ({"r1", "r2"} & set(initial)):
-        raise rd.error("initial", "start", start, "no stated r1, r2 with a quasi-static start (it sets them)")
-    x0 = initial_state(model, initial, start)
-    if kind == "elastic" and np.any(x0[2:4] <= 0):
-        raise rd.error("initial", "r1/r2", x0[2:4].tolist(), "spring lengths > 0 m")
-
-    sim = rd.table("simulation")
-    rd.only("simulation", sim, tuple(_SIMULATION_DEFAULTS), "keys")
-    settings = {**_SIMULATION_DEFAULTS, **sim}
-    method = rd.string("simulation", "method", settings["method"], ("auto", *METHODS))
-    t_final, dt, rtol, atol = (rd.real("simulation", k, settings[k], positive=True) for k in ("t_final", "dt", "rtol", "atol"))
-    if dt > t_final:
-        raise rd.error("simulation", "dt", dt, f"an output step <= t_final = {t_final}")
-
-    out_table = rd.table("outputs")
-    rd.only("outputs", out_table, ("names", "tolerance"), "keys")
-    names = out_table.get("names", list(_DEFAULT_OUTPUTS))
-    signals = model.state_names + model.input_names + model.output_names
-    if not isinstance(names, list) or not names or any(n not in signals for n in names):
-        raise rd.error("outputs", "names", names, f"a non-empty list of signal names of the {kind} model {list(signals)}")
-    tolerance = out_table.get("tolerance")
-    if tolerance is not None:
-        tolerance = rd.real("outputs", "tolerance", tolerance, positive=True)
-
-    u = None
-    amplitude, frequency = None, 0.0
-    if "input" in data:
-        in_table = dict(rd.table("input"))
-        sine = rd.table("input.sine") if "sine" in in_table else {}
-        in_table.pop("sine", None)
-        rd.only("input", in_table, model.input_names, "input names (or the table 'sine')")
-        u = np.array([rd.real("input", k, in_table.get(k, 0.0)) for k in model.input_names])
-        if sine:
-            rd.only("input.sine", sine, ("amplitude", "frequency"), "keys")
-            amp = sine.get("amplitude", _MISSING)
-            if not isinstance(amp, list) or len(amp) != model.nu:
-                raise rd.error(
-                    "input.sine", "amplitude", amp, f"a list of {model.nu} amplitudes [N.m] for {list(model.input_names)}"
-                )
-            amplitude = np.array([rd.real("input.sine", "amplitude", a) for a in amp])
-            frequency = rd.real("input.sine", "frequency", sine.get("frequency", _MISSING), positive=True)
-
-    extra = {k: v for k, v in data.items() if k not in _KNOWN_SECTIONS}
-    return Scene(
-        name=name,
-        description=description,
-        model=model,
-        initial=MappingProxyType(initial),
-        x0=_frozen(x0),
-        t_final=t_final,
-        dt=dt,
-        method=method,
-        rtol=rtol,
-        atol=atol,
-        outputs=tuple(names),
-        tolerance=tolerance,
-        u=None if u is None else _frozen(u),
-        extra=MappingProxyType(extra),
-        path=path,
-        start=start,
-        u_amplitude=None if amplitude is None else _frozen(amplitude),
-        u_frequency=frequency,
-    )
