@@ -4,6 +4,7 @@ from ._version import __version__
 from .analysis.equilibria import Equilibrium, equilibria, equilibrium
 from .analysis.linearize import Linearization, linearize
 from .analysis.modes import Mode, modes
+from .ensemble import ensemble
 from .integrate import METHODS, SimulationError, simulate
 from .integrate.trajectory import Trajectory
 from .model.model import ACTUATIONS, Model, elastic, make_model, rigid
@@ -22,6 +23,7 @@ __all__ = [
     "SimulationError",
     "Trajectory",
     "elastic",
+    "ensemble",
     "equilibria",
     "equilibrium",
     "linearize",

@@ -25,6 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("analysis", "native"),
     ("integrate",),
     ("scene", "scenes"),
+    ("ensemble",),
     ("control",),
     ("viz",),
     ("fmu",),

@@ -19,6 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._checks import check_model
 from ..model.model import Model, model_functions
 from ..model.statics import static_spring_lengths
 
@@ -184,7 +185,10 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
         configuration (its length would not stay positive).
     RuntimeError
         Newton did not converge.
+    TypeError
+        ``model`` is not a pendulab Model.
     """
+    check_model(model)
     name = _check_name(name)
     uv = model.check_input(u, "u")
     if uv.ndim != 1:
@@ -242,7 +246,10 @@ def equilibria(model: Model, u: Any = None) -> list[Equilibrium]:
     ------
     ValueError
         As :func:`equilibrium` (except for the too-soft-spring case).
+    TypeError
+        ``model`` is not a pendulab Model.
     """
+    check_model(model)
     out = []
     for name in EQUILIBRIUM_NAMES:
         try:

@@ -16,6 +16,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._checks import check_model
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model, make_model, model_functions
 from .equilibria import Equilibrium
 
@@ -28,7 +29,15 @@ __all__ = [
     "check_actuation",
     "operating_point",
     "selected_outputs",
+    "equilibrium_residual",
+    "EQUILIBRIUM_RTOL",
+    "not_equilibrium_error",
 ]
+
+#: Relative tolerance of the equilibrium test: a point is an equilibrium when every state derivative
+#: ``|f_i(x, u)|`` is at most ``EQUILIBRIUM_RTOL * (1 + sum_j |A_ij| |x_j|)``, i.e. no larger than what a
+#: relative perturbation of 1e-6 of the state would produce (round-off of a solved equilibrium is ~1e-15).
+EQUILIBRIUM_RTOL = 1e-6
 
 OutputSpec = str | Sequence[str]
 
@@ -61,6 +70,15 @@ class Linearization:
     kind : {"rigid", "elastic"}
     input_indices : tuple of int
         Positions of the actuated inputs in (tau1, tau2).
+    residual : float
+        ``max_i |f_i(x0, u0)|`` [SI units of the state derivatives]: zero at an
+        equilibrium up to round-off.
+    is_equilibrium : bool
+        True when ``(x0, u0)`` passes the equilibrium test of
+        :func:`equilibrium_residual`. A linearization about a non-equilibrium
+        (along a trajectory) is legitimate, but its deviation model lacks the
+        drift ``f(x0, u0)``: ``modes``, ``to_statespace`` and ``lqr_balance``
+        refuse such a point.
     """
 
     A: np.ndarray
@@ -76,6 +94,8 @@ class Linearization:
     actuation: str
     kind: str
     input_indices: tuple[int, ...]
+    residual: float = 0.0
+    is_equilibrium: bool = True
 
     @property
     def eigenvalues(self) -> np.ndarray:
@@ -85,7 +105,9 @@ class Linearization:
     def __repr__(self) -> str:
         return (
             f"Linearization({self.kind}, actuation={self.actuation!r}, states={list(self.state_names)}, "
-            f"inputs={list(self.input_names)}, outputs={list(self.output_names)})"
+            f"inputs={list(self.input_names)}, outputs={list(self.output_names)}"
+            + ("" if self.is_equilibrium else f", not an equilibrium: |f(x0, u0)| = {self.residual:.3g}")
+            + ")"
         )
 
 
@@ -135,6 +157,7 @@ def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
         ``"stretch"`` for the rigid model, an unknown or repeated name, an
         empty list, or ``outputs`` neither a string nor iterable.
     """
+    check_model(model)
     groups = {
         "states": model.state_names,
         "positions": ("x1", "y1", "x2", "y2"),
@@ -204,6 +227,7 @@ def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...]
     ValueError
         Invalid ``outputs`` (see :func:`resolve_outputs`).
     """
+    check_model(model)
     names = resolve_outputs(model, outputs)
     return names, _output_function(model.kind, names)
 
@@ -234,6 +258,7 @@ def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np
     ValueError
         ``x`` or ``u`` is not a single finite vector of the right size.
     """
+    check_model(model)
     if isinstance(x, Equilibrium):
         if u is None:
             u = x.u
@@ -262,7 +287,9 @@ def linearize(
         Model to linearize, at its parameters ``model.p``.
     x : array_like, shape (nx,), or Equilibrium
         Operating-point state in ``model.state_names`` order (SI units). Need
-        not be an equilibrium (time-varying linearization along a trajectory).
+        not be an equilibrium (time-varying linearization along a trajectory):
+        the result then says so (``is_equilibrium`` False, ``residual`` =
+        ``max |f(x, u)|``) instead of raising.
     u : array_like, shape (2,), optional
         Operating-point torques (tau1, tau2) [N.m]; default zero, or the
         equilibrium's own torques when ``x`` is an Equilibrium.
@@ -276,19 +303,24 @@ def linearize(
     -------
     Linearization
         A (nx, nx), B (nx, m), C (ny, nx), D (ny, m) with m = 2 for ``full``,
-        1 otherwise; signal names attached.
+        1 otherwise; signal names attached; ``residual`` and ``is_equilibrium``
+        mark the operating point.
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
         Unknown actuation or output name, operating point of the wrong size or
         non-finite.
     """
+    check_model(model)
     idx = check_actuation(inputs)
     xv, uv = operating_point(model, x, u)
     names, yfun = selected_outputs(model, outputs)
     A, B = model.functions["jac_rhs"](xv, uv, model.p)
     y, C, D = yfun(xv, uv, model.p)
+    residual, is_eq = _residual(model, xv, uv, np.asarray(A, dtype=float))
     cols = list(idx)
     return Linearization(
         A=np.asarray(A, dtype=float),
@@ -304,6 +336,60 @@ def linearize(
         actuation=inputs,
         kind=model.kind,
         input_indices=tuple(idx),
+        residual=residual,
+        is_equilibrium=is_eq,
+    )
+
+
+def _residual(model: Model, x: np.ndarray, u: np.ndarray, A: np.ndarray) -> tuple[float, bool]:
+    f = np.abs(np.asarray(model.functions["rhs"](x, u, model.p), dtype=float).ravel())
+    scale = 1.0 + np.abs(A) @ np.abs(x)
+    return float(np.max(f)), bool(np.all(f <= EQUILIBRIUM_RTOL * scale))
+
+
+def equilibrium_residual(model: Model, x: Any, u: Any = None) -> tuple[float, bool]:
+    """How far an operating point is from an equilibrium: ``max_i |f_i(x, u)|`` and the verdict.
+
+    The test is relative: ``|f_i(x, u)| <= EQUILIBRIUM_RTOL * (1 + sum_j |A_ij| |x_j|)``
+    for every state derivative ``i`` (``A`` the exact Jacobian), so that a solved
+    equilibrium of a stiff elastic model passes while a nonzero rate or a
+    visibly tilted link fails.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum, at its parameters.
+    x : array_like, shape (nx,), or Equilibrium
+        State (or a solved equilibrium, with its own torques unless ``u`` is given).
+    u : array_like, shape (2,), optional
+        Torques (tau1, tau2) [N.m]; default zero.
+
+    Returns
+    -------
+    residual : float
+        ``max_i |f_i(x, u)|`` [SI units of the state derivatives: rad/s, m/s, rad/s^2, m/s^2].
+    is_equilibrium : bool
+        The verdict of the relative test.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a Model.
+    ValueError
+        ``x`` or ``u`` of the wrong size or non-finite.
+    """
+    check_model(model)
+    xv, uv = operating_point(model, x, u)
+    A = np.asarray(model.functions["jac_rhs"](xv, uv, model.p)[0], dtype=float)
+    return _residual(model, xv, uv, A)
+
+
+def not_equilibrium_error(where: str, lin: Linearization, keyword: str = "allow_non_equilibrium") -> ValueError:
+    """The one message for a function that needs an equilibrium and got another point (used by modes, LQR, bridge)."""
+    return ValueError(
+        f"{where}: the operating point is not an equilibrium: |f(x, u)| = {lin.residual:.3g} (largest state "
+        f"derivative, SI units) at x = {np.round(lin.x0, 12).tolist()}, u = {lin.u0.tolist()} [N.m]; expected an "
+        f"equilibrium: solve one with pendulab.equilibrium(model, name, u) (or pass {keyword}=True to use this point anyway)"
     )
 
 
@@ -328,6 +414,7 @@ def linearize_along(model: Model, X: Any, U: Any = None, inputs: str = "full") -
     B : ndarray, shape (N, nx, m)
         df/du at each sample, m = 2 for ``full`` and 1 otherwise.
     """
+    check_model(model)
     idx = list(check_actuation(inputs))
     Xv = np.atleast_2d(model.check_state(X, "X"))
     Uv = np.broadcast_to(model.check_input(U, "U"), (Xv.shape[0], model.nu))

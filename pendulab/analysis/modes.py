@@ -18,9 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import check_model
 from ..model.model import Model
 from .equilibria import Equilibrium, equilibrium
-from .linearize import linearize, operating_point
+from .linearize import linearize, not_equilibrium_error, operating_point
 
 __all__ = ["Mode", "modes", "mode_table", "stiffness_sweep"]
 
@@ -126,27 +127,46 @@ def _label(shape: np.ndarray, spring_share: float, nq: int) -> str:
     return "spring stretch " + phase if not phase.startswith("mostly") else phase.replace("mostly ", "") + " stretch"
 
 
-def modes(model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None) -> tuple[Mode, ...]:
-    """Modes of the exact linearization at an equilibrium (or any state).
+def modes(
+    model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None, *, allow_non_equilibrium: bool = False
+) -> tuple[Mode, ...]:
+    """Modes of the exact linearization at an equilibrium.
 
     Parameters
     ----------
     model : Model
         Model to analyse, at its parameters.
     at : str, Equilibrium or array_like of shape (nx,)
-        Equilibrium name (solved at torque ``u``), a solved Equilibrium, or a state.
+        Equilibrium name (solved at torque ``u``), a solved Equilibrium, or a
+        state that is an equilibrium under ``u`` (e.g. ``[pi, pi, 0, 0]``).
     u : array_like, shape (2,), optional
         Torques (tau1, tau2) [N.m]; default zero (or the Equilibrium's own).
+    allow_non_equilibrium : bool
+        Return the eigenstructure of the Jacobian at a state that is not an
+        equilibrium (local, "frozen-time" modes) instead of raising.
 
     Returns
     -------
     tuple of Mode
         Sorted by natural frequency, unstable before decaying at equal frequency.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pendulab Model.
+    ValueError
+        Unknown equilibrium name, a state of the wrong size, or a state that is
+        not an equilibrium (the message names ``|f(x, u)|`` and suggests
+        :func:`pendulab.equilibrium`).
     """
+    check_model(model)
     if isinstance(at, str):
         at = equilibrium(model, at, u)
     x, uv = operating_point(model, at, u)
-    A = linearize(model, x, uv).A
+    lin = linearize(model, x, uv)
+    if not lin.is_equilibrium and not allow_non_equilibrium:
+        raise not_equilibrium_error("modes", lin)
+    A = lin.A
     M = model.mass_matrix(x)
     nq = model.nq
     ev, V = np.linalg.eig(A)

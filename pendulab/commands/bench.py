@@ -6,8 +6,10 @@ import argparse
 import csv
 import json
 import sys
-import time
 from pathlib import Path
+from typing import Any
+
+from . import CLIError
 
 __all__ = ["register"]
 
@@ -15,20 +17,24 @@ _DEFAULT_OUT = "docs/benchmarks"
 
 
 class _Bar:
-    """A one-line progress bar on stderr."""
+    """Progress of a benchmark as a tqdm bar on stderr, fed by ``progress(done, total, label)``."""
 
-    def __init__(self, width: int = 30) -> None:
-        self.width = width
-        self.start = time.perf_counter()
+    def __init__(self, desc: str = "bench") -> None:
+        self.desc = desc
+        self.bar: Any = None
 
     def __call__(self, done: int, total: int, label: str) -> None:
-        frac = done / total if total else 1.0
-        fill = int(self.width * frac)
-        elapsed = time.perf_counter() - self.start
-        sys.stderr.write(f"\r[{'#' * fill}{'.' * (self.width - fill)}] {done}/{total} {elapsed:6.1f}s {label[:60]:<60}")
+        from tqdm import tqdm
+
+        if self.bar is None:
+            self.bar = tqdm(total=total, desc=self.desc, unit="step", file=sys.stderr, dynamic_ncols=True)
+        self.bar.total = total
+        self.bar.n = done
+        self.bar.set_postfix_str(label[:60], refresh=False)
+        self.bar.refresh()
         if done >= total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+            self.bar.close()
+            self.bar = None
 
 
 def _work_precision(args: argparse.Namespace) -> int:
@@ -162,6 +168,48 @@ def _references(args: argparse.Namespace) -> int:
     return 0
 
 
+def _ensemble(args: argparse.Namespace) -> int:
+    from ..bench import ensemble as eb
+    from .ensemble import DEFAULT_K
+
+    for name in ("grid", "repeats"):
+        if getattr(args, name) < 1:
+            raise CLIError(f"--{name} {getattr(args, name)}: expected an integer >= 1")
+    for name in ("runs", "hand_runs"):
+        value = getattr(args, name)
+        if value is not None and value < 1:
+            raise CLIError(f"--{name.replace('_', '-')} {value}: expected an integer >= 1")
+    if not args.t_max > 0:
+        raise CLIError(f"--t-max {args.t_max}: expected a number > 0")
+    if any(n < 1 for n in [*args.threads, *args.workers]):
+        raise CLIError("--threads/--workers: expected integers >= 1")
+    out = Path(args.out)
+    bench = eb.run_ensemble_bench(
+        grid=args.grid,
+        t_max=args.t_max,
+        runs=args.runs,
+        hand_runs=args.hand_runs,
+        repeats=args.repeats,
+        threads=tuple(args.threads),
+        workers=tuple(args.workers),
+        progress=_Bar("bench ensemble"),
+    )
+    if not args.no_cli:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            cli = ["ensemble", "flipmap", "--model", "rigid", "--grid", str(args.grid), "--t-max", f"{args.t_max:g}"]
+            bench.extra["cli"] = eb.time_cli(cli, tmp)
+    if args.elastic_grid:
+        bench.extra["elastic"] = eb.elastic_rigid_ratio(args.elastic_grid, args.t_max, args.k or DEFAULT_K)
+    text = eb.ensemble_markdown(bench)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    print(text)
+    print(f"wrote {out}")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("bench", help="work-precision and stability benchmarks", description=__doc__)
     sub = p.add_subparsers(dest="bench_command", metavar="BENCH")
@@ -196,3 +244,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rf.add_argument("--cases", nargs="+", metavar="CASE", help="case names (default: all)")
     rf.add_argument("--out", default=None, help="directory (default: the package's bench/references)")
     rf.set_defaults(func=_references)
+
+    en = sub.add_parser(
+        "ensemble",
+        help="ensemble throughput (runs/s) on the rigid flip map: threads, Dask workers, hand-written heyoka loop",
+        description="Throughput of pendulab.ensemble (local threads, Dask LocalCluster worker processes) against a "
+        "hand-written single-core heyoka loop, on the runs of the rigid flip map; also times the whole "
+        "`pendulab ensemble flipmap` command and the elastic map against the rigid one.",
+    )
+    en.add_argument("--grid", type=int, default=400, help="flip-map grid defining the workload (default 400)")
+    en.add_argument("--t-max", type=float, default=10.0, help="horizon [s] (default 10)")
+    en.add_argument("--runs", type=int, default=None, help="time a seeded random subset of this many runs (default all)")
+    en.add_argument("--hand-runs", type=int, default=None, help="runs of the hand-written loop (default: as --runs)")
+    en.add_argument("--repeats", type=int, default=3, help="timed repetitions; medians reported (default 3)")
+    en.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="local thread counts (default 1 2)")
+    en.add_argument("--workers", type=int, nargs="*", default=[1, 2], help="Dask worker processes (default 1 2)")
+    en.add_argument("--no-cli", action="store_true", help="do not time the whole flipmap command")
+    en.add_argument("--elastic-grid", type=int, default=100, help="grid of the elastic/rigid timing (0: skip; default 100)")
+    en.add_argument("--k", type=float, default=None, help="elastic stiffness [N/m] (default: the flipmap command's)")
+    en.add_argument("--out", default="benchmarks/results/ensemble.md", help="Markdown results file")
+    en.set_defaults(func=_ensemble)

@@ -34,6 +34,8 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
+    """Exit status 0 PASS, 1 FAIL; bad input (an unreadable file: ``UnreadableFMUError``, a ValueError)
+    propagates to the dispatcher, which prints one line and returns 2."""
     from ..fmu import validate
 
     report = validate(
@@ -62,7 +64,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     e.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")
     e.set_defaults(func=_export)
 
-    v = sub.add_parser("validate", help="fmpy validate_fmu + agreement with the native integrator; exit 1 on FAIL")
+    v = sub.add_parser(
+        "validate",
+        help="fmpy validate_fmu + agreement with the native integrator; exit 1 on FAIL, 2 on an unreadable file",
+        description="Validate a pendulab FMU: fmpy's validate_fmu plus agreement with the native integrator on the "
+        "validation scenes. Exit status: 0 PASS, 1 FAIL, 2 bad input (not a readable FMU - not a zip, a truncated "
+        "archive, a schema-invalid modelDescription.xml -, not a pendulab FMU, unknown scene), one line on stderr.",
+    )
     v.add_argument("fmu", type=Path)
     v.add_argument("--scene", action="append", metavar="NAME", help="validation scene (repeatable; default: all)")
     v.add_argument("--out", type=Path, default=None, help="directory for the overlay plot")

@@ -12,8 +12,9 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from .._checks import check_model
 from ..analysis.equilibria import equilibrium
-from ..analysis.linearize import OutputSpec, check_actuation, linearize, selected_outputs
+from ..analysis.linearize import OutputSpec, check_actuation, linearize, not_equilibrium_error, selected_outputs
 from ..model.model import INPUT_NAMES, Model
 
 __all__ = ["to_statespace", "to_nlsys"]
@@ -26,6 +27,8 @@ def to_statespace(
     actuation: str = "full",
     outputs: OutputSpec = "states",
     name: str | None = None,
+    *,
+    allow_non_equilibrium: bool = False,
 ) -> ct.StateSpace:
     """Exact linearization as a named ``control.StateSpace``.
 
@@ -34,7 +37,7 @@ def to_statespace(
     model : Model
     x : str, Equilibrium or array_like of shape (nx,)
         Operating point: an equilibrium name (solved at torque ``u``), a solved
-        Equilibrium, or any state.
+        Equilibrium, or a state that is an equilibrium under ``u``.
     u : array_like, shape (2,), optional
         Operating-point torques (tau1, tau2) [N.m]; default zero.
     actuation : {"full", "pendubot", "acrobot"}
@@ -42,6 +45,11 @@ def to_statespace(
         As in :func:`pendulab.linearize`.
     name : str, optional
         System name (default ``"<kind>_<actuation>"``).
+    allow_non_equilibrium : bool
+        Accept a state that is not an equilibrium. The matrices are then the
+        Jacobians there, and the deviation model misses the drift
+        ``f(x0, u0)`` (kept in ``sys.x0``/``sys.u0``; see
+        :func:`pendulab.linearize`, which reports ``residual``).
 
     Returns
     -------
@@ -49,11 +57,22 @@ def to_statespace(
         States, inputs and outputs named after the model's signals; the
         operating point is kept in ``sys.x0``, ``sys.u0`` (full torque vector)
         and ``sys.y0`` (deviation variables are what the matrices act on).
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pendulab Model.
+    ValueError
+        Unknown actuation, output or equilibrium name; a state of the wrong
+        size; a state that is not an equilibrium (unless ``allow_non_equilibrium``).
     """
+    check_model(model)
     check_actuation(actuation)
     if isinstance(x, str):
         x = equilibrium(model, x, u)
     lin = linearize(model, x, u, inputs=actuation, outputs=outputs)
+    if not lin.is_equilibrium and not allow_non_equilibrium:
+        raise not_equilibrium_error("to_statespace", lin)
     sys = ct.ss(
         lin.A,
         lin.B,
@@ -94,7 +113,15 @@ def to_nlsys(
     Returns
     -------
     control.NonlinearIOSystem
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pendulab Model.
+    ValueError
+        Unknown actuation or output name.
     """
+    check_model(model)
     idx = list(check_actuation(actuation))
     names, yfun = selected_outputs(model, outputs)
     rhs = model.functions["rhs"]

@@ -19,8 +19,9 @@ import control as ct
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov, solve_discrete_lyapunov
 
+from .._checks import check_model
 from ..analysis.equilibria import Equilibrium, equilibrium
-from ..analysis.linearize import check_actuation, linearize, linearize_along
+from ..analysis.linearize import check_actuation, linearize, linearize_along, not_equilibrium_error
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
 from .controllability import controllable_subspace
 
@@ -277,6 +278,7 @@ def lqr_balance(
     dt: float | None = None,
     *,
     at: str | Equilibrium | np.ndarray = "up-up",
+    allow_non_equilibrium: bool = False,
 ) -> LQRDesign:
     """Linear-quadratic regulator about an equilibrium (default: balancing upright).
 
@@ -296,7 +298,12 @@ def lqr_balance(
         Sample time [s] for a discrete gain (co-simulation); ``None`` for continuous.
     at : str, Equilibrium or array_like of shape (nx,)
         Equilibrium name (zero torque), a solved :class:`Equilibrium`, or a
-        state held with zero torque (e.g. a swing-up goal).
+        state held with zero torque (e.g. a swing-up goal); a state must be an
+        equilibrium under zero torque.
+    allow_non_equilibrium : bool
+        Design on the Jacobians at a state that is not an equilibrium (the
+        regulator then fights the drift ``f(x, 0)`` with a steady error)
+        instead of raising.
 
     Returns
     -------
@@ -304,11 +311,15 @@ def lqr_balance(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
-        Unknown actuation or equilibrium name; bad Q, R or dt.
+        Unknown actuation or equilibrium name; bad Q, R or dt; ``at`` is a state
+        that is not an equilibrium (the message names ``|f(x, u)|``).
     UncontrollableError
         An uncontrollable mode is unstable or a drift (the configuration cannot be balanced).
     """
+    check_model(model)
     actuation = actuation_name(actuation)
     if isinstance(at, str):
         eq: Equilibrium | np.ndarray = equilibrium(model, at)
@@ -324,6 +335,8 @@ def lqr_balance(
     if dt is not None and not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive sample time in seconds or None, got {dt!r}")
     lin = linearize(model, x_eq, u_eq, inputs=actuation)
+    if not lin.is_equilibrium and not allow_non_equilibrium:
+        raise not_equilibrium_error("lqr_balance", lin)
     n, m = lin.B.shape
     Qm = weight_matrix(Q, n, "Q", definite=False)
     Rm = weight_matrix(R, m, "R", definite=True)
@@ -408,7 +421,13 @@ def discrete_tvlqr(
     -------
     ndarray, shape (M, m, nx)
         Gains: ``u_k = u_lin[k] - K[k] (x_k - x_ref_k)`` on the driven torques.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a pendulab Model.
     """
+    check_model(model)
     As, Bs = linearize_along(model, x_lin, u_lin, inputs=actuation_name(actuation))
     M, nx, m = Bs.shape
     P = np.asarray(P_final, dtype=float)

@@ -18,9 +18,11 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,7 +31,21 @@ from ..model.model import make_model
 from ..scene import Scene, list_scenes, load_scene
 from .codegen import SOLVER_NAMES
 
-__all__ = ["ValidationScene", "SCENES", "ValidationRow", "ValidationReport", "validate", "fmu_kind"]
+__all__ = [
+    "ValidationScene",
+    "SCENES",
+    "ValidationRow",
+    "ValidationReport",
+    "validate",
+    "fmu_kind",
+    "UnreadableFMUError",
+]
+
+
+class UnreadableFMUError(ValueError):
+    """The file is not a readable FMU: not a zip archive, a truncated archive, no or a schema-invalid
+    ``modelDescription.xml``. (The CLI reports it in one line with exit status 2, FAIL is status 1.)"""
+
 
 REFERENCE_TOL = 1e-12
 REFERENCE_METHOD = "cvodes"
@@ -195,9 +211,13 @@ def fmu_kind(model_description) -> str:
     Raises
     ------
     ValueError
-        The identifier is neither ``pendulab_rigid`` nor ``pendulab_elastic``.
+        The identifier is neither ``pendulab_rigid`` nor ``pendulab_elastic``,
+        or the FMU has neither interface.
     """
-    ident = (model_description.coSimulation or model_description.modelExchange).modelIdentifier
+    interface = model_description.coSimulation or model_description.modelExchange
+    if interface is None:
+        raise ValueError("not a pendulab FMU: it has neither a Co-Simulation nor a Model Exchange interface")
+    ident = interface.modelIdentifier
     for kind in ("rigid", "elastic"):
         if ident == f"pendulab_{kind}":
             return kind
@@ -288,6 +308,9 @@ def validate(
     ------
     FileNotFoundError
         ``fmu`` is not a file.
+    UnreadableFMUError (ValueError)
+        Not a zip archive, a truncated or corrupt archive, no
+        ``modelDescription.xml`` or one that fails the FMI schema.
     ValueError
         Not a pendulab FMU, an unknown scene name, or a scene for the other
         model kind.
@@ -300,8 +323,7 @@ def validate(
     fmu = Path(fmu)
     if not fmu.is_file():
         raise FileNotFoundError(f"FMU file not found: {str(fmu)!r}")
-    problems = list(validate_fmu(str(fmu)))
-    md = read_model_description(str(fmu))
+    problems, md = _read(fmu, validate_fmu, read_model_description)
     kind = fmu_kind(md)
     chosen = [s for s in SCENES if s.kind == kind]
     if scenes:
@@ -320,7 +342,10 @@ def validate(
     curves: dict[str, dict[str, np.ndarray]] = {}
     tmp = tempfile.mkdtemp(prefix="pendulab_validate_")
     try:
-        unzipdir = extract(str(fmu), tmp)
+        try:
+            unzipdir = extract(str(fmu), tmp)
+        except Exception as exc:  # noqa: BLE001 - zipfile/OS errors of a corrupt archive, reported in one line
+            raise UnreadableFMUError(f"FMU {str(fmu)!r}: cannot extract the archive: {_first_line(exc)}") from None
         for scene in chosen:
             if progress:
                 progress(f"{scene.name}: reference ({REFERENCE_METHOD}, tol {REFERENCE_TOL:g})")
@@ -346,6 +371,34 @@ def validate(
     if out_dir is not None:
         report.plot = _plot(report, chosen, curves, signals, Path(out_dir))
     return report
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def _read(fmu: Path, validate_fmu: Callable, read_model_description: Callable) -> tuple[list[str], Any]:
+    """fmpy's findings and the model description, or UnreadableFMUError in one line (fmpy raises bare
+    ``Exception``, ``BadZipFile``, ``KeyError`` and ``ValidationError`` for unreadable files)."""
+    try:
+        with zipfile.ZipFile(fmu) as zf:
+            bad = zf.testzip()
+            names = set(zf.namelist())
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
+        raise UnreadableFMUError(f"FMU {str(fmu)!r} is not a readable FMU (zip archive): {_first_line(exc)}") from None
+    if bad is not None:
+        raise UnreadableFMUError(f"FMU {str(fmu)!r} is a corrupt archive: member {bad!r} fails its CRC check")
+    if "modelDescription.xml" not in names:
+        raise UnreadableFMUError(f"FMU {str(fmu)!r} is not an FMU: the archive has no modelDescription.xml")
+    try:
+        problems = list(validate_fmu(str(fmu)))
+        md = read_model_description(str(fmu))
+    except Exception as exc:  # noqa: BLE001 - fmpy's errors of an unreadable file, reported in one line
+        detail = getattr(exc, "problems", None)
+        reason = f"{detail[0]}" + (f" (and {len(detail) - 1} more)" if len(detail) > 1 else "") if detail else _first_line(exc)
+        raise UnreadableFMUError(f"FMU {str(fmu)!r}: modelDescription.xml is invalid: {reason}") from None
+    return problems, md
 
 
 def _plot(report: ValidationReport, scenes, curves, signals, out_dir: Path) -> Path:

@@ -15,6 +15,7 @@ a method at run time (tests, plug-ins).
 
 from __future__ import annotations
 
+import time
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -33,12 +34,16 @@ __all__ = [
     "Registry",
     "STIFF_HINT",
     "DEFAULT_FIXED_STEP",
+    "DEFAULT_MAX_STEPS",
+    "Budget",
 ]
 
 #: Hint attached to integration failures that are most often caused by stiffness.
 STIFF_HINT = "stiff springs need an implicit method such as 'cvodes', 'Radau' or 'collocation'"
 #: Step [s] of the fixed-step methods when ``max_step`` is not given.
 DEFAULT_FIXED_STEP = 1e-3
+#: Default step budget of one :func:`pendulab.simulate` run (``options={"max_steps": ...}``).
+DEFAULT_MAX_STEPS = 1_000_000
 
 
 class SimulationError(RuntimeError):
@@ -56,16 +61,66 @@ class SimulationError(RuntimeError):
         What went wrong (solver message).
     hint : str, optional
         What to try instead.
+    n_steps : int, optional
+        Steps taken when the solver stopped (where known).
+
+    Attributes
+    ----------
+    method, t_reached, t_final, n_steps
+        As given.
     """
 
-    def __init__(self, method: str, t_reached: float, t_final: float, reason: str, hint: str = "") -> None:
+    def __init__(
+        self, method: str, t_reached: float, t_final: float, reason: str, hint: str = "", n_steps: int | None = None
+    ) -> None:
         self.method = method
         self.t_reached = t_reached
         self.t_final = t_final
+        self.n_steps = n_steps
         msg = f"method {method!r} failed at t = {t_reached:.6g} s of {t_final:.6g} s: {reason}"
         if hint:
             msg += f" (hint: {hint})"
         super().__init__(msg)
+
+
+@dataclass
+class Budget:
+    """The work budget of one run: a step budget and an optional wall-time budget.
+
+    Set by :func:`pendulab.simulate` from ``options={"max_steps": ..., "max_wall_time": ...}``;
+    runners check it with :meth:`RunRequest.check_budget` between their own calls (and the SciPy
+    runner at every step). It also records a SIGINT seen during the run (``interrupted``), so that
+    a runner can tell an interrupted solver from a failing one.
+
+    Attributes
+    ----------
+    max_steps : int
+        Largest number of solver steps over the whole run.
+    max_wall_time : float or None
+        Largest wall time [s] of the run; None: no limit.
+    explicit_steps : bool
+        True when the user set ``max_steps`` (the CasADi runner then also uses it as
+        CVODES/IDAS' per-interval ``max_num_steps``).
+    start : float
+        ``time.perf_counter()`` at the start of the run.
+    interrupted : bool
+        A SIGINT arrived during the run.
+    """
+
+    max_steps: int = DEFAULT_MAX_STEPS
+    max_wall_time: float | None = None
+    explicit_steps: bool = False
+    start: float = field(default_factory=time.perf_counter)
+    interrupted: bool = False
+
+    @property
+    def elapsed(self) -> float:
+        """Wall time [s] since :attr:`start`."""
+        return time.perf_counter() - self.start
+
+    def wall_exceeded(self) -> bool:
+        """True when a wall-time budget is set and used up."""
+        return self.max_wall_time is not None and self.elapsed > self.max_wall_time
 
 
 @dataclass(frozen=True)
@@ -91,7 +146,9 @@ class RunRequest:
     max_step : float or None
         Largest internal step [s]; the step of the fixed-step methods.
     options : mapping
-        Method-specific options given by the user.
+        Method-specific options given by the user (without the budget options).
+    budget : Budget
+        Step and wall-time budget of the run.
     """
 
     model: Model
@@ -104,6 +161,7 @@ class RunRequest:
     atol: float
     max_step: float | None
     options: Mapping[str, Any] = field(default_factory=dict)
+    budget: Budget = field(default_factory=Budget)
 
     @property
     def t_final(self) -> float:
@@ -143,6 +201,8 @@ class RunRequest:
         """
         if self.feedback is None:
             raise ValueError("this run has no feedback; use the input schedule")
+        # Every family's per-interval loop passes here: the wall-time budget holds for all of them.
+        self.check_budget(t, None)
         value = self.feedback(t, np.array(x, dtype=float))
         try:
             return self.model.check_input(np.asarray(value, dtype=float).reshape(self.model.nu), "u(t, x)")
@@ -167,6 +227,57 @@ class RunRequest:
             Error naming this run's method and horizon ``t_final``.
         """
         return SimulationError(self.spec.name, float(t_reached), self.t_final, reason, hint)
+
+    def check_budget(self, t_reached: float, n_steps: int | None) -> None:
+        """Raise the budget's :class:`SimulationError` when the steps or the wall time are used up.
+
+        Parameters
+        ----------
+        t_reached : float
+            Time [s] the integration has reached.
+        n_steps : int or None
+            Steps taken so far over the run (None: not known to the caller; only the
+            wall time is checked).
+
+        Raises
+        ------
+        SimulationError
+            Names the budget, the steps taken, the time reached and the stiffness hint.
+        """
+        if n_steps is not None and n_steps > self.budget.max_steps:
+            raise self.budget_error(t_reached, n_steps, "steps")
+        if self.budget.wall_exceeded():
+            raise self.budget_error(t_reached, n_steps, "wall")
+
+    def budget_error(self, t_reached: float, n_steps: int | None, which: str) -> SimulationError:
+        """The :class:`SimulationError` of an exhausted budget (the caller raises it).
+
+        Parameters
+        ----------
+        t_reached : float
+            Time [s] the integration reached.
+        n_steps : int or None
+            Steps taken (None: unknown).
+        which : {"steps", "wall"}
+            The budget used up.
+
+        Returns
+        -------
+        SimulationError
+            With ``n_steps`` set.
+        """
+        b = self.budget
+        taken = "an unknown number of steps" if n_steps is None else f"{n_steps} steps"
+        if which == "steps":
+            reason = f"step budget exhausted: {taken} taken, options max_steps = {b.max_steps}"
+            hint = f"{STIFF_HINT}; or raise options={{'max_steps': ...}}"
+        else:
+            reason = (
+                f"wall-time budget exhausted: {b.elapsed:.3g} s elapsed (options max_wall_time = {b.max_wall_time:g} s), "
+                f"{taken} taken"
+            )
+            hint = f"{STIFF_HINT}; or raise options={{'max_wall_time': ...}}"
+        return SimulationError(self.spec.name, float(t_reached), self.t_final, reason, hint, n_steps=n_steps)
 
 
 @dataclass

@@ -14,25 +14,38 @@ torque on each interval, a callable ``u(t, x)`` is a sampled-data feedback
 evaluated at each output time (the same semantics as a co-simulation master).
 Fixed-step methods take ``dt / ceil(dt / max_step)`` equal steps per output
 interval (default ``max_step`` 1e-3 s); ``rtol``/``atol`` do not apply to them.
+
+Every run has a work budget (options ``max_steps``, default 1 000 000, and
+``max_wall_time``, default none), checked here once and honoured by every family
+(see :func:`simulate`); an exhausted budget is a
+:class:`~pendulab.integrate.registry.SimulationError`, never a hang.
 """
 
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 
-from .._checks import positive_float
+from .._checks import check_model, positive_float
 from ..model.model import Model
 from .auto import choose_method
 from .methods import METHODS
-from .registry import STIFF_HINT, RunRequest, SimulationError
+from .registry import DEFAULT_FIXED_STEP, DEFAULT_MAX_STEPS, STIFF_HINT, Budget, MethodSpec, RunRequest, SimulationError
 from .trajectory import Trajectory
 
-__all__ = ["simulate", "time_grid", "input_schedule", "InputSpec"]
+__all__ = ["simulate", "time_grid", "input_schedule", "InputSpec", "BUDGET_OPTIONS"]
+
+#: Options of every method, handled by the front end (not passed to the solver).
+BUDGET_OPTIONS: tuple[str, ...] = ("max_steps", "max_wall_time")
+#: Families whose runner takes the step budget as its own ``options["max_steps"]``.
+_NATIVE_BUDGET_FAMILIES = ("taylor", "compiled")
 
 InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any]
 
@@ -135,7 +148,31 @@ def simulate(
         Largest internal step [s]; the step of the fixed-step methods
         (default 1e-3 s there).
     options : mapping, optional
-        Extra options passed to the CasADi integrator or ``solve_ivp``.
+        Extra options passed to the method: CasADi integrator options (checked
+        against the plugin's option list), ``solve_ivp`` solver options
+        (e.g. ``first_step``; checked against the solver's keywords), the
+        Taylor/compiled options. Two **budget options** apply to every method:
+
+        ``max_steps`` : int, default 1 000 000
+            Step budget of the whole run. SciPy: accepted steps, counted at
+            every step. CasADi CVODES/IDAS: SUNDIALS' ``max_num_steps`` per
+            output interval (100 000 by default); a ``max_steps`` given by the
+            user also bounds the total, checked between output intervals (the
+            run then goes one output interval per call: CVODES restarts at
+            each output time). Fixed-step methods and collocation:
+            the step count is known in advance; a run above the budget is
+            refused before it starts. Compiled: step attempts (accepted +
+            rejected) over the run. Taylor: heyoka's ``max_steps`` of each
+            propagation (per run of equal inputs, per interval under feedback).
+        ``max_wall_time`` : float [s], default none
+            Wall-time budget. SciPy: checked at every RHS evaluation. CasADi:
+            the run is integrated one output interval per call (CVODES restarts
+            at each output time) and checked between calls. Other families:
+            checked between their calls (at every output time under feedback);
+            a single whole-grid C call is bounded by the step budget only.
+
+        An exhausted budget raises :class:`SimulationError` naming the steps
+        taken, the time reached and the stiffness hint.
 
     Returns
     -------
@@ -143,13 +180,19 @@ def simulate(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
-        Bad arguments (shape, non-finite, unknown method, non-positive times).
+        Bad arguments (shape, non-finite, unknown method, non-positive times),
+        an option the method does not accept (the message lists those it does),
+        a bad budget option.
     SimulationError
-        The integrator failed; names the method, time reached and a hint.
+        The integrator failed or a budget ran out; names the method, time
+        reached and a hint.
+    KeyboardInterrupt
+        Ctrl-C during the run (never reported as a solver failure).
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
+    check_model(model)
     auto = isinstance(method, str) and method.lower() == "auto"
     spec = None if auto else METHODS.resolve(method)
     x0 = model.check_state(x0, "x0")
@@ -169,6 +212,8 @@ def simulate(
     if auto:
         choice = choose_method(model, x0, schedule[0] if schedule is not None else np.zeros(model.nu), rtol, atol)
         spec = METHODS[choice.method]
+    opts, budget = _budget(spec, options)
+    _check_fixed_step_budget(spec, t, max_step, budget)
     request = RunRequest(
         model=model,
         spec=spec,
@@ -179,11 +224,18 @@ def simulate(
         rtol=rtol,
         atol=atol,
         max_step=max_step,
-        options=dict(options or {}),
+        options=opts,
+        budget=budget,
     )
-    start = time.perf_counter()
-    result = spec.runner(request)
-    wall = time.perf_counter() - start
+    with _interrupt_watch(budget):
+        start = budget.start = time.perf_counter()
+        try:
+            result = spec.runner(request)
+        except Exception:
+            if budget.interrupted:  # a solver stopped by Ctrl-C is not a solver failure
+                raise KeyboardInterrupt from None
+            raise
+        wall = time.perf_counter() - start
     X, U, stats = result.x, result.u, result.stats
     if not np.all(np.isfinite(X)):
         k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
@@ -203,3 +255,78 @@ def simulate(
         message=f"{spec.description}: reached t = {t_final:.6g} s",
         stats={"wall_time": wall, **stats, **({"auto": choice.as_dict()} if choice else {})},
     )
+
+
+def _budget(spec: MethodSpec, options: Mapping[str, Any] | None) -> tuple[dict[str, Any], Budget]:
+    """Split the budget options off the method's options; map the step budget into the families that take it."""
+    if options is not None and not isinstance(options, Mapping):
+        raise ValueError(f"options must be a mapping of option names to values, got {options!r}")
+    opts = dict(options or {})
+    explicit = "max_steps" in opts
+    max_steps = opts.pop("max_steps", DEFAULT_MAX_STEPS)
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or not 1 <= max_steps <= 2**31 - 1:
+        raise ValueError(
+            f"method {spec.name!r}: option max_steps must be an integer in [1, 2**31 - 1] (the step budget), got {max_steps!r}"
+        )
+    wall = opts.pop("max_wall_time", None)
+    if wall is not None:
+        if isinstance(wall, bool) or not isinstance(wall, (int, float, np.integer, np.floating)):
+            raise ValueError(f"option max_wall_time must be a positive number of seconds, got {wall!r}")
+        wall = positive_float("option max_wall_time", wall, "[s]")
+    if spec.family in _NATIVE_BUDGET_FAMILIES:
+        opts["max_steps"] = int(max_steps)
+    return opts, Budget(max_steps=int(max_steps), max_wall_time=wall, explicit_steps=explicit)
+
+
+def _check_fixed_step_budget(spec: MethodSpec, t: np.ndarray, max_step: float | None, budget: Budget) -> None:
+    """Fixed-step methods know their step count in advance: refuse a run above the budget before it starts."""
+    if not spec.fixed_step:
+        return
+    h = float(t[1] - t[0])
+    n_sub = max(1, math.ceil(h / (max_step or DEFAULT_FIXED_STEP) - 1e-9))
+    n_steps = (len(t) - 1) * n_sub
+    if n_steps > budget.max_steps:
+        raise SimulationError(
+            spec.name,
+            0.0,
+            float(t[-1]),
+            f"the run needs {n_steps} fixed steps ({len(t) - 1} output intervals x {n_sub} steps of {h / n_sub:.3g} s), "
+            f"above the step budget options max_steps = {budget.max_steps}; refused before starting",
+            "raise options={'max_steps': ...}, take a larger max_step, or use an error-controlled method",
+            n_steps=0,
+        )
+
+
+@contextmanager
+def _interrupt_watch(budget: Budget) -> Iterator[None]:
+    """Record a SIGINT in ``budget.interrupted`` while the run lasts (main thread only).
+
+    Solvers that run Python's signal check inside C (CasADi) turn the resulting
+    ``KeyboardInterrupt`` into their own failure (e.g. CVODES' ``CV_RHSFUNC_FAIL``);
+    the flag lets the front end and the runners re-raise ``KeyboardInterrupt``.
+    The previous handler still runs (and raises ``KeyboardInterrupt`` as usual).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is None or previous is signal.SIG_IGN:  # installed outside Python, or ignored: leave it alone
+        yield
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        budget.interrupted = True
+        if callable(previous):
+            previous(signum, frame)
+        else:  # SIG_DFL
+            raise KeyboardInterrupt
+
+    try:
+        signal.signal(signal.SIGINT, handler)
+    except ValueError:  # not allowed here (e.g. an embedded interpreter)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)

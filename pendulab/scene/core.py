@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,12 +18,17 @@ from ..model.model import Model, make_model
 from ..model.params import ElasticParams, RigidParams
 from ..model.quasistatic import quasi_static_state
 
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover - Python 3.10
-    pass
-
-__all__ = ["Scene", "list_scenes", "default_scene", "scene_path", "initial_state", "SCENE_DIR", "STARTS", "GROUPS"]
+__all__ = [
+    "Scene",
+    "list_scenes",
+    "default_scene",
+    "scene_path",
+    "initial_state",
+    "SCENE_DIR",
+    "STARTS",
+    "GROUPS",
+    "FEATURE_SECTIONS",
+]
 
 #: Directory of the scenes shipped with the package.
 SCENE_DIR = Path(__file__).resolve().parent.parent / "scenes"
@@ -34,7 +38,14 @@ _SIMULATION_DEFAULTS: Mapping[str, Any] = MappingProxyType(
     {"t_final": 10.0, "dt": 0.01, "method": "auto", "rtol": 1e-8, "atol": 1e-8}
 )
 _DEFAULT_OUTPUTS = ("theta1", "theta2")
+#: Top-level sections the reader itself validates.
 _KNOWN_SECTIONS = ("scene", "model", "initial", "simulation", "outputs", "input")
+#: Top-level sections owned by a feature, kept unvalidated in ``Scene.extra`` for it (the feature
+#: checks their keys): ``task`` (swing-up tasks, :mod:`pendulab.control.swingup.tasks`) and
+#: ``validation`` (FMU validation scenes, :mod:`pendulab.fmu.validate`). A new feature that reads
+#: its own section from scene files registers the section name here; any other top-level section
+#: is an error (a misspelt ``[simulaton]`` must not be silently ignored).
+FEATURE_SECTIONS: tuple[str, ...] = ("task", "validation")
 #: How unstated spring lengths are set at t = 0: static hanging length, rest length L (excites
 #: the spring mode), or quasi-static (zero radial acceleration at the initial angles and rates).
 STARTS: tuple[str, ...] = ("static", "rest-length", "quasi-static")
@@ -78,7 +89,8 @@ class Scene:
     u_frequency : float
         Its frequency [Hz].
     extra : mapping
-        Other top-level sections, unvalidated, for the feature that uses them.
+        The feature sections (:data:`FEATURE_SECTIONS`: ``task``, ``validation``)
+        present in the file, unvalidated, for the feature that uses them.
     path : Path or None
         The file the scene came from.
     """

@@ -18,6 +18,7 @@ from .core import (
     _KNOWN_SECTIONS,
     _PARAM_CLASSES,
     _SIMULATION_DEFAULTS,
+    FEATURE_SECTIONS,
     STARTS,
     Scene,
     _frozen,
@@ -98,10 +99,20 @@ def load_scene(path_or_name: str | Path) -> Scene:
     FileNotFoundError
         No such file or shipped scene.
     ValueError
-        Malformed TOML, an unknown key in a known section, a wrong type, an
+        Malformed TOML, an unknown top-level section (e.g. a misspelt
+        ``[simulaton]``), an unknown key in a known section, a wrong type, an
         unknown parameter or state name, a non-positive horizon, step or
         tolerance, an unknown method or output. The message names the file,
         the section, the key, the value and what was expected.
+
+    Notes
+    -----
+    Top-level sections are those the reader validates (``scene``, ``model``,
+    ``initial``, ``simulation``, ``outputs``, ``input``) plus the feature
+    sections listed in :data:`pendulab.scene.core.FEATURE_SECTIONS`
+    (``task``, ``validation``), which are kept unvalidated in
+    ``Scene.extra`` for their feature. A new feature that stores settings in
+    scene files adds its section name to ``FEATURE_SECTIONS``.
     """
     path = scene_path(path_or_name)
     try:
@@ -111,6 +122,14 @@ def load_scene(path_or_name: str | Path) -> Scene:
     except UnicodeDecodeError as exc:
         raise ValueError(f"scene file {str(path)!r}: not UTF-8 text: {exc}") from None
     rd = _Reader(path, data)
+    allowed = (*_KNOWN_SECTIONS, *FEATURE_SECTIONS)
+    for section, value in data.items():
+        if section not in allowed:
+            shown = repr(dict(value)) if isinstance(value, Mapping) else repr(value)
+            raise ValueError(
+                f"scene file {str(path)!r}: unknown section [{section}] = {shown}: expected one of the sections "
+                f"{list(_KNOWN_SECTIONS)} or a feature section {list(FEATURE_SECTIONS)}"
+            )
 
     head = rd.table("scene")
     rd.only("scene", head, ("name", "description"), "keys")
@@ -174,7 +193,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
             amplitude = np.array([rd.real("input.sine", "amplitude", a) for a in amp])
             frequency = rd.real("input.sine", "frequency", sine.get("frequency", _MISSING), positive=True)
 
-    extra = {k: v for k, v in data.items() if k not in _KNOWN_SECTIONS}
+    extra = {k: v for k, v in data.items() if k in FEATURE_SECTIONS}
     return Scene(
         name=name,
         description=description,

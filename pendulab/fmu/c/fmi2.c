@@ -210,7 +210,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     GET_INSTANCE("fmi2SetFMUstate");
-    CHECK_STATE(MS_ANY & ~MS_ERROR, "fmi2SetFMUstate");
+    CHECK_STATE(MS_ANY, "fmi2SetFMUstate"); /* also in Error: restart from a stored state */
     return (fmi2Status)core_restore(inst, (const CoreData *)FMUstate, "fmi2SetFMUstate");
 }
 

@@ -447,7 +447,7 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
     GET_INSTANCE("fmi3SetFMUState");
-    CHECK_STATE(MS_ANY & ~MS_ERROR, "fmi3SetFMUState");
+    CHECK_STATE(MS_ANY, "fmi3SetFMUState"); /* also in Error: restart from a stored state */
     return (fmi3Status)core_restore(inst, (const CoreData *)FMUState, "fmi3SetFMUState");
 }
 

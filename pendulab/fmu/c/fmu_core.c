@@ -15,6 +15,19 @@ static const char *const P_NAMES[MODEL_NP] = MODEL_P_NAMES;
 /* A communication point may differ from the FMU's time by accumulated rounding in the master. */
 #define TIME_RTOL 1e-9
 
+/* Spring-length states of the elastic model, which must stay > 0 (the model is singular at r = 0):
+ * by convention the elastic state is (theta1, theta2, r1, r2, omega1, omega2, v1, v2). A generated
+ * model.h may name them itself (MODEL_R_INDEX, MODEL_NR); the rigid model has none. */
+#ifndef MODEL_NR
+#if MODEL_NX == 8
+#define MODEL_R_INDEX 2
+#define MODEL_NR 2
+#else
+#define MODEL_R_INDEX 0
+#define MODEL_NR 0
+#endif
+#endif
+
 void core_defaults(Instance *inst) {
     CoreData *d = &inst->d;
     memset(d, 0, sizeof(*d));
@@ -107,6 +120,58 @@ static int all_finite(const double *v, int n) {
     return 1;
 }
 
+/* Index of the first spring length <= 0 in x, or -1 (NaN counts as invalid too). */
+static int bad_spring_length(const double *x) {
+    for (int i = 0; i < MODEL_NR; i++)
+        if (!(x[MODEL_R_INDEX + i] > 0.0)) return MODEL_R_INDEX + i;
+    return -1;
+}
+
+/* The one rule for a state vector, wherever it comes from (setters, ME states, FMU states, the solver). */
+static CoreStatus check_state_vector(Instance *inst, const double *x, const char *fname) {
+    for (int i = 0; i < MODEL_NX; i++)
+        if (!isfinite(x[i])) {
+            core_logf(inst, ST_ERROR, "%s: state %d (value reference %d) is not finite: %g", fname, i, MODEL_VR_X + i, x[i]);
+            return ST_ERROR;
+        }
+    int r = bad_spring_length(x);
+    if (r >= 0) {
+        core_logf(inst, ST_ERROR, "%s: spring length r%d (value reference %d) must be > 0, got %g", fname,
+                  r - MODEL_R_INDEX + 1, MODEL_VR_X + r, x[r]);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+/* The setter's rule for parameter k (also applied to restored FMU states). */
+static CoreStatus check_param(Instance *inst, int k, double v, const char *fname) {
+    if (!isfinite(v)) {
+        core_logf(inst, ST_ERROR, "%s: parameter %s: value %g is not finite", fname, P_NAMES[k], v);
+        return ST_ERROR;
+    }
+    if (P_POSITIVE[k] ? !(v > 0.0) : !(v >= 0.0)) {
+        core_logf(inst, ST_ERROR, "%s: parameter %s must be %s, got %g", fname, P_NAMES[k], P_POSITIVE[k] ? "> 0" : ">= 0", v);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static CoreStatus check_tolerance(Instance *inst, double v, const char *fname) {
+    if (!(v > 0.0) || !(v < 1.0)) {
+        core_logf(inst, ST_ERROR, "%s: solver_tolerance must be in (0, 1), got %g", fname, v);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+static CoreStatus check_max_step(Instance *inst, double v, const char *fname) {
+    if (!isfinite(v) || v < 0.0) {
+        core_logf(inst, ST_ERROR, "%s: max_step must be finite and >= 0 (0: unlimited), got %g", fname, v);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
 CoreStatus core_derivatives(Instance *inst, double *xdot) {
     if (eval(inst, MODEL_RHS, inst->d.x, xdot) != 0 || !all_finite(xdot, MODEL_NX)) {
         core_logf(inst, ST_ERROR, "the right-hand side could not be evaluated (non-finite result) at t = %g", inst->d.time);
@@ -161,6 +226,10 @@ CoreStatus core_get_real(Instance *inst, const char *fname, const unsigned int *
     return ST_OK;
 }
 
+/* A changed solver setting discards the set-up solver (ExitInitializationMode or the next DoStep sets it
+ * up again), so that an FMU state never holds a solver block inconsistent with its settings. */
+static void invalidate_solver(Instance *inst) { memset(&inst->d.ode, 0, sizeof(inst->d.ode)); }
+
 static CoreStatus set_one_real(Instance *inst, const char *fname, unsigned int vr, double v) {
     int k;
     const int before_run = MS_INSTANTIATED | MS_INIT;
@@ -176,6 +245,11 @@ static CoreStatus set_one_real(Instance *inst, const char *fname, unsigned int v
     switch (kind) {
     case KIND_STATE:
         if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
+        if (k >= MODEL_R_INDEX && k < MODEL_R_INDEX + MODEL_NR && !(v > 0.0)) {
+            core_logf(inst, ST_ERROR, "%s: spring length r%d (value reference %u) must be > 0, got %g", fname,
+                      k - MODEL_R_INDEX + 1, vr, v);
+            return ST_ERROR;
+        }
         inst->d.x[k] = v;
         return ST_OK;
     case KIND_INPUT:
@@ -188,28 +262,20 @@ static CoreStatus set_one_real(Instance *inst, const char *fname, unsigned int v
                       P_TUNABLE[k] ? "tunable only in step or event mode" : "fixed after initialization");
             return ST_ERROR;
         }
-        if (P_POSITIVE[k] ? !(v > 0.0) : !(v >= 0.0)) {
-            core_logf(inst, ST_ERROR, "%s: parameter %s must be %s, got %g", fname, P_NAMES[k],
-                      P_POSITIVE[k] ? "> 0" : ">= 0", v);
-            return ST_ERROR;
-        }
+        if (check_param(inst, k, v, fname) != ST_OK) return ST_ERROR;
         inst->d.p[k] = v;
         return ST_OK;
     case KIND_TOL:
         if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
-        if (!(v > 0.0) || v >= 1.0) {
-            core_logf(inst, ST_ERROR, "%s: solver_tolerance must be in (0, 1), got %g", fname, v);
-            return ST_ERROR;
-        }
+        if (check_tolerance(inst, v, fname) != ST_OK) return ST_ERROR;
         inst->d.tolerance = v;
+        invalidate_solver(inst);
         return ST_OK;
     case KIND_HMAX:
         if (core_check(inst, before_run, fname) != ST_OK) return ST_ERROR;
-        if (v < 0.0) {
-            core_logf(inst, ST_ERROR, "%s: max_step must be >= 0 (0: unlimited), got %g", fname, v);
-            return ST_ERROR;
-        }
+        if (check_max_step(inst, v, fname) != ST_OK) return ST_ERROR;
         inst->d.max_step = v;
+        invalidate_solver(inst);
         return ST_OK;
     default:
         core_logf(inst, ST_ERROR, "%s: value reference %u (time, derivative or output) cannot be set", fname, vr);
@@ -270,6 +336,7 @@ CoreStatus core_set_int(Instance *inst, const char *fname, const unsigned int *v
         }
     }
     for (size_t i = 0; i < n; i++) inst->d.solver = value[i];
+    if (n > 0) invalidate_solver(inst);
     return ST_OK;
 }
 
@@ -286,21 +353,26 @@ CoreStatus core_set_experiment(Instance *inst, int tolerance_defined, double tol
         }
         inst->d.tolerance = tolerance;
         inst->d.tolerance_from_master = 1;
+        invalidate_solver(inst);
     }
     inst->d.time = start_time;
     return ST_OK;
 }
 
-CoreStatus core_exit_initialization(Instance *inst) {
-    if (!all_finite(inst->d.x, MODEL_NX)) {
-        core_logf(inst, ST_ERROR, "initial state is not finite");
-        return ST_ERROR;
-    }
-    int rc = ode_init(&inst->d.ode, MODEL_NX, inst->d.solver, inst->d.tolerance, inst->d.tolerance, inst->d.max_step);
+static CoreStatus solver_setup(Instance *inst, const char *fname) {
+    CoreData *d = &inst->d;
+    int rc = ode_init(&d->ode, MODEL_NX, d->solver, d->tolerance, d->tolerance, d->max_step);
     if (rc != ODE_OK) {
-        core_logf(inst, ST_ERROR, "solver setup failed: %s", ode_error_string(rc));
+        core_logf(inst, ST_ERROR, "%s: solver setup failed: %s", fname, ode_error_string(rc));
         return ST_ERROR;
     }
+    d->ode.max_steps = CORE_MAX_INTERNAL_STEPS;
+    return ST_OK;
+}
+
+CoreStatus core_exit_initialization(Instance *inst) {
+    if (check_state_vector(inst, inst->d.x, "ExitInitializationMode: initial state") != ST_OK) return ST_ERROR;
+    if (solver_setup(inst, "ExitInitializationMode") != ST_OK) return ST_ERROR;
     double y[MODEL_NY];
     if (outputs(inst, y) != ST_OK) return ST_ERROR;
     core_debugf(inst, "initialized at t = %g with solver %s, tolerance %g (%s), max_step %g", inst->d.time,
@@ -311,9 +383,9 @@ CoreStatus core_exit_initialization(Instance *inst) {
 
 CoreStatus core_do_step(Instance *inst, double current, double h) {
     CoreData *d = &inst->d;
-    if (!isfinite(current) || !isfinite(h) || !(h > 0.0)) {
-        core_logf(inst, ST_ERROR, "DoStep: communication step size must be positive and finite, got %g at point %g", h,
-                  current);
+    if (!isfinite(current) || !isfinite(h) || !(h > 0.0) || !isfinite(current + h)) {
+        core_logf(inst, ST_ERROR, "DoStep: communication step size must be positive and finite (and end at a finite time), "
+                  "got %g at point %g", h, current);
         return ST_ERROR;
     }
     if (fabs(current - d->time) > TIME_RTOL * fmax(1.0, fabs(d->time))) {
@@ -321,24 +393,43 @@ CoreStatus core_do_step(Instance *inst, double current, double h) {
         return ST_ERROR;
     }
     if (d->ode.n != MODEL_NX) { /* e.g. an FMU state saved during initialization was restored */
-        int rc0 = ode_init(&d->ode, MODEL_NX, d->solver, d->tolerance, d->tolerance, d->max_step);
-        if (rc0 != ODE_OK) {
-            core_logf(inst, ST_ERROR, "DoStep: solver setup failed: %s", ode_error_string(rc0));
-            return ST_ERROR;
-        }
+        if (solver_setup(inst, "DoStep") != ST_OK) return ST_ERROR;
     }
     double t = d->time;
     double t_end = current + h;
-    if (!(t_end > t)) {
-        core_logf(inst, ST_ERROR, "DoStep: step size %g too small to advance from t = %.17g", h, t);
-        return ST_ERROR;
+    double span = t_end - t;
+    if (span < CORE_MIN_SOLVER_SPAN * fmax(1.0, fabs(t))) {
+        /* Below the solver's resolution (its smallest step is 1e-14 max(1, |t|)): one explicit Euler step,
+         * whose error h^2 |x''| / 2 is far below the rounding of x; a span <= 0 (the master's communication
+         * point is up to TIME_RTOL behind the FMU time) changes nothing. Time never runs backwards. */
+        if (span > 0.0) {
+            double xdot[MODEL_NX], x1[MODEL_NX];
+            if (core_derivatives(inst, xdot) != ST_OK) {
+                d->machine = MS_ERROR;
+                return ST_ERROR;
+            }
+            for (int i = 0; i < MODEL_NX; i++) x1[i] = d->x[i] + span * xdot[i];
+            if (check_state_vector(inst, x1, "DoStep") != ST_OK) {
+                d->machine = MS_ERROR;
+                return ST_ERROR;
+            }
+            memcpy(d->x, x1, sizeof(d->x));
+            d->time = t_end;
+        }
+        core_debugf(inst, "DoStep: step %g below the solver resolution at t = %.17g: Euler step", h, t);
+        return ST_OK;
     }
     int rc = ode_integrate(&d->ode, rhs_cb, jac_cb, inst, &t, d->x, t_end);
     d->time = t;
     if (rc != ODE_OK) {
         d->machine = MS_ERROR; /* bad arguments leave the instance usable; a solver failure does not */
-        core_logf(inst, ST_ERROR, "DoStep: %s solver failed at t = %.17g (target %.17g): %s",
-                  d->solver == ODE_RODAS4 ? "rodas4" : "dopri5", t, t_end, ode_error_string(rc));
+        core_logf(inst, ST_ERROR, "DoStep: %s solver failed at t = %.17g (target %.17g): %s%s",
+                  d->solver == ODE_RODAS4 ? "rodas4" : "dopri5", t, t_end, ode_error_string(rc),
+                  rc == ODE_ERR_MAX_STEPS ? " (at most " CORE_MAX_INTERNAL_STEPS_TEXT " per communication step)" : "");
+        return ST_ERROR;
+    }
+    if (check_state_vector(inst, d->x, "DoStep: state reached by the solver") != ST_OK) {
+        d->machine = MS_ERROR; /* the trajectory left the model's domain (a spring length reached 0) */
         return ST_ERROR;
     }
     return ST_OK;
@@ -349,10 +440,7 @@ CoreStatus core_set_states(Instance *inst, const double *x, size_t n) {
         core_logf(inst, ST_ERROR, "SetContinuousStates: expected %d states and a non-NULL array, got n = %zu", MODEL_NX, n);
         return ST_ERROR;
     }
-    if (!all_finite(x, MODEL_NX)) {
-        core_logf(inst, ST_ERROR, "SetContinuousStates: states must be finite");
-        return ST_ERROR;
-    }
+    if (check_state_vector(inst, x, "SetContinuousStates: states must be finite and valid") != ST_OK) return ST_ERROR;
     memcpy(inst->d.x, x, sizeof(inst->d.x));
     return ST_OK;
 }
@@ -417,24 +505,84 @@ CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t 
 }
 
 /* ------------------------------------------------------------ FMU state */
+static int is_machine_state(int m) {
+    return m == MS_INSTANTIATED || m == MS_INIT || m == MS_STEP || m == MS_EVENT || m == MS_CONT || m == MS_TERMINATED;
+}
+
+/* Every field of an FMU state passes the checks its setter applies; the solver block is either unset
+ * (saved before initialization) or consistent with the settings. Nothing is changed. */
+static CoreStatus validate_data(Instance *inst, const CoreData *d, const char *fname) {
+    char what[160];
+    if (d->magic != MODEL_MAGIC) {
+        core_logf(inst, ST_ERROR, "%s: FMU state was not produced by this model (%s)", fname, MODEL_IDENTIFIER);
+        return ST_ERROR;
+    }
+    if (!is_machine_state(d->machine)) {
+        core_logf(inst, ST_ERROR, "%s: FMU state holds an invalid life-cycle state %d", fname, d->machine);
+        return ST_ERROR;
+    }
+    if (!isfinite(d->time)) {
+        core_logf(inst, ST_ERROR, "%s: FMU state: time %g is not finite", fname, d->time);
+        return ST_ERROR;
+    }
+    snprintf(what, sizeof(what), "%s: FMU state", fname);
+    if (check_state_vector(inst, d->x, what) != ST_OK) return ST_ERROR;
+    for (int i = 0; i < MODEL_NU; i++)
+        if (!isfinite(d->u[i])) {
+            core_logf(inst, ST_ERROR, "%s: FMU state: input %d (value reference %d) is not finite: %g", fname, i,
+                      MODEL_VR_U + i, d->u[i]);
+            return ST_ERROR;
+        }
+    for (int k = 0; k < MODEL_NP; k++)
+        if (check_param(inst, k, d->p[k], what) != ST_OK) return ST_ERROR;
+    if (check_tolerance(inst, d->tolerance, what) != ST_OK || check_max_step(inst, d->max_step, what) != ST_OK)
+        return ST_ERROR;
+    if (d->solver != ODE_DOPRI5 && d->solver != ODE_RODAS4) {
+        core_logf(inst, ST_ERROR, "%s: FMU state: solver must be 0 (dopri5) or 1 (rodas4), got %d", fname, d->solver);
+        return ST_ERROR;
+    }
+    if (d->tolerance_from_master != 0 && d->tolerance_from_master != 1) {
+        core_logf(inst, ST_ERROR, "%s: FMU state: invalid tolerance flag %d", fname, d->tolerance_from_master);
+        return ST_ERROR;
+    }
+    const OdeSolver *o = &d->ode;
+    if (o->n == 0) return ST_OK; /* saved before initialization: the solver is set up at the next step */
+    if (o->n != MODEL_NX || o->method != d->solver || o->rtol != d->tolerance || o->atol != d->tolerance ||
+        o->h_max != d->max_step || o->max_steps < 1 || o->max_steps > CORE_MAX_INTERNAL_STEPS || !isfinite(o->h) ||
+        o->h < 0.0 || o->n_steps < 0 || o->n_rejected < 0 || o->n_rhs < 0 || o->n_jac < 0) {
+        core_logf(inst, ST_ERROR, "%s: FMU state: the solver settings (n = %d, method %d, tolerance %g, max_step %g, "
+                  "step guess %g) are inconsistent with the model settings", fname, o->n, o->method, o->rtol, o->h_max, o->h);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
 CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, const char *fname) {
     CoreData tmp;
     if (blob == NULL || size != sizeof(CoreData)) {
         core_logf(inst, ST_ERROR, "%s: FMU state is NULL or has %zu bytes, expected %zu", fname, size, sizeof(CoreData));
         return ST_ERROR;
     }
-    memcpy(&tmp, blob, sizeof(tmp));
-    if (tmp.magic != MODEL_MAGIC) {
-        core_logf(inst, ST_ERROR, "%s: FMU state was not produced by this model (%s)", fname, MODEL_IDENTIFIER);
-        return ST_ERROR;
-    }
-    return ST_OK;
+    memcpy(&tmp, blob, sizeof(tmp)); /* the blob may be unaligned (a serialized byte buffer) */
+    return validate_data(inst, &tmp, fname);
 }
 
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname) {
     if (core_check_state_blob(inst, saved, sizeof(CoreData), fname) != ST_OK) return ST_ERROR;
-    int machine = inst->d.machine; /* the life-cycle state stays the importer's */
-    inst->d = *saved;
+    int machine = inst->d.machine;
+    if (machine == MS_ERROR) {
+        /* restart from a state stored before the error (FMI 2.0 section 2.1.3, FMI 3.0 section 2.2.3): the
+         * instance resumes the life-cycle state it had when the FMU state was taken */
+        machine = saved->machine;
+        int legal = inst->is_cosim ? (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
+                                   : (MS_INSTANTIATED | MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED);
+        if (!(machine & legal)) {
+            core_logf(inst, ST_ERROR, "%s: FMU state was taken in %s, which a %s instance cannot resume", fname,
+                      core_machine_name(machine), inst->is_cosim ? "Co-Simulation" : "Model Exchange");
+            return ST_ERROR;
+        }
+    }
+    inst->d = *saved; /* otherwise the life-cycle state stays the importer's */
     inst->d.machine = machine;
     return ST_OK;
 }

@@ -14,6 +14,17 @@
 #include "model.h"
 #include "ode_solver.h"
 
+/* Work limit of one communication step: at most this many internal solver steps (about 0.2 s of CPU
+ * for the elastic model); beyond it DoStep fails ("too many internal steps") and the instance enters
+ * the Error state. Ample for co-simulation: 200 s of a stiff (k = 1e6 N/m) spring with dopri5. */
+#define CORE_MAX_INTERNAL_STEPS 100000L
+#define CORE_MAX_INTERNAL_STEPS_TEXT "100000 internal steps"
+
+/* Communication steps whose span is below CORE_MIN_SOLVER_SPAN * max(1, |t|) (the solver's smallest
+ * step, 1e-14 max(1, |t|) in ode_solver.c) are legal: DoStep advances time with one explicit Euler step
+ * (its error is far below the rounding of the state) and returns OK; h = 1e-300 is such a step. */
+#define CORE_MIN_SOLVER_SPAN 1e-14
+
 /* Status codes: numerically equal to fmi2Status and fmi3Status. */
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } CoreStatus;
 
@@ -98,7 +109,12 @@ CoreStatus core_set_time(Instance *inst, double t);
 CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t n_unknown, const unsigned int *known,
                             size_t n_known, const double *seed, double *sensitivity);
 
-/* FMU state: the layer allocates sizeof(CoreData) bytes; the serialized form is those bytes. */
+/* FMU state: the layer allocates sizeof(CoreData) bytes; the serialized form is those bytes.
+ * core_check_state_blob checks size and model magic and then every field with the setters' rules
+ * (finite time, finite states with spring lengths > 0, finite inputs, parameters with their sign
+ * rules, tolerance in (0, 1), max_step >= 0, solver 0/1, a solver block that is unset or consistent);
+ * a rejected state logs why and changes nothing. core_restore in the Error state resumes the
+ * life-cycle state stored with the FMU state (restart after an error, as the standard allows). */
 CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, const char *fname);
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname);
 

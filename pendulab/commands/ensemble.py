@@ -1,0 +1,153 @@
+"""``pendulab ensemble``: many runs at once; ``flipmap`` draws the double pendulum's time-to-first-flip map."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+from . import CLIError
+
+__all__ = ["register", "run_flipmap", "DEFAULT_K"]
+
+_KINDS = ("rigid", "elastic")
+#: Spring stiffness [N/m] of the elastic flip map (both springs); see docs/ensembles.md for the choice.
+DEFAULT_K = 1e4
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``ensemble`` command and its ``flipmap`` sub-command."""
+    p = subparsers.add_parser("ensemble", help="ensembles of runs (flip map)", description=__doc__)
+    sub = p.add_subparsers(dest="ensemble_command", metavar="ENSEMBLE")
+    sub.required = True
+    fm = sub.add_parser(
+        "flipmap",
+        help="time to the first flip over a grid of release angles",
+        description=(
+            "Release the double pendulum at rest at every (theta1, theta2) of an N x N grid over (-pi, pi) and "
+            "integrate (method taylor) until a link flips (|theta| = pi) or T passes. Points whose energy is too "
+            "low to ever flip are skipped (exact). Writes DIR/flipmap.npz (theta1, theta2, t_flip[i_theta1, "
+            "i_theta2], NaN = no flip) and DIR/flipmap.png; with --compare (default for --model elastic) also "
+            "the rigid map and DIR/flipmap_compare.png (rigid | elastic)."
+        ),
+    )
+    fm.add_argument("--model", default="rigid", metavar="KIND", help="rigid (default) | elastic")
+    fm.add_argument("--grid", default="400", metavar="N", help="grid points per angle (default 400)")
+    fm.add_argument("--t-max", default="10", metavar="T", help="horizon [s] (default 10)")
+    fm.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    fm.add_argument("--scheduler", default=None, metavar="ADDRESS", help="Dask scheduler address tcp://host:port")
+    fm.add_argument("--k", default=None, metavar="K", help=f"elastic spring stiffness k1 = k2 [N/m] (default {DEFAULT_K:g})")
+    fm.add_argument("--threads", default=None, metavar="N", help="local threads (default: all cores)")
+    fm.add_argument("--rtol", default="1e-12", metavar="TOL", help="integration tolerance (default 1e-12)")
+    cmp = fm.add_mutually_exclusive_group()
+    cmp.add_argument("--compare", dest="compare", action="store_true", default=None, help="also draw rigid | elastic")
+    cmp.add_argument("--no-compare", dest="compare", action="store_false", help="no comparison (elastic)")
+    fm.add_argument("--no-progress", action="store_true", help="no progress bar")
+    fm.set_defaults(func=run_flipmap)
+
+
+def _int(option: str, text: str, lo: int, hi: int) -> int:
+    try:
+        value = int(text)
+    except (TypeError, ValueError):
+        raise CLIError(f"{option} {text!r}: expected an integer") from None
+    if not lo <= value <= hi:
+        raise CLIError(f"{option} {text!r}: expected an integer in [{lo}, {hi}]")
+    return value
+
+
+def _positive(option: str, text: str) -> float:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise CLIError(f"{option} {text!r}: expected a number") from None
+    if not (math.isfinite(value) and value > 0):
+        raise CLIError(f"{option} {text!r}: expected a finite number > 0")
+    return value
+
+
+class _Progress:
+    """A tqdm bar fed by the engine's ``progress(done, total)`` callback."""
+
+    def __init__(self, desc: str, enabled: bool) -> None:
+        self.desc, self.enabled, self.bar = desc, enabled, None
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=self.desc, unit="run", smoothing=0.1)
+        self.bar.n = done
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: float, rtol: float, threads: Any) -> Any:
+    from ..ensemble.flipmap import flip_map
+    from ..model.model import make_model
+
+    model = make_model(kind, **({"k1": k, "k2": k} if kind == "elastic" else {}))
+    bar = _Progress(f"flip map {kind}", not args.no_progress)
+    try:
+        return flip_map(model, grid, t_max, client=args.scheduler, threads=threads, progress=bar, rtol=rtol)
+    finally:
+        bar.close()
+
+
+def run_flipmap(args: argparse.Namespace) -> int:
+    """Execute ``pendulab ensemble flipmap``; return the exit status."""
+    if args.model not in _KINDS:
+        raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
+    grid = _int("--grid", args.grid, 1, 20000)
+    t_max = _positive("--t-max", args.t_max)
+    rtol = _positive("--rtol", args.rtol)
+    threads = None if args.threads is None else _int("--threads", args.threads, 1, 4096)
+    if args.k is not None and args.model == "rigid" and not args.compare:
+        raise CLIError("--k: only meaningful with --model elastic or --compare")
+    k = DEFAULT_K if args.k is None else _positive("--k", args.k)
+    if args.scheduler is not None and not args.scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
+        raise CLIError(f"--scheduler {args.scheduler!r}: expected a Dask scheduler address like tcp://127.0.0.1:8786")
+    compare = args.compare if args.compare is not None else args.model == "elastic"
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"--out {args.out!r}: exists and is not a directory")
+    out.mkdir(parents=True, exist_ok=True)
+
+    from ..ensemble.flipmap import plot_flip_map, plot_flip_map_compare
+
+    t0 = time.perf_counter()
+    main = _compute(args.model, k, args, grid, t_max, rtol, threads)
+    written = [main.save_npz(out / "flipmap.npz")]
+    fig = plot_flip_map(main, out / "flipmap.png")
+    written.append(out / "flipmap.png")
+    _close(fig)
+    maps = {args.model: main}
+    if compare:
+        other = "elastic" if args.model == "rigid" else "rigid"
+        maps[other] = _compute(other, k, args, grid, t_max, rtol, threads)
+        written.append(maps[other].save_npz(out / f"flipmap_{other}.npz"))
+        fig = plot_flip_map_compare([maps["rigid"], maps["elastic"]], out / "flipmap_compare.png")
+        written.append(out / "flipmap_compare.png")
+        _close(fig)
+    for kind, m in maps.items():
+        n = m.t_flip.size
+        print(
+            f"{kind}: {grid} x {grid}, t_max {t_max:g} s: {m.n_simulated} runs integrated "
+            f"({int(m.skipped.sum())} skipped below V_flip = {m.energy_threshold:.4f} J), "
+            f"{int(m.flipped.sum())}/{n} flip; {m.wall_time:.2f} s"
+        )
+    print(f"total {time.perf_counter() - t0:.2f} s; wrote " + ", ".join(str(p) for p in written))
+    return 0
+
+
+def _close(fig: Any) -> None:
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

@@ -1,0 +1,369 @@
+"""heyoka batch integration of one chunk of runs, with per-lane events and lane refilling.
+
+:func:`run_chunk` is a top-level function of plain data (:class:`ChunkTask`), so it runs the
+same in a thread of this process and in a Dask worker: the worker rebuilds (and caches, once
+per process) the compiled batch integrator from the task's :class:`BatchKey`.
+
+**Per-lane events.** heyoka's batch mode stops *every* lane when a terminal event triggers in
+*any* lane. That is used, not fought: the lane that triggered is truncated at its event
+(state and time are the crossing's), the other lanes end a normal step, so their step
+sequences are those of a single run. After each ``propagate_until`` the chunk reads each lane's
+outcome, records finished lanes (target time reached, terminal event, failure) and refills them
+with the next run of the chunk (time 0, new state and parameters, cooldowns reset); the others
+go on where they stopped. Lanes with no run left idle (target = their current time). Recorded
+(non-terminal) events are ``nt_event_batch`` with a callback that stores the first crossing
+time of the lane's current run.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..integrate.taylor import TaylorSystem, translate
+from ..integrate.taylor.availability import heyoka_module
+from ..model.builders import build_elastic, build_rigid
+from ..model.model import model_functions
+from .events import EventPlan
+
+__all__ = ["BatchKey", "ChunkTask", "ChunkOut", "run_chunk", "STATUS_OK", "STATUS_EVENT", "STATUS_FAILED"]
+
+STATUS_PENDING, STATUS_OK, STATUS_EVENT, STATUS_FAILED = 0, 1, 2, 3
+_TERMINAL_MIN = -(2**32)  # heyoka: outcome -i-1 (> -2**32) = stopped by terminal event i
+
+
+@dataclass(frozen=True)
+class BatchKey:
+    """What a compiled batch integrator depends on (never a parameter value).
+
+    Attributes
+    ----------
+    kind : {"rigid", "elastic"}
+    zero_params : tuple of int
+        Parameters that are exactly 0 in every run (specialised away, as ``method="taylor"`` does).
+    tol : float
+        heyoka tolerance ``min(rtol, atol)``.
+    events : EventPlan
+        Resolved events.
+    batch_size : int
+        SIMD lanes.
+    """
+
+    kind: str
+    zero_params: tuple[int, ...]
+    tol: float
+    events: EventPlan
+    batch_size: int
+
+
+@dataclass(frozen=True)
+class ChunkTask:
+    """One chunk of runs (plain data; pickle-friendly).
+
+    Attributes
+    ----------
+    key : BatchKey
+    index : int
+        Chunk number (for messages).
+    x0 : ndarray, shape (m, nx)
+    p : ndarray, shape (m, np)
+        Model parameter vectors.
+    t_final : float
+    t_eval : ndarray or None
+    """
+
+    key: BatchKey
+    index: int
+    x0: np.ndarray
+    p: np.ndarray
+    t_final: float
+    t_eval: np.ndarray | None
+
+
+@dataclass
+class ChunkOut:
+    """Results of one chunk (arrays over its m runs).
+
+    Attributes
+    ----------
+    index : int
+        Chunk number.
+    x_final : ndarray, shape (m, nx)
+    t_final : ndarray, shape (m,)
+    status : ndarray of int8, shape (m,)
+        ``STATUS_OK``, ``STATUS_EVENT`` or ``STATUS_FAILED``.
+    messages : dict of int to str
+        Failure message by run.
+    event_times : ndarray, shape (n_events, m)
+    terminal_event : ndarray of int, shape (m,)
+        Index of the terminal event that stopped the run, -1 when none.
+    x : ndarray, shape (m, len(t_eval), nx), or None
+    n_steps : int
+        Batch steps summed over lanes.
+    """
+
+    index: int
+    x_final: np.ndarray
+    t_final: np.ndarray
+    status: np.ndarray
+    messages: dict[int, str]
+    event_times: np.ndarray  # (n_events, m)
+    terminal_event: np.ndarray  # (m,) event index or -1
+    x: np.ndarray | None
+    n_steps: int
+
+
+@dataclass
+class _Built:
+    ode: TaylorSystem
+    ev_derived: Any  # callable p -> ndarray or None
+    n_ev_derived: int
+    template: Any
+    nt_index: tuple[int, ...]  # nt event j -> event index
+    t_index: tuple[int, ...]  # terminal event j -> event index
+    lock: threading.Lock
+
+
+_BUILT: dict[BatchKey, _Built] = {}
+_BUILD_LOCK = threading.Lock()
+
+
+def _state_names(kind: str) -> tuple[str, ...]:
+    return (build_rigid() if kind == "rigid" else build_elastic()).state_names
+
+
+class _Recorder:
+    """nt-event callback: first crossing time per run of the lane (its arrays are set per chunk)."""
+
+    def __init__(self, event: int) -> None:
+        self.event = event
+        self.times: np.ndarray | None = None
+        self.lane_run: np.ndarray | None = None
+
+    def __call__(self, ta: Any, t: float, d_sgn: Any, lane: int) -> None:
+        r = self.lane_run[lane]
+        if r >= 0 and math.isnan(self.times[self.event, r]):
+            self.times[self.event, r] = t
+
+
+def build(key: BatchKey) -> _Built:
+    """The compiled batch integrator of ``key`` (translated and JIT-compiled once per key and process)."""
+    built = _BUILT.get(key)
+    if built is not None:
+        return built
+    with _BUILD_LOCK:
+        built = _BUILT.get(key)
+        if built is not None:
+            return built
+        hy = heyoka_module()
+        names = _state_names(key.kind)
+        # The same translation as method="taylor" with zero torques (identical ODE expressions).
+        ode = translate(model_functions(key.kind)["rhs"], zero_params=key.zero_params, zero_inputs=(0, 1), state_names=names)
+        xs = [v for v, _ in ode.sys]
+        n_base = ode.n_inputs + ode.n_derived
+        plan = key.events
+        ev_exprs: dict[int, Any] = {}
+        ev_derived, n_ev = None, 0
+        if plan.sx_function:
+            g = ca.Function.deserialize(plan.sx_function)
+            ev_exprs, ev_derived, n_ev = _translate_events(hy, g, key, names, n_base, xs)
+        t_events, nt_events, t_index, nt_index = [], [], [], []
+        for k, kind, arg, direction in plan.components:
+            if kind == "square":
+                expr = xs[arg] * xs[arg] - math.pi**2
+            elif kind == "state":
+                expr = xs[arg[0]] - arg[1]
+            else:
+                expr = ev_exprs[arg]
+            d = {0: hy.event_direction.any, 1: hy.event_direction.positive, -1: hy.event_direction.negative}[direction]
+            if plan.terminal[k]:
+                t_events.append(hy.t_event_batch(expr, direction=d))
+                t_index.append(k)
+            else:
+                nt_events.append(hy.nt_event_batch(expr, _Recorder(k), direction=d))
+                nt_index.append(k)
+        S = key.batch_size
+        template = hy.taylor_adaptive_batch(
+            ode.sys,
+            np.zeros((len(names), S)),
+            pars=np.zeros((n_base + n_ev, S)),
+            tol=key.tol,
+            t_events=t_events,
+            nt_events=nt_events,
+        )
+        built = _Built(ode, ev_derived, n_ev, template, tuple(nt_index), tuple(t_index), threading.Lock())
+        _BUILT[key] = built
+    return built
+
+
+def _translate_events(hy: Any, g: Any, key: BatchKey, names: tuple[str, ...], n_base: int, xs: list) -> tuple:
+    """heyoka expressions of the rows of ``g(x, u, p)``; their coefficients go after the ODE's parameters.
+
+    The translator numbers hoisted coefficients after the inputs, so ``g`` is re-wrapped with a
+    dummy input vector of size ``n_base`` (all specialised to zero).
+    """
+    nx = len(names)
+    x = ca.SX.sym("x", nx)
+    p = ca.SX.sym("p", g.nnz_in(2))
+    rows = g(x, ca.DM.zeros(g.nnz_in(1)), p)
+    n_rows = rows.numel()
+    exprs: dict[int, Any] = {}
+    derived_fns: list[tuple[Any, int]] = []
+    offset = n_base
+    for start in range(0, n_rows, nx):
+        stop = min(start + nx, n_rows)
+        u = ca.SX.sym("u", offset)
+        f = ca.Function("g", [x, u, p], [ca.densify(rows[start:stop])])
+        sys_g = translate(f, zero_params=key.zero_params, zero_inputs=range(offset), state_names=names)
+        # The translator makes its own variables with the same names: rebuild on ours by name (identical).
+        for r in range(stop - start):
+            exprs[start + r] = sys_g.sys[r][1]
+        derived_fns.append((sys_g.derived, sys_g.n_derived))
+        offset += sys_g.n_derived
+    n_ev = offset - n_base
+
+    def derived(pv: Any) -> np.ndarray:
+        return (
+            np.concatenate([np.asarray(fn(pv), dtype=float).reshape(m) for fn, m in derived_fns]) if derived_fns else np.empty(0)
+        )
+
+    return exprs, derived, n_ev
+
+
+def _pars(built: _Built, P: np.ndarray, nu: int) -> np.ndarray:
+    """Runtime parameters (n_par, m) of the runs' parameter rows ``P`` (m, np); one evaluation per distinct row."""
+    uniq, inv = np.unique(P, axis=0, return_inverse=True)
+    inv = np.asarray(inv).reshape(-1)
+    n_par = nu + built.ode.n_derived + built.n_ev_derived
+    cols = np.zeros((n_par, len(uniq)))
+    for j, row in enumerate(uniq):
+        cols[nu : nu + built.ode.n_derived, j] = built.ode.derived(row)
+        if built.ev_derived is not None:
+            cols[nu + built.ode.n_derived :, j] = built.ev_derived(row)
+    return cols[:, inv]
+
+
+def run_chunk(task: ChunkTask) -> ChunkOut:
+    """Integrate one chunk of runs with one batch integrator (see the module docstring).
+
+    Parameters
+    ----------
+    task : ChunkTask
+
+    Returns
+    -------
+    ChunkOut
+    """
+    hy = heyoka_module()
+    built = build(task.key)
+    with built.lock:
+        ta = copy.copy(built.template)
+    S = ta.batch_size
+    m, nx = task.x0.shape
+    n_ev = len(task.key.events.names)
+    pars_all = _pars(built, task.p, built.ode.n_inputs)
+    x_final = np.full((m, nx), np.nan)
+    t_end = np.full(m, np.nan)
+    status = np.full(m, STATUS_PENDING, dtype=np.int8)
+    messages: dict[int, str] = {}
+    ev_times = np.full((n_ev, m), np.nan)
+    term_ev = np.full(m, -1, dtype=np.int64)
+    t_eval = task.t_eval
+    X = np.full((m, len(t_eval), nx), np.nan) if t_eval is not None else None
+    lane_run = np.full(S, -1, dtype=np.int64)
+    ptr = np.zeros(S, dtype=np.int64)
+    for ev in ta.nt_events if built.nt_index else ():
+        cb = ev.callback
+        cb.times, cb.lane_run = ev_times, lane_run
+    target = np.empty(S)
+    times = np.zeros(S)
+    next_run = 0
+    t_index = built.t_index
+    time_limit, nf = hy.taylor_outcome.time_limit, hy.taylor_outcome.err_nf_state
+    n_steps = 0
+    has_events = bool(built.nt_index or built.t_index)
+
+    def fill(lane: int) -> None:
+        nonlocal next_run
+        if next_run < m:
+            r = next_run
+            next_run += 1
+            lane_run[lane] = r
+            times[lane] = 0.0
+            target[lane] = task.t_final
+            ta.state[:, lane] = task.x0[r]
+            ta.pars[:, lane] = pars_all[:, r]
+            if has_events:
+                ta.reset_cooldowns(lane)
+            ptr[lane] = 0
+        else:  # idle: a benign finite state and parameters, no time to go
+            lane_run[lane] = -1
+            target[lane] = times[lane]
+            ta.state[:, lane] = task.x0[0]
+            ta.pars[:, lane] = pars_all[:, 0]
+
+    for lane in range(S):
+        fill(lane)
+    ta.set_time(times)
+    while np.any(lane_run >= 0):
+        res = ta.propagate_until(target.copy(), c_output=X is not None)
+        times[:] = ta.time
+        if X is not None:
+            _record_grid(res[0], t_eval, times, lane_run, ptr, X)
+        refill = []
+        for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
+            n_steps += int(steps)
+            r = lane_run[lane]
+            if r < 0:
+                continue
+            o = int(outcome)
+            if outcome == time_limit:
+                status[r] = STATUS_OK
+            elif _TERMINAL_MIN < o < 0:
+                k = t_index[-o - 1]
+                status[r] = STATUS_EVENT
+                term_ev[r] = k
+                ev_times[k, r] = times[lane]
+            elif o >= 0:  # a terminal event whose callback let the run go on (not used here)
+                continue
+            elif outcome == hy.taylor_outcome.success:
+                continue
+            else:
+                status[r] = STATUS_FAILED
+                why = "the state became non-finite (err_nf_state)" if outcome == nf else f"heyoka outcome {outcome}"
+                messages[r] = f"method 'taylor' (ensemble) failed at t = {times[lane]!r}: {why}"
+            state = np.array(ta.state[:, lane])
+            if status[r] != STATUS_FAILED and not np.all(np.isfinite(state)):
+                status[r] = STATUS_FAILED
+                messages[r] = f"method 'taylor' (ensemble) failed at t = {times[lane]!r}: the state became non-finite"
+            x_final[r] = state
+            t_end[r] = times[lane]
+            refill.append(lane)
+        for lane in refill:
+            fill(lane)
+        if refill:
+            ta.set_time(times)
+    return ChunkOut(task.index, x_final, t_end, status, messages, ev_times, term_ev, X, n_steps)
+
+
+def _record_grid(co: Any, t_eval: np.ndarray, times: np.ndarray, lane_run: np.ndarray, ptr: np.ndarray, X: np.ndarray) -> None:
+    """Dense output of the last propagation at the grid points each lane passed."""
+    stops = np.searchsorted(t_eval, times, side="right")
+    counts = np.where(lane_run >= 0, stops - ptr, 0)
+    mmax = int(counts.max(initial=0))
+    if mmax <= 0:
+        return
+    tm = np.tile(times, (mmax, 1))
+    for lane in np.flatnonzero(counts > 0):
+        tm[: counts[lane], lane] = t_eval[ptr[lane] : stops[lane]]
+    vals = co(tm)  # (mmax, nx, S)
+    for lane in np.flatnonzero(counts > 0):
+        r = lane_run[lane]
+        X[r, ptr[lane] : stops[lane]] = vals[: counts[lane], :, lane]
+        ptr[lane] = stops[lane]
