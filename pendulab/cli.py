@@ -3,14 +3,24 @@
 Each command lives in its own module exposing ``register(subparsers)``, which
 adds a sub-parser whose ``func(args) -> int`` does the work. Library errors
 become a one-line message on stderr and a non-zero exit status.
+
+Ctrl-C always stops a command: SIGINT raises ``KeyboardInterrupt`` as usual,
+and because a native solver may catch it (CasADi turns it into a warning or a
+``RuntimeError``, IPOPT or an integrator then carries on), the interrupt is
+*sticky*: until it reaches :func:`main`, it is raised again every
+:data:`_REINTERRUPT_S` seconds, and any error that ends a command after an
+interrupt counts as the interrupt ("interrupted", exit status 130).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 
 from .commands import CLIError
 
@@ -55,7 +65,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         0 on success (or the command's own status), 2 after an error, 130 on
-        ``KeyboardInterrupt``.
+        ``KeyboardInterrupt`` (Ctrl-C), also when a native solver turned it
+        into an error or swallowed it.
 
     Raises
     ------
@@ -64,15 +75,90 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    with _sticky_interrupt() as guard:
+        try:
+            try:
+                status = int(args.func(args) or 0)
+            finally:
+                guard.stop()
+            # An interrupt swallowed by a native solver still ends the command as interrupted.
+            return _interrupted() if guard.interrupted else status
+        except KeyboardInterrupt:
+            return _interrupted()
+        except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError) as exc:
+            if guard.interrupted or _mentions_interrupt(exc):
+                # A native layer (CasADi, IPOPT, SUNDIALS) turned the interrupt into an error.
+                return _interrupted()
+            message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            print(f"pendulab {args.command}: error: {message}", file=sys.stderr)
+            return 2
+        except Exception:
+            if guard.interrupted:
+                return _interrupted()
+            raise
+
+
+#: Seconds between repeated interrupts while a SIGINT has not yet reached :func:`main`.
+_REINTERRUPT_S = 0.5
+
+
+def _interrupted() -> int:
+    print("pendulab: interrupted", file=sys.stderr)
+    return 130
+
+
+def _mentions_interrupt(exc: BaseException) -> bool:
+    """True when ``exc`` (or an exception it was raised from) is an interrupt in disguise."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
+            return True
+        e = e.__cause__ or e.__context__
+    return False
+
+
+class _InterruptGuard:
+    """SIGINT handler of a running command: raise ``KeyboardInterrupt``, and again until it arrives."""
+
+    def __init__(self) -> None:
+        self.interrupted = False
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def handler(self, signum: int, frame: object) -> None:
+        if self._done.is_set():
+            return
+        self.interrupted = True
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._repeat, name="pendulab-sigint", daemon=True)
+            self._thread.start()
+        raise KeyboardInterrupt
+
+    def _repeat(self) -> None:
+        # A native solver may have swallowed the first KeyboardInterrupt: interrupt again until
+        # main() has seen one (stop() ends this), so Ctrl-C always ends the command.
+        while not self._done.wait(_REINTERRUPT_S):
+            signal.raise_signal(signal.SIGINT)
+
+    def stop(self) -> None:
+        self._done.set()
+
+
+@contextlib.contextmanager
+def _sticky_interrupt() -> Iterator[_InterruptGuard]:
+    """Install :class:`_InterruptGuard` for SIGINT (main thread only), restore the old handler after."""
+    guard = _InterruptGuard()
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        yield guard
+        return
+    previous = signal.signal(signal.SIGINT, guard.handler)
     try:
-        return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("pendulab: interrupted", file=sys.stderr)
-        return 130
-    except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError) as exc:
-        message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        print(f"pendulab {args.command}: error: {message}", file=sys.stderr)
-        return 2
+        yield guard
+    finally:
+        guard.stop()
+        signal.signal(signal.SIGINT, previous)
 
 
 if __name__ == "__main__":

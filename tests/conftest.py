@@ -30,6 +30,12 @@ def compiler_missing() -> str | None:
     return None
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--fuzz-long", action="store_true", default=False, help="run the long FMI fuzz campaigns (tests/fmu/test_fmi_fuzz.py)"
+    )
+
+
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "needs_cc: builds C code (an FMU or the native library); skipped without a C compiler")
 

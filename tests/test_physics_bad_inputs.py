@@ -26,6 +26,7 @@ CASES = [
     ("zero stiffness", lambda: pl.elastic(k1=0.0), ValueError, ["'k1'", "> 0", "0.0"]),
     ("negative stiffness", lambda: pl.elastic(k2=-10.0), ValueError, ["'k2'", "> 0", "-10.0"]),
     ("negative damper", lambda: pl.rigid(b1=-0.1), ValueError, ["'b1'", ">= 0", "-0.1"]),
+    ("link 2 without inertia", lambda: pl.rigid(lc2=0.0), ValueError, ["link 2", "singular", "lc2 > 0 or I2 > 0"]),
     ("NaN parameter", lambda: pl.rigid(g=NAN), ValueError, ["'g'", "finite", "nan"]),
     ("inf parameter", lambda: pl.elastic(c1=math.inf), ValueError, ["'c1'", "finite", "inf"]),
     ("NaN via with_params", lambda: pl.rigid().with_params(I1=NAN), ValueError, ["'I1'", "finite", "nan"]),

@@ -23,7 +23,7 @@ from .._checks import check_model
 from ..model.model import Model, model_functions
 from ..model.statics import static_spring_lengths
 
-__all__ = ["Equilibrium", "EQUILIBRIUM_NAMES", "equilibria", "equilibrium"]
+__all__ = ["Equilibrium", "EquilibriumNotFoundError", "EQUILIBRIUM_NAMES", "equilibria", "equilibrium"]
 
 #: Branch names, link 1 first: which way each link points.
 EQUILIBRIUM_NAMES: tuple[str, ...] = ("down-down", "down-up", "up-down", "up-up")
@@ -123,6 +123,10 @@ def _solver(kind: str) -> tuple[ca.Function, ca.Function]:
     return newton, grad_v
 
 
+class EquilibriumNotFoundError(ValueError, RuntimeError):
+    """Newton did not converge to the named equilibrium (a ``ValueError`` of the inputs, and a ``RuntimeError`` as before)."""
+
+
 class _SpringsTooSoftError(ValueError):
     """The branch would need a non-positive spring length: it does not exist."""
 
@@ -183,8 +187,8 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
         Unknown name; ``u`` of the wrong size or non-finite; torque too large
         to be held by gravity; ``g = 0``; a spring too soft to hold the
         configuration (its length would not stay positive).
-    RuntimeError
-        Newton did not converge.
+    EquilibriumNotFoundError
+        Newton did not converge (a ``ValueError`` and a ``RuntimeError``).
     TypeError
         ``model`` is not a pendulab Model.
     """
@@ -203,7 +207,10 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
     try:
         q = np.asarray(newton(seed, uv, model.p), dtype=float).ravel()
     except RuntimeError as exc:
-        raise RuntimeError(f"Newton failed to find equilibrium {name!r} from seed {seed.tolist()}: {exc}") from exc
+        raise EquilibriumNotFoundError(
+            f"Newton did not converge to equilibrium {name!r} of the {model.kind} model under u = {uv.tolist()} from seed "
+            f"{np.round(seed, 6).tolist()}; the torque may exceed what the links and springs can hold"
+        ) from exc
     x = np.concatenate([q, np.zeros(model.nq)])
     if model.kind == "elastic" and np.any(q[2:] <= 0.0):
         raise _SpringsTooSoftError(

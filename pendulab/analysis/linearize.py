@@ -385,7 +385,22 @@ def equilibrium_residual(model: Model, x: Any, u: Any = None) -> tuple[float, bo
 
 
 def not_equilibrium_error(where: str, lin: Linearization, keyword: str = "allow_non_equilibrium") -> ValueError:
-    """The one message for a function that needs an equilibrium and got another point (used by modes, LQR, bridge)."""
+    """The one error of a function that needs an equilibrium and got another point (modes, LQR, bridge).
+
+    Parameters
+    ----------
+    where : str
+        Name of the refusing function.
+    lin : Linearization
+        The linearization at the point (its ``residual``, ``x0`` and ``u0`` are named).
+    keyword : str
+        The opt-out keyword of the function.
+
+    Returns
+    -------
+    ValueError
+        The caller raises it.
+    """
     return ValueError(
         f"{where}: the operating point is not an equilibrium: |f(x, u)| = {lin.residual:.3g} (largest state "
         f"derivative, SI units) at x = {np.round(lin.x0, 12).tolist()}, u = {lin.u0.tolist()} [N.m]; expected an "

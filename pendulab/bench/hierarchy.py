@@ -44,6 +44,7 @@ from ..model.counterpart import rigid_counterpart
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
 from ..scene import Scene
+from .workprecision import is_interrupt, watch_interrupt
 
 __all__ = [
     "LevelResult",
@@ -390,20 +391,8 @@ def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = Non
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
     levels = levels_for(scene.model)
-    X_ref, wall_ref = _timed(lambda: levels[-1].run(scene), repeats)  # a failing reference propagates
-    ref = _signals(scene, X_ref)
-    results = []
-    for lv in levels[:-1]:
-        try:
-            X, wall = _timed(lambda lv=lv: lv.run(scene), repeats)
-        except RuntimeError as exc:  # e.g. no quasi-static solution, or an integrator failure
-            errors = dict.fromkeys(scene.outputs, math.inf)
-            results.append(LevelResult(lv.name, math.inf, errors, math.nan, False, f"failed: {str(exc).splitlines()[0]}"))
-            continue
-        sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
-        errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
-        err = max(errors.values())
-        results.append(LevelResult(lv.name, err, errors, wall, err <= tol))
+    with watch_interrupt() as interrupted:
+        results, X_ref, wall_ref = _run_levels(scene, levels, repeats, tol, interrupted)
     results.append(LevelResult(levels[-1].name, 0.0, dict.fromkeys(scene.outputs, 0.0), wall_ref, True, "reference"))
     ok = [r for r in results if r.within]
     fastest = min(r.wall_time for r in ok)
@@ -418,6 +407,32 @@ def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = Non
         tuple(results),
         chosen,
     )
+
+
+def _run_levels(
+    scene: Scene, levels: tuple[ModelLevel, ...], repeats: int, tol: float, interrupted: Callable[[], bool]
+) -> tuple[list[LevelResult], np.ndarray, float]:
+    X_ref, wall_ref = _timed(lambda: levels[-1].run(scene), repeats)  # a failing reference propagates
+    if interrupted():  # a native solver swallowed a Ctrl-C (and retried): stop anyway
+        raise KeyboardInterrupt
+    ref = _signals(scene, X_ref)
+    results = []
+    for lv in levels[:-1]:
+        try:
+            X, wall = _timed(lambda lv=lv: lv.run(scene), repeats)
+        except RuntimeError as exc:  # e.g. no quasi-static solution, or an integrator failure
+            if interrupted() or is_interrupt(exc):  # ... but a Ctrl-C is never a failed level
+                raise KeyboardInterrupt from exc
+            errors = dict.fromkeys(scene.outputs, math.inf)
+            results.append(LevelResult(lv.name, math.inf, errors, math.nan, False, f"failed: {str(exc).splitlines()[0]}"))
+            continue
+        sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
+        errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
+        err = max(errors.values())
+        results.append(LevelResult(lv.name, err, errors, wall, err <= tol))
+        if interrupted():
+            raise KeyboardInterrupt
+    return results, X_ref, wall_ref
 
 
 def choose_model(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:

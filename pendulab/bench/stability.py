@@ -37,10 +37,12 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .._io import atomic_open
 from ..integrate import simulate
 from ..integrate.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_state
+from .workprecision import watch_interrupt
 
 __all__ = [
     "omega_max",
@@ -268,12 +270,30 @@ def run_stability(*, quick: bool = False, progress: Progress | None = None) -> S
     total = len(ks) * (1 + len(methods) * len(n_steps)) + len(blow_ks) + len(sc_ks) * len(sc_methods) * 2 + 1
     done = 0
 
-    def tick(label: str) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done, total, label)
+    with watch_interrupt() as interrupted:
 
+        def tick(label: str) -> None:
+            nonlocal done
+            # A native solver (CVODES) may have swallowed a Ctrl-C and carried on: stop anyway.
+            if interrupted():
+                raise KeyboardInterrupt
+            done += 1
+            if progress is not None:
+                progress(done, total, label)
+
+        return _run_studies(ks, n_steps, methods, blow_ks, sc_ks, sc_methods, quick, tick)
+
+
+def _run_studies(
+    ks: np.ndarray,
+    n_steps: np.ndarray,
+    methods: list[str],
+    blow_ks: list[float],
+    sc_ks: list[float],
+    sc_methods: list[str],
+    quick: bool,
+    tick: Callable[[str], None],
+) -> StabilityResult:
     res = StabilityResult(ks=ks, n_steps=n_steps, omega_max=np.array([omega_max(elastic(k1=k, k2=k)) for k in ks]))
     for m in methods:
         res.maps[m] = np.zeros((len(ks), len(n_steps)), dtype=int)
@@ -343,7 +363,8 @@ def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "stability_map.csv", out / "rk4_limit.csv", out / "step_counts.csv"]
     names = {UNSTABLE: "unstable", INACCURATE: "stable-inaccurate", ACCURATE: "stable-accurate"}
-    with paths[0].open("w", newline="") as fh:
+    # Atomic writes: an interrupted run never leaves a truncated CSV.
+    with atomic_open(paths[0], "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["method", "k", "omega_max", "h", "h_omega_max", "class", "position_error"])
         for m, grid in res.maps.items():
@@ -360,12 +381,12 @@ def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
                             f"{res.errors[m][i, j]:.3e}",
                         ]
                     )
-    with paths[1].open("w", newline="") as fh:
+    with atomic_open(paths[1], "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["k", "h_measured", "h_predicted", "relative_difference"])
         for k, hm, hp in res.blowup:
             w.writerow([f"{k:.6g}", f"{hm:.6g}", f"{hp:.6g}", f"{hm / hp - 1:.4f}"])
-    with paths[2].open("w", newline="") as fh:
+    with atomic_open(paths[2], "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=["k", "start", "method", "steps"])
         w.writeheader()
         w.writerows(res.step_counts)

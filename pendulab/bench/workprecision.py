@@ -25,17 +25,21 @@ ones come from the integrate registry, the FMU's embedded solvers from
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
+import signal
 import statistics
+import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._io import atomic_open
 from ..integrate import SimulationError
 from ..model.model import Model
 from ..scene import Scene
@@ -140,6 +144,9 @@ def _measure(method: BenchMethod, case: Scene, model: Model, x0: np.ndarray, ref
         try:
             traj = method.run(model, x0, case.t_final, case.dt, setting)
         except SimulationError as exc:
+            # CasADi turns a Ctrl-C inside the integrator into an error: that is no failed point.
+            if is_interrupt(exc):
+                raise KeyboardInterrupt from exc
             row.status = "unstable" if "non-finite" in str(exc) else "failed"
             row.message = str(exc).splitlines()[0][:200]
             return row
@@ -222,21 +229,85 @@ def run_work_precision(
     total = sum(len(bm.quick if quick else bm.settings) for _, bm in plan)
     rows: list[Row] = []
     done = 0
-    for case, bm in plan:
-        model, x0 = case.model, case.x0
-        settings = bm.quick if quick else bm.settings
-        stop = False
-        for s in settings:
-            if stop:
-                rows.append(Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s"))
-            else:
-                row = _measure(bm, case, model, x0, refs[case.name], s, repeats)
-                rows.append(row)
-                stop = row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s)
-            done += 1
-            if progress is not None:
-                progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
+    with watch_interrupt() as interrupted:
+        for case, bm in plan:
+            model, x0 = case.model, case.x0
+            settings = bm.quick if quick else bm.settings
+            stop = False
+            for s in settings:
+                if stop:
+                    rows.append(
+                        Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s")
+                    )
+                else:
+                    row = _measure(bm, case, model, x0, refs[case.name], s, repeats)
+                    # A native solver may have swallowed a Ctrl-C (and retried): stop anyway.
+                    if interrupted():
+                        raise KeyboardInterrupt
+                    rows.append(row)
+                    stop = row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s)
+                done += 1
+                if progress is not None:
+                    progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
     return rows
+
+
+def is_interrupt(exc: BaseException) -> bool:
+    """True when ``exc`` is a Ctrl-C that a native solver (CasADi, IPOPT, SUNDIALS) turned into an error.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The caught exception; its ``__cause__`` / ``__context__`` chain is searched too.
+
+    Returns
+    -------
+    bool
+        ``KeyboardInterrupt`` in the chain, or a message naming it.
+    """
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
+            return True
+        e = e.__cause__ or e.__context__
+    return False
+
+
+@contextlib.contextmanager
+def watch_interrupt() -> Iterator[Callable[[], bool]]:
+    """Record SIGINTs while the block runs, for loops whose native calls may swallow the interrupt.
+
+    The caller's SIGINT handler still runs (Python's default raises
+    ``KeyboardInterrupt``); outside the main thread nothing is installed.
+
+    Yields
+    ------
+    callable
+        ``interrupted()``: True once a SIGINT has arrived during the block.
+    """
+    hit = [False]
+    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if previous in (None, signal.SIG_IGN):
+        yield lambda: hit[0]
+        return
+
+    def on_sigint(signum: int, frame: Any) -> None:
+        if not callable(previous):  # SIG_DFL would end the process: interrupt instead
+            hit[0] = True
+            raise KeyboardInterrupt
+        try:
+            previous(signum, frame)
+        except KeyboardInterrupt:
+            hit[0] = True
+            raise
+
+    signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield lambda: hit[0]
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 _FIELDS = [f for f in Row.__dataclass_fields__]
@@ -259,8 +330,7 @@ def write_csv(rows: Iterable[Row], path: str | Path) -> Path:
         The written file.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
+    with atomic_open(path, "w", newline="") as fh:  # never a truncated CSV after an interrupt
         w = csv.DictWriter(fh, fieldnames=_FIELDS)
         w.writeheader()
         for r in rows:

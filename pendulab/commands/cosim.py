@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_write_text
 from . import CLIError
 
 _DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0}
@@ -159,7 +160,8 @@ def run(args: argparse.Namespace) -> int:
         "caught_at": getattr(ctrl, "caught_at", None),
         "stats": {k: float(v) for k, v in traj.stats.items()},
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    # Atomic, and last: a summary.json means every other output of the run is complete.
+    atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
     print(f"wrote {out / 'cosim.csv'}, cosim.png{'' if args.no_gif else ', cosim.gif'}, summary.json")
     wall, inside = traj.stats["wall_time"] * 1e3, traj.stats["time_in_do_step"] * 1e3
     print(f"{traj.message}; wall {wall:.1f} ms, of which doStep {inside:.1f} ms")
@@ -224,16 +226,18 @@ def run_sweep(args: argparse.Namespace) -> int:
             f"{res.kind}: critical comm step predicted {res.h_crit_pred * 1e3:.2f} ms, measured {res.h_crit_meas * 1e3:.2f} ms, "
             f"large perturbation lost from {res.h_crit_large * 1e3:.2f} ms"
         )
-    (out / "sweep.md").write_text("\n".join(lines))
-    (out / "sweep.csv").write_text("\n".join(",".join(str(v) for v in row) for row in rows) + "\n")
-    (out / "sweep.json").write_text(
+    # Atomic writes; the summaries (sweep.json, then the sweep.md table) last.
+    atomic_write_text(out / "sweep.csv", "\n".join(",".join(str(v) for v in row) for row in rows) + "\n")
+    atomic_write_text(
+        out / "sweep.json",
         json.dumps(
             [
                 {"kind": r.kind, "h_crit_pred": r.h_crit_pred, "h_crit_meas": r.h_crit_meas, "h_crit_large": r.h_crit_large}
                 for r in results
             ],
             indent=2,
-        )
+        ),
     )
+    atomic_write_text(out / "sweep.md", "\n".join(lines))
     print(f"wrote {out / 'sweep.png'}, sweep.md, sweep.csv, sweep.json")
     return 0

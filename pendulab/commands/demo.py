@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._io import atomic_write_text
 from ._common import format_summary, parse_number, summarize
 
 __all__ = ["register", "run"]
@@ -82,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
 
     summaries = [summarize(label, model, traj) for label, (model, traj) in runs.items()]
     report_data = {"scene": scene.name, "description": scene.description, "runs": summaries, "files": files}
-    (out / "summary.json").write_text(json.dumps(report_data, indent=2))
+    # Atomic, and last: a summary.json means every other file of the run is complete.
+    atomic_write_text(out / "summary.json", json.dumps(report_data, indent=2))
     files["summary.json"] = str(out / "summary.json")
     _progress(f"done in {time.perf_counter() - start:.1f} s; {len(files)} files in {out}/")
     if args.json:

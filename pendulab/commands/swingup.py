@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from .._io import atomic_open, atomic_write_text
 from . import CLIError
 
 __all__ = ["register"]
@@ -53,10 +54,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={args.N or task.N}) ...", file=sys.stderr)
     ep = run_episode(task, method=args.method, N=args.N, guess=args.guess)
     summary = ep.summary()
-    if args.fmu and ep.closed_loop is not None:
-        summary.update(_fmu_loop(ep, out))
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
     if not ep.result.success:
+        _write_summary(out, summary)
         print(f"swing-up failed: {ep.result.message}")
         print(f"summary: {out / 'summary.json'}")
         return 1
@@ -68,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
     figs = plot_episode(ep, out)
     if not args.no_gif:
         figs.append(animate_episode(ep, out / "swingup.gif"))
+    if args.fmu:
+        summary.update(_fmu_loop(ep, out))
+    # Last: a summary.json means every other output of the run is complete.
+    _write_summary(out, summary)
     s = summary
     print(f"task {s['task']}: {'SUCCESS' if s['success'] else 'FAILED'} (end effector above {s['height_threshold_m']:.3f} m)")
     print(f"  solve: {s['ipopt_status']}, {s['iterations']} iterations, {s['solve_time_s']:.2f} s", end="")
@@ -103,10 +106,15 @@ def _fmu_loop(ep, out: Path) -> dict:
     return {"fmu_success": hc.success, "fmu_swing_up_time_s": hc.t_up, "fmu_max_state_deviation": dev}
 
 
+def _write_summary(out: Path, summary: dict) -> None:
+    atomic_write_text(out / "summary.json", json.dumps(summary, indent=2, default=float) + "\n")
+
+
 def _optimal_csv(ep, path: Path) -> None:
     import numpy as np
 
     res = ep.result
     names = ep.task.model.state_names + ep.task.model.input_names
     u = np.vstack([res.u, res.u[-1:]])
-    np.savetxt(path, np.column_stack([res.t, res.x, u]), delimiter=",", header=",".join(("t",) + names), comments="")
+    with atomic_open(path, "w") as fh:
+        np.savetxt(fh, np.column_stack([res.t, res.x, u]), delimiter=",", header=",".join(("t",) + names), comments="")

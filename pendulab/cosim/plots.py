@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_path
 from ..integrate.trajectory import Trajectory
 
 __all__ = ["plot_cosim", "animate_cosim", "plot_side_by_side"]
@@ -128,8 +129,8 @@ def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_fram
         images.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3]).convert("P", palette=Image.ADAPTIVE))
     plt.close(fig)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
+    with atomic_path(path) as tmp:  # an interrupted run never leaves a truncated GIF
+        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
     return path
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..integrate.taylor import TaylorSystem, translate
 from ..integrate.taylor.availability import heyoka_module
+from ..integrate.taylor.translate import used_parameter_count
 from ..model.builders import build_elastic, build_rigid
 from ..model.model import model_functions
 from .events import EventPlan
@@ -189,10 +190,13 @@ def build(key: BatchKey) -> _Built:
                 nt_events.append(hy.nt_event_batch(expr, _Recorder(k), direction=d))
                 nt_index.append(k)
         S = key.batch_size
+        # heyoka sizes the parameters by the highest index used (structural zeros can remove the last ones).
+        events_used = [ev.expression for ev in (*t_events, *nt_events)]
+        n_used = used_parameter_count([rhs for _, rhs in ode.sys] + events_used)
         template = hy.taylor_adaptive_batch(
             ode.sys,
             np.zeros((len(names), S)),
-            pars=np.zeros((n_base + n_ev, S)),
+            pars=np.zeros((n_used, S)),
             tol=key.tol,
             t_events=t_events,
             nt_events=nt_events,
@@ -267,7 +271,7 @@ def run_chunk(task: ChunkTask) -> ChunkOut:
     S = ta.batch_size
     m, nx = task.x0.shape
     n_ev = len(task.key.events.names)
-    pars_all = _pars(built, task.p, built.ode.n_inputs)
+    pars_all = _pars(built, task.p, built.ode.n_inputs)[: ta.pars.shape[0]]
     x_final = np.full((m, nx), np.nan)
     t_end = np.full(m, np.nan)
     status = np.full(m, STATUS_PENDING, dtype=np.int8)

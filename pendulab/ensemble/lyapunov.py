@@ -207,7 +207,7 @@ def _variational(model: Model, tol: float) -> tuple[Any, Any]:
             # d/d(x_0(0)) of the solution: one column of the state-transition matrix, i.e. the tangent
             # equations d(delta)/dt = A(x) delta; the column's initial value is overwritten at every renormalisation.
             vsys = hy.var_ode_sys(system.sys, [first_state], order=1)
-            found = (vsys, system.pars, system.n_inputs + system.n_derived)
+            found = (vsys, system.pars, system.n_pars)
             _VAR_CACHE[key] = found
     return key, found
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_open
 from ..model.model import Model
 from ..native.build import CFLAGS, CompilerNotFoundError, compile_shared, find_compiler, shared_library_suffix
 from .codegen import compiled_sources, generate_sources, layout, token
@@ -159,8 +160,8 @@ def export(
         ext = shared_library_suffix()
         lib = compile_sources(src, Path(tmp) / f"{lay.identifier}{ext}", fmi_version, cc=cc)
         files[f"binaries/{binary_platform(fmi_version)}/{lib.name}"] = lib.read_bytes()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+    # Atomic: an interrupted or failing export never leaves a truncated FMU where a good one was.
+    with atomic_open(path, "wb") as fh, zipfile.ZipFile(fh, "w", zipfile.ZIP_DEFLATED) as zf:
         for name in sorted(files):
             info = zipfile.ZipInfo(name, date_time=_ZIP_DATE)
             info.compress_type = zipfile.ZIP_DEFLATED

@@ -38,7 +38,7 @@ import numpy as np
 from ..model.builders import build_elastic, build_rigid
 from .registry import DEFAULT_FIXED_STEP, STIFF_HINT, MethodSpec, RunRequest, RunResult
 
-__all__ = ["METHOD_SPECS", "run_casadi", "freeze_options", "thaw_options"]
+__all__ = ["METHOD_SPECS", "run_casadi", "freeze_options", "thaw_options", "plugin_options", "IntegratorOptionError"]
 
 _MAPPING = "__mapping__"
 
@@ -173,13 +173,23 @@ def _options(req: RunRequest) -> dict:
     return opts
 
 
+class IntegratorOptionError(ValueError, RuntimeError):
+    """CasADi rejected an integrator option (wrong type, unknown nested option).
+
+    A ``ValueError`` (bad input); also a ``RuntimeError``, the type CasADi itself raised before.
+    """
+
+
 def _build(req: RunRequest, kind: str, plugin: str, grid: tuple[float, ...], opts: dict) -> ca.Function:
-    """The cached integrator; an option CasADi rejects (e.g. a wrong type) is a ValueError naming the method."""
+    """The cached integrator; an option CasADi rejects (e.g. a wrong type) is an error naming the method."""
     try:
         return _integrator(kind, plugin, grid, freeze_options(opts))
     except RuntimeError as exc:
-        raise ValueError(
-            f"method {req.spec.name!r}: CasADi rejected the integrator options {dict(req.options)}: {_short(exc)}"
+        lines = [_SOURCE.sub("", line).strip() for line in str(exc).splitlines()]
+        found = [line for line in lines if re.search(r"Unknown option|Illegal type|option", line)]
+        raise IntegratorOptionError(
+            f"method {req.spec.name!r}: CasADi rejected the integrator options {dict(req.options)}: "
+            f"{found[0] if found else _short(exc)}"
         ) from None
 
 

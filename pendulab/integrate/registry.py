@@ -119,7 +119,13 @@ class Budget:
         return time.perf_counter() - self.start
 
     def wall_exceeded(self) -> bool:
-        """True when a wall-time budget is set and used up."""
+        """Whether a wall-time budget is set and used up.
+
+        Returns
+        -------
+        bool
+            True when ``max_wall_time`` is set and :attr:`elapsed` exceeds it.
+        """
         return self.max_wall_time is not None and self.elapsed > self.max_wall_time
 
 

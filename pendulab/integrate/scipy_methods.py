@@ -55,6 +55,11 @@ def solver_options(name: str) -> tuple[str, ...]:
     return tuple(sorted(n for n in keep if n not in _MANAGED))
 
 
+#: A run whose time advances less than _STALL_FRACTION of its horizon over _STALL_STEPS steps has stalled.
+_STALL_STEPS = 10_000
+_STALL_FRACTION = 1e-9
+
+
 class _BudgetExhaustedError(Exception):
     """Raised inside solve_ivp by the step counter or the RHS wrapper; caught by the runner."""
 
@@ -67,6 +72,8 @@ class _BudgetExhaustedError(Exception):
 def _counting(base: type[OdeSolver], req: RunRequest, counter: dict[str, Any]) -> type[OdeSolver]:
     """A subclass of ``base`` counting steps over the run and stopping at the step or wall budget."""
     budget = req.budget
+    horizon = req.t_final
+    mark = {"n": 0, "t": float(req.t[0])}
 
     class Counted(base):  # type: ignore[misc, valid-type]
         def step(self):  # noqa: ANN202 - OdeSolver.step
@@ -76,6 +83,16 @@ def _counting(base: type[OdeSolver], req: RunRequest, counter: dict[str, Any]) -
                 raise _BudgetExhaustedError("wall", float(self.t))
             message = super().step()
             counter["n_steps"] += 1
+            if counter["n_steps"] - mark["n"] >= _STALL_STEPS:
+                # Steps that no longer move time (e.g. a state growing without bound under huge torques)
+                # would spend the whole step budget for nothing: stop early and say why.
+                if abs(float(self.t) - mark["t"]) < _STALL_FRACTION * horizon:
+                    raise req.fail(
+                        float(self.t),
+                        f"the step size collapsed: t advanced {abs(float(self.t) - mark['t']):.3g} s in the last "
+                        f"{_STALL_STEPS} steps",
+                    )
+                mark["n"], mark["t"] = counter["n_steps"], float(self.t)
             return message
 
     Counted.__name__ = Counted.__qualname__ = f"Counted{base.__name__}"

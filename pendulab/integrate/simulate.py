@@ -240,6 +240,18 @@ def simulate(
     if not np.all(np.isfinite(X)):
         k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
         raise SimulationError(spec.name, float(t[k - 1]), t_final, "the state became non-finite", STIFF_HINT)
+    if model.kind == "elastic":
+        collapsed = X[:, 2:4] <= 0.0
+        if collapsed.any():
+            # A spring that reaches zero length puts a bob on its joint: the model's polar coordinates break down.
+            k, j = np.argwhere(collapsed)[0]
+            raise SimulationError(
+                spec.name,
+                float(t[k - 1]),
+                t_final,
+                f"spring length r{j + 1} reached {X[k, 2 + j]:.3g} m <= 0 (a bob passed through its joint)",
+                "stiffer springs (larger k) or a gentler start keep the springs extended",
+            )
     U_full = np.vstack([U, U[-1:]])
     Y = model.outputs(X, U_full)
     return Trajectory(

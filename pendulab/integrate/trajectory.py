@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from .._io import atomic_open
+
 __all__ = ["Trajectory"]
 
 
@@ -77,6 +79,9 @@ class Trajectory:
     def to_csv(self, path: str | Path) -> Path:
         """Write a CSV with header ``t, <states>, <inputs>, <outputs>`` (SI units).
 
+        The file is written atomically (a temporary file renamed over ``path``):
+        an interrupted run never leaves a truncated CSV.
+
         Parameters
         ----------
         path : str or Path
@@ -88,8 +93,7 @@ class Trajectory:
             The file written.
         """
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with path.open("w", newline="") as fh:
+        with atomic_open(path, "w", newline="") as fh:
             writer = csv.writer(fh)
             writer.writerow(("t",) + self.names)
             for row in self.table():
@@ -99,7 +103,8 @@ class Trajectory:
     def to_npz(self, path: str | Path) -> Path:
         """Write the arrays, names, method, success flag and message to a NumPy ``.npz`` archive.
 
-        ``stats`` is not written.
+        ``stats`` is not written. The file is written atomically (a temporary
+        file renamed over it): an interrupted run never leaves a truncated archive.
 
         Parameters
         ----------
@@ -113,9 +118,14 @@ class Trajectory:
             ``path`` as given (without any suffix NumPy appended).
         """
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        target = path if path.name.endswith(".npz") else path.with_name(path.name + ".npz")
+        with atomic_open(target, "wb") as fh:
+            self._savez(fh)
+        return path
+
+    def _savez(self, fh: Any) -> None:
         np.savez(
-            path,
+            fh,
             t=self.t,
             x=self.x,
             u=self.u,
@@ -127,4 +137,3 @@ class Trajectory:
             success=np.array(self.success),
             message=np.array(self.message),
         )
-        return path

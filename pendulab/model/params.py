@@ -186,6 +186,16 @@ class RigidParams(_ParamsBase):
     I1: float = _p(0.0, "kg.m2", "inertia of link 1 about its centre of mass", positive=False)
     I2: float = _p(0.0, "kg.m2", "inertia of link 2 about its centre of mass", positive=False)
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        lc2 = self.L2 if self.lc2 is None else self.lc2
+        if self.m2 * lc2**2 + self.I2 == 0.0:
+            # The mass matrix is singular: the elbow torque would give link 2 an infinite acceleration.
+            raise ValueError(
+                f"link 2 has no inertia about the elbow (m2 lc2^2 + I2 = 0 with lc2 = {lc2!r} m, I2 = {self.I2!r} kg.m2): "
+                "the mass matrix is singular; expected lc2 > 0 or I2 > 0"
+            )
+
     def resolved(self) -> dict[str, float]:
         """Parameter values with ``lc1, lc2 = None`` replaced by ``L1, L2``.
 

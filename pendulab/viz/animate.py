@@ -15,6 +15,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from PIL import Image  # noqa: E402
 
+from .._io import atomic_path  # noqa: E402
 from .drawing import as_runs, link_polylines, run_colors, view_limits  # noqa: E402
 
 __all__ = ["animate"]
@@ -142,6 +143,6 @@ def animate(
     palette = images[len(images) // 2].quantize(colors=64, method=0)
     frames_p = [im.quantize(palette=palette, dither=0) for im in images]
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    frames_p[0].save(path, save_all=True, append_images=frames_p[1:], duration=int(round(1000 / fps)), loop=0)
+    with atomic_path(path) as tmp:  # an interrupted run never leaves a truncated GIF
+        frames_p[0].save(tmp, format="GIF", save_all=True, append_images=frames_p[1:], duration=int(round(1000 / fps)), loop=0)
     return path

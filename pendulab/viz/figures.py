@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from .drawing import Run, as_runs, link_polylines, run_colors, view_limits  # noqa: E402
+from .save import save_figure  # noqa: E402
 
 __all__ = [
     "FIGURES",
@@ -382,8 +383,5 @@ def save_figures(runs: Any, out_dir: str | Path, dpi: int = 110) -> dict[str, Pa
         fig = make(runs)
         if fig is None:
             continue
-        path = out / f"{name}.png"
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        written[name] = path
+        written[name] = save_figure(fig, out / f"{name}.png", dpi=dpi)
     return written

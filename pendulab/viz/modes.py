@@ -19,6 +19,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from ..analysis.equilibria import Equilibrium, equilibrium  # noqa: E402
 from ..analysis.modes import Mode, modes, stiffness_sweep  # noqa: E402
 from ..model.model import Model  # noqa: E402
+from .save import save_figure  # noqa: E402
 
 __all__ = ["plot_mode_shapes", "plot_frequency_vs_stiffness", "save_mode_figures"]
 
@@ -166,15 +167,9 @@ def save_mode_figures(model: Model, directory: str | Path, at: Sequence[str | Eq
     written = []
     for eq in at:
         fig = plot_mode_shapes(model, eq)
-        path = out / f"modes_{model.kind}_{eq if isinstance(eq, str) else eq.name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written.append(save_figure(fig, out / f"modes_{model.kind}_{eq if isinstance(eq, str) else eq.name}.png", dpi=110))
     if model.kind == "elastic":
         shared = {n: getattr(model.params, n) for n in ("m1", "m2", "L1", "L2", "g")}
         fig = plot_frequency_vs_stiffness(**{**shared, **sweep_params})
-        path = out / "modes_frequency_vs_stiffness.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written.append(save_figure(fig, out / "modes_frequency_vs_stiffness.png", dpi=110))
     return written

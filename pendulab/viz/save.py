@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .._io import atomic_path
+
 __all__ = ["save_figure"]
 
 
@@ -12,6 +14,9 @@ def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     """Save ``fig`` to ``path`` (parent directories created), close it and return the path.
 
     Closing matters: pyplot keeps every open figure alive, and sweeps draw many.
+    The file is written atomically (a temporary file renamed over ``path``), so
+    an interrupted run never leaves a truncated image; the figure is closed
+    even when saving fails.
 
     Parameters
     ----------
@@ -30,7 +35,10 @@ def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     import matplotlib.pyplot as plt
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            # The temporary name ends in ".tmp<suffix>"; name the format so it never depends on it.
+            fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or plt.rcParams["savefig.format"])
+    finally:
+        plt.close(fig)
     return path

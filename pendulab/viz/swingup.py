@@ -11,7 +11,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
+from .._io import atomic_path  # noqa: E402
 from ..control.swingup.episode import Episode  # noqa: E402
+from .save import save_figure  # noqa: E402
 
 __all__ = ["plot_episode", "animate_episode"]
 
@@ -46,10 +48,7 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
 
     def finish(fig: plt.Figure, name: str) -> None:
         fig.tight_layout()
-        p = out / name
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
+        paths.append(save_figure(fig, out / name, dpi=110))
 
     fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
     for i, name in enumerate(("theta1", "theta2")):
@@ -193,6 +192,9 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
 
     fig.tight_layout()
     anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
-    anim.save(path, writer=PillowWriter(fps=fps))
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:  # an interrupted animation never leaves a truncated GIF
+            anim.save(tmp, writer=PillowWriter(fps=fps))
+    finally:
+        plt.close(fig)
     return path

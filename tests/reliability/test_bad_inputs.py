@@ -176,3 +176,9 @@ def test_linearize_marks_a_non_equilibrium():
     # |f| is the angular acceleration of link 1 released at 1 rad: of the order g sin(1) / L.
     assert 1.0 < lin.residual < 20.0
     assert pl.linearize(pl.rigid(), pl.equilibrium(pl.rigid(), "down-down")).is_equilibrium
+
+
+def test_nested_unknown_casadi_option_is_named():
+    with pytest.raises(ValueError, match="no_such_option") as exc:
+        pl.simulate(pl.rigid(), [0.1, 0, 0, 0], 0.1, method="cvodes", options={"linear_solver_options": {"no_such_option": 1}})
+    assert ".cpp" not in str(exc.value)

@@ -10,11 +10,21 @@ spring lengths.
 A failed solve is a result with ``success=False``, IPOPT's return status and
 a readable message, never an exception and never a trajectory passed off as
 optimal.
+
+An interrupt (Ctrl-C) is never a failed solve: CasADi catches the
+``KeyboardInterrupt`` raised inside IPOPT's callbacks and returns as if IPOPT
+had failed, which would start the next homotopy stage. :func:`swing_up`
+watches SIGINT while it runs and raises ``KeyboardInterrupt`` as soon as the
+interrupted IPOPT run returns, without starting another.
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -194,7 +204,24 @@ def swing_up(
     ------
     ValueError
         Unknown method/guess name, bad N or degree.
+    KeyboardInterrupt
+        On SIGINT (Ctrl-C), also when it arrives inside an IPOPT iteration;
+        no further stage is started.
     """
+    with _watch_interrupt() as interrupt:
+        return _swing_up(problem, method, N, degree, integrator, guess, ipopt_options, interrupt)
+
+
+def _swing_up(
+    problem: SwingUpProblem,
+    method: str,
+    N: int,
+    degree: int,
+    integrator: str,
+    guess: str | Guess | SwingUpResult,
+    ipopt_options: dict[str, Any] | None,
+    interrupt: _Interrupt,
+) -> SwingUpResult:
     if isinstance(guess, str) and guess not in GUESSES:
         raise ValueError(f"guess must be one of {list(GUESSES)}, a Guess or a SwingUpResult, got {guess!r}")
     if not isinstance(guess, (str, Guess, SwingUpResult)):
@@ -228,11 +255,11 @@ def swing_up(
 
     out = None
     if guess != "homotopy":
-        out = _run(tr, problem, w0, 0.0, "direct", stages)
+        out = _run(tr, problem, w0, 0.0, "direct", stages, interrupt)
     if guess == "homotopy" or (guess == "auto" and not _ok(out)):
         w = w0
         for frac in _HOMOTOPY:
-            out = _run(tr, problem, w, frac, f"passive {frac:g}x limit", stages)
+            out = _run(tr, problem, w, frac, f"passive {frac:g}x limit", stages, interrupt)
             # Keep going from the last iterate even after a failed stage: later stages often recover.
             w = out["w"]
     return _result(tr, problem, out, stages, time.perf_counter() - t_start, build + build_extra)
@@ -252,13 +279,66 @@ def _guess_vector(tr: Transcription, problem: SwingUpProblem, g: Guess) -> np.nd
     return tr.join(X, Xc, np.clip(U, lb, ub), T)
 
 
-def _run(tr: Transcription, problem: SwingUpProblem, w0: np.ndarray, passive: float, label: str, stages: list) -> dict:
+class _Interrupt:
+    """Whether a SIGINT arrived while :func:`swing_up` ran (set by :func:`_watch_interrupt`)."""
+
+    def __init__(self) -> None:
+        self.hit = False
+
+    def handler(self, previous: Any) -> Any:
+        def on_sigint(signum: int, frame: Any) -> None:
+            if not callable(previous):  # SIG_DFL: would end the process; interrupt instead
+                self.hit = True
+                raise KeyboardInterrupt
+            try:
+                previous(signum, frame)  # the caller's handler (Python's default raises KeyboardInterrupt)
+            except KeyboardInterrupt:
+                self.hit = True
+                raise
+
+        return on_sigint
+
+    def check(self, message: str = "") -> None:
+        """Raise ``KeyboardInterrupt`` when a SIGINT arrived or CasADi's message names one.
+
+        IPOPT's own status does not tell: CasADi reports an interrupted run as
+        ``NonIpopt_Exception_Thrown``, like any other exception in a callback.
+        """
+        if self.hit or "KeyboardInterrupt" in message:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _watch_interrupt() -> Iterator[_Interrupt]:
+    # Signal handlers can only be installed from the main thread; elsewhere only CasADi's message tells.
+    flag = _Interrupt()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous in (signal.SIG_IGN, None):
+        yield flag
+        return
+    signal.signal(signal.SIGINT, flag.handler(previous))
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _run(
+    tr: Transcription, problem: SwingUpProblem, w0: np.ndarray, passive: float, label: str, stages: list, interrupt: _Interrupt
+) -> dict:
     lb, ub = problem.torque_bounds(passive_fraction=passive)
     t0 = time.perf_counter()
     try:
         out = tr.solve(problem, w0, lb, ub)
     except RuntimeError as exc:  # function evaluation errors (NaN, integrator failure) end up here
+        interrupt.check(str(exc))  # ... and interrupts CasADi turned into errors
         out = {"w": w0, "f": float("nan"), "g": np.array([np.inf]), "stats": {"return_status": f"Error: {exc}", "iter_count": 0}}
+    # CasADi catches a KeyboardInterrupt raised in IPOPT's callbacks and returns (status
+    # NonIpopt_Exception_Thrown): stop here, do not start another stage from an interrupted one.
+    interrupt.check(str(out["stats"].get("return_status", "")))
     stats = out["stats"]
     iters = int(stats.get("iter_count", 0))
     stages.append(

@@ -111,7 +111,7 @@ CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t 
 
 /* FMU state: the layer allocates sizeof(CoreData) bytes; the serialized form is those bytes.
  * core_check_state_blob checks size and model magic and then every field with the setters' rules
- * (finite time, finite states with spring lengths > 0, finite inputs, parameters with their sign
+ * (finite time, finite states, finite inputs, parameters with their sign
  * rules, tolerance in (0, 1), max_step >= 0, solver 0/1, a solver block that is unset or consistent);
  * a rejected state logs why and changes nothing. core_restore in the Error state resumes the
  * life-cycle state stored with the FMU state (restart after an error, as the standard allows). */

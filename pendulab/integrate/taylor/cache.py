@@ -114,7 +114,7 @@ def _entry(key: StructureKey) -> _Entry:
             ta = hy.taylor_adaptive(
                 system.sys,
                 [0.0] * len(names),
-                pars=[0.0] * (system.n_inputs + system.n_derived),
+                pars=[0.0] * system.n_pars,
                 tol=key.tol,
                 compact_mode=key.compact_mode,
                 high_accuracy=key.high_accuracy,

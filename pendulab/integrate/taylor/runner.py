@@ -68,6 +68,7 @@ def run_taylor(req: RunRequest) -> RunResult:
     entry = _entry(key)
     system = entry.system
     pars = system.pars(np.zeros(model.nu), model.p)
+    n_u = min(model.nu, len(pars))  # torques specialised to zero may be absent from a system without coefficients
     kw: dict[str, Any] = {"max_steps": opts["max_steps"]}
     if req.max_step is not None:
         kw["max_delta_t"] = req.max_step
@@ -82,7 +83,7 @@ def run_taylor(req: RunRequest) -> RunResult:
             # One dense-output propagation per run of equal inputs; heyoka's last step of each
             # lands exactly on the run's last grid time, where the input may jump.
             for a, b in _segments(sched):
-                ta.pars[: model.nu] = sched[a]
+                ta.pars[:n_u] = sched[a, :n_u]
                 res = ta.propagate_grid(t[a : b + 1], **kw)
                 n_steps += int(res[3])
                 if res[0] != ok:
@@ -94,7 +95,7 @@ def run_taylor(req: RunRequest) -> RunResult:
             X[0] = req.x0
             for k in range(req.n_intervals):
                 U[k] = req.feedback_input(float(t[k]), X[k])
-                ta.pars[: model.nu] = U[k]
+                ta.pars[:n_u] = U[k, :n_u]
                 res = ta.propagate_until(float(t[k + 1]), **kw)
                 n_steps += int(res[3])
                 if res[0] != ok:

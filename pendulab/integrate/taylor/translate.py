@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
@@ -47,6 +48,20 @@ class TaylorSystem:
     strategy: str
     derived: Callable[[Sequence[float]], np.ndarray] = field(repr=False)
 
+    @cached_property
+    def n_pars(self) -> int:
+        """Runtime parameters the heyoka system has (the highest ``par`` index used + 1).
+
+        Structural zeros can remove every use of the last parameters (e.g. both torques specialised to
+        zero and no parameter coefficient left); heyoka sizes the system by the indices it sees.
+
+        Returns
+        -------
+        int
+            At most ``n_inputs + n_derived``.
+        """
+        return used_parameter_count([rhs for _, rhs in self.sys])
+
     def pars(self, u: Sequence[float], p: Sequence[float]) -> np.ndarray:
         """Runtime parameter vector of the heyoka system.
 
@@ -59,13 +74,29 @@ class TaylorSystem:
 
         Returns
         -------
-        ndarray, shape (n_inputs + n_derived,)
-            ``[u, derived(p)]``.
+        ndarray, shape (n_pars,)
+            ``[u, derived(p)]``, cut to the parameters the system uses.
         """
         out = np.empty(self.n_inputs + self.n_derived)
         out[: self.n_inputs] = u
         out[self.n_inputs :] = self.derived(p)
-        return out
+        return out[: self.n_pars]
+
+
+def used_parameter_count(expressions: Sequence[Any]) -> int:
+    """Number of runtime parameters heyoka sees in ``expressions``: the highest ``par`` index + 1 (0 if none).
+
+    Parameters
+    ----------
+    expressions : sequence of heyoka.expression
+        Right-hand sides (and event functions).
+
+    Returns
+    -------
+    int
+    """
+    hy = heyoka_module()
+    return 1 + max((int(str(q)[1:]) for q in hy.get_params(list(expressions))), default=-1)
 
 
 def translate(
