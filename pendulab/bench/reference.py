@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .._io import atomic_path
 from ..integrate import simulate
 from ..model.pycode import to_python
 from ..scene import Scene
@@ -87,9 +88,16 @@ class Reference:
         """
         directory.mkdir(parents=True, exist_ok=True)
         path = directory / f"{self.case}.npz"
-        np.savez_compressed(
-            path, t=self.t, x=self.x, method=self.method, check_method=self.check_method, accuracy=self.accuracy, notes=self.notes
-        )
+        with atomic_path(path) as tmp:
+            np.savez_compressed(
+                tmp,
+                t=self.t,
+                x=self.x,
+                method=self.method,
+                check_method=self.check_method,
+                accuracy=self.accuracy,
+                notes=self.notes,
+            )
         return path
 
 

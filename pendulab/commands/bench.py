@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from .._io import atomic_open, atomic_write_text
 from . import CLIError
 
 __all__ = ["register"]
@@ -53,7 +54,7 @@ def _work_precision(args: argparse.Namespace) -> int:
     ]
     figs.append(wp.plot_work_precision(rows, out / "work_precision_grid_error_cpu.png", "grid_error", time_metric="cpu_median"))
     md = out / "work_precision_fastest.md"
-    md.write_text(_fastest_markdown(rows))
+    atomic_write_text(md, _fastest_markdown(rows))
     figs.append(md)
     n_ok = sum(r.status == "ok" for r in rows)
     print(f"{n_ok}/{len(rows)} runs ok; wrote {csv_path} and {', '.join(str(f) for f in figs)}")
@@ -104,7 +105,7 @@ def _hierarchy(args: argparse.Namespace) -> int:
     amps = (0.05, 1.0) if args.quick else (0.05, 0.3, 1.0, 2.0)
     rows = stiffness_amplitude_study(ks, amps, tolerance=args.tolerance, repeats=1 if args.quick else 3, progress=_Bar())
     path = out / "hierarchy_table.csv"
-    with path.open("w", newline="") as fh:
+    with atomic_open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
@@ -119,10 +120,10 @@ def _hierarchy(args: argparse.Namespace) -> int:
             errs = ", ".join(f"{lv[:3] if lv != 'rigid+quasi-static' else 'r+qs'} {r[f'error[{lv}]']:.1e}" for lv in LEVELS[:-1])
             cells.append(f"**{r['chosen']}** ({errs})")
         lines.append(f"| {k:.0e} | " + " | ".join(cells) + " |")
-    (out / "hierarchy_table.md").write_text("\n".join(lines) + "\n")
+    atomic_write_text(out / "hierarchy_table.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
     scene_lines = _shipped_scene_table(quick=args.quick)
-    (out / "hierarchy_scenes.md").write_text("\n".join(scene_lines) + "\n")
+    atomic_write_text(out / "hierarchy_scenes.md", "\n".join(scene_lines) + "\n")
     print("\n".join(scene_lines))
     print(f"wrote {path}, {out / 'hierarchy_table.md'} and {out / 'hierarchy_scenes.md'}")
     return 0
@@ -204,7 +205,7 @@ def _ensemble(args: argparse.Namespace) -> int:
         bench.extra["elastic"] = eb.elastic_rigid_ratio(args.elastic_grid, args.t_max, args.k or DEFAULT_K)
     text = eb.ensemble_markdown(bench)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    atomic_write_text(out, text)
     print(text)
     print(f"wrote {out}")
     return 0

@@ -46,6 +46,8 @@ from typing import Any
 
 import numpy as np
 
+from .._io import atomic_path
+
 __all__ = [
     "FlipMap",
     "flip_map",
@@ -124,17 +126,18 @@ class FlipMap:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         skipped = self.skipped if self.skipped is not None else np.zeros(self.t_flip.shape, bool)
-        np.savez(
-            path,
-            theta1=self.theta1,
-            theta2=self.theta2,
-            t_flip=self.t_flip,
-            t_max=np.float64(self.t_max),
-            kind=np.str_(self.kind),
-            energy_threshold=np.float64(self.energy_threshold),
-            skipped=skipped,
-            params=np.str_(json.dumps(self.params)),
-        )
+        with atomic_path(path if path.suffix == ".npz" else Path(f"{path}.npz")) as tmp:
+            np.savez(
+                tmp,
+                theta1=self.theta1,
+                theta2=self.theta2,
+                t_flip=self.t_flip,
+                t_max=np.float64(self.t_max),
+                kind=np.str_(self.kind),
+                energy_threshold=np.float64(self.energy_threshold),
+                skipped=skipped,
+                params=np.str_(json.dumps(self.params)),
+            )
         return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
 
     @classmethod

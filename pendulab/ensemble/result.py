@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .._io import atomic_path
 
 __all__ = ["EnsembleResult"]
 
@@ -123,4 +126,6 @@ class EnsembleResult:
         if self.x is not None:
             arrays["x"] = self.x
             arrays["t_eval"] = self.t_eval
-        np.savez_compressed(path, **arrays)
+        final = Path(path) if str(path).endswith(".npz") else Path(f"{path}.npz")  # NumPy's naming rule
+        with atomic_path(final) as tmp:
+            np.savez_compressed(tmp, **arrays)

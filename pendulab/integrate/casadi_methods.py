@@ -36,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from ..model.builders import build_elastic, build_rigid
-from .registry import DEFAULT_FIXED_STEP, STIFF_HINT, MethodSpec, RunRequest, RunResult
+from .registry import DEFAULT_FIXED_STEP, MethodSpec, RunRequest, RunResult, failure_hint
 
 __all__ = ["METHOD_SPECS", "run_casadi", "freeze_options", "thaw_options", "plugin_options", "IntegratorOptionError"]
 
@@ -270,7 +270,7 @@ def _run_intervals(req: RunRequest, plugin: str, opts: dict, n_sub: int, stats: 
             loud, x_k = _loud(model.kind, plugin, grid, opts), X[k].copy()
             t_reached = _time_reached(lambda: loud(x0=x_k, u=u_k, p=model.p))  # noqa: B023 - called at once
             t_abs = float(t[k]) if t_reached is None else float(t[k]) + t_reached
-            raise req.fail(t_abs, *_reason(exc, opts)) from None
+            raise req.fail(t_abs, *_reason(exc, opts, req.model.kind)) from None
         if not np.all(np.isfinite(X[k + 1])):
             raise req.fail(t[k], "the state became non-finite")
         _collect_stats(F, req.spec, stats, n_sub)
@@ -322,16 +322,17 @@ def _time_reached(call: Callable[[], Any]) -> float | None:
     return float(times[-1]) if times else None
 
 
-def _reason(exc: BaseException, opts: dict) -> tuple[str, str]:
+def _reason(exc: BaseException, opts: dict, kind: str) -> tuple[str, str]:
     """Solver message and hint of a failed interval."""
+    hint = failure_hint(kind)
     reason = _short(exc)
     if "TOO_MUCH_WORK" in reason:
         reason += (
             f" ({opts.get('max_num_steps')} steps within one output interval: SUNDIALS' max_num_steps, "
             "set by options={'max_steps': ...})"
         )
-        return reason, f"{STIFF_HINT}; or raise options={{'max_steps': ...}} or take a smaller output step dt"
-    return reason, STIFF_HINT
+        return reason, f"{hint}; or raise options={{'max_steps': ...}} or take a smaller output step dt"
+    return reason, hint
 
 
 def _collect_stats(F: ca.Function, spec: MethodSpec, stats: dict, n_steps: int) -> None:

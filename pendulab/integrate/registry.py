@@ -33,6 +33,8 @@ __all__ = [
     "Runner",
     "Registry",
     "STIFF_HINT",
+    "RIGID_HINT",
+    "failure_hint",
     "DEFAULT_FIXED_STEP",
     "DEFAULT_MAX_STEPS",
     "Budget",
@@ -40,6 +42,26 @@ __all__ = [
 
 #: Hint attached to integration failures that are most often caused by stiffness.
 STIFF_HINT = "stiff springs need an implicit method such as 'cvodes', 'Radau' or 'collocation'"
+#: Hint attached to failures of the rigid model (no spring, so stiffness is rarely the cause).
+RIGID_HINT = "a tighter tolerance, a smaller max_step or another method (e.g. 'taylor', 'cvodes', 'Radau') may get through"
+
+
+def failure_hint(kind: str) -> str:
+    """The hint a failed integration of a model kind carries.
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
+
+    Returns
+    -------
+    str
+        :data:`STIFF_HINT` for the elastic model (stiff springs are the usual cause), :data:`RIGID_HINT` otherwise.
+    """
+    return STIFF_HINT if kind == "elastic" else RIGID_HINT
+
+
 #: Step [s] of the fixed-step methods when ``max_step`` is not given.
 DEFAULT_FIXED_STEP = 1e-3
 #: Default step budget of one :func:`pendulab.simulate` run (``options={"max_steps": ...}``).
@@ -212,10 +234,10 @@ class RunRequest:
         value = self.feedback(t, np.array(x, dtype=float))
         try:
             return self.model.check_input(np.asarray(value, dtype=float).reshape(self.model.nu), "u(t, x)")
-        except ValueError as exc:
-            raise ValueError(f"feedback u(t, x) at t = {t:.6g} s returned an invalid torque: {exc}") from exc
+        except (TypeError, ValueError) as exc:  # TypeError: not numbers at all (e.g. a dict)
+            raise ValueError(f"feedback u(t, x) at t = {t:.6g} s returned an invalid torque {value!r}: {exc}") from exc
 
-    def fail(self, t_reached: float, reason: str, hint: str = STIFF_HINT) -> SimulationError:
+    def fail(self, t_reached: float, reason: str, hint: str | None = None) -> SimulationError:
         """Build a :class:`SimulationError` for this run (the caller raises it).
 
         Parameters
@@ -224,15 +246,17 @@ class RunRequest:
             Last time [s] the integration reached.
         reason : str
             What went wrong (solver message).
-        hint : str, default STIFF_HINT
-            What to try instead; ``""`` for none.
+        hint : str, optional
+            What to try instead (default :func:`failure_hint` of the model kind); ``""`` for none.
 
         Returns
         -------
         SimulationError
             Error naming this run's method and horizon ``t_final``.
         """
-        return SimulationError(self.spec.name, float(t_reached), self.t_final, reason, hint)
+        return SimulationError(
+            self.spec.name, float(t_reached), self.t_final, reason, failure_hint(self.model.kind) if hint is None else hint
+        )
 
     def check_budget(self, t_reached: float, n_steps: int | None) -> None:
         """Raise the budget's :class:`SimulationError` when the steps or the wall time are used up.

@@ -37,7 +37,7 @@ from .._checks import check_model, positive_float
 from ..model.model import Model
 from .auto import choose_method
 from .methods import METHODS
-from .registry import DEFAULT_FIXED_STEP, DEFAULT_MAX_STEPS, STIFF_HINT, Budget, MethodSpec, RunRequest, SimulationError
+from .registry import DEFAULT_FIXED_STEP, DEFAULT_MAX_STEPS, Budget, MethodSpec, RunRequest, SimulationError, failure_hint
 from .trajectory import Trajectory
 
 __all__ = ["simulate", "time_grid", "input_schedule", "InputSpec", "BUDGET_OPTIONS"]
@@ -239,7 +239,7 @@ def simulate(
     X, U, stats = result.x, result.u, result.stats
     if not np.all(np.isfinite(X)):
         k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
-        raise SimulationError(spec.name, float(t[k - 1]), t_final, "the state became non-finite", STIFF_HINT)
+        raise SimulationError(spec.name, float(t[k - 1]), t_final, "the state became non-finite", failure_hint(model.kind))
     if model.kind == "elastic":
         collapsed = X[:, 2:4] <= 0.0
         if collapsed.any():
