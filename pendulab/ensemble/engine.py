@@ -6,10 +6,11 @@ chunks, runs the chunks on local threads or a Dask cluster and assembles one
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from typing import Any
 
 import numpy as np
@@ -83,7 +84,8 @@ def ensemble(
         Runs per chunk (Dask: one task per chunk; locally chunks are smaller when needed to
         keep every thread busy).
     threads : int, optional
-        Local worker threads (default ``os.cpu_count()``); ignored with ``client``.
+        Local workers (default ``os.cpu_count()``): forked processes for ensembles of 5,000 runs
+        or more, threads below; ignored with ``client``.
     rtol, atol : float
         Tolerances; heyoka's ``tol = min(rtol, atol)``.
     progress : callable or bool, optional
@@ -337,6 +339,24 @@ def _tasks(key: BatchKey, X0: np.ndarray, P: np.ndarray, tf: float, te: np.ndarr
     return [ChunkTask(key, i, X0[a : a + size], P[a : a + size], tf, te) for i, a in enumerate(range(0, n, size))]
 
 
+def _executor(threads: int, n_tasks: int, n_runs: int) -> Executor:
+    """Worker processes (fork) for big ensembles, threads for small ones.
+
+    heyoka releases the GIL while it integrates, but the per-lane bookkeeping between event
+    stops is Python: measured on the 400x400 flip map, 2 threads ran no faster than 1 while 2
+    processes ran 1.5-1.9x faster. Forked workers inherit the compiled integrators, so they start in
+    milliseconds; below _PROCESS_MIN_RUNS runs, or where fork is unavailable, threads are used.
+    """
+    workers = min(threads, n_tasks)
+    if n_runs >= _PROCESS_MIN_RUNS and "fork" in multiprocessing.get_all_start_methods():
+        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"))
+    return ThreadPoolExecutor(max_workers=workers)
+
+
+#: Ensembles of at least this many runs use worker processes (see :func:`_executor`).
+_PROCESS_MIN_RUNS = 5000
+
+
 def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | None], None]) -> list[ChunkOut]:
     if threads == 1 or len(tasks) == 1:
         outs = []
@@ -346,7 +366,7 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
         return outs
     outs_by: dict[int, ChunkOut] = {}
     failed: list[tuple[int, BaseException]] = []
-    with ThreadPoolExecutor(max_workers=min(threads, len(tasks))) as pool:
+    with _executor(threads, len(tasks), sum(len(t.x0) for t in tasks)) as pool:
         futures = {pool.submit(run_chunk, t): t for t in tasks}
         for f in as_completed(futures):
             t = futures[f]
