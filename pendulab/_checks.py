@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-__all__ = ["positive_float", "check_model"]
+__all__ = ["positive_float", "check_model", "is_interrupt"]
 
 
 def positive_float(name: str, value: Any, unit: str = "") -> float:
@@ -71,3 +71,29 @@ _MODEL_CLASS = ("pendulab.model.model", "Model")
 def _is_model(obj: Any) -> bool:
     """True for an instance of ``pendulab.model.model.Model`` (or a subclass), checked without importing it."""
     return any((c.__module__, c.__qualname__) == _MODEL_CLASS for c in type(obj).__mro__)
+
+
+def is_interrupt(exc: BaseException) -> bool:
+    """True when ``exc``, or an exception in its cause/context chain, is a Ctrl-C in disguise.
+
+    CasADi, IPOPT and fmpy turn a ``KeyboardInterrupt`` raised inside their callbacks into their own
+    errors; loops that keep going after a failed point must not keep going after an interrupt.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    bool
+        ``KeyboardInterrupt`` in the chain, or a message naming it.
+    """
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
+            return True
+        e = e.__cause__ or e.__context__
+    return False

@@ -22,6 +22,7 @@ import sys
 import threading
 from collections.abc import Iterator, Sequence
 
+from ._checks import is_interrupt
 from .commands import CLIError
 
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
@@ -86,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt:
             return _interrupted()
         except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError) as exc:
-            if guard.interrupted or _mentions_interrupt(exc):
+            if guard.interrupted or is_interrupt(exc):
                 # A native layer (CasADi, IPOPT, SUNDIALS) turned the interrupt into an error.
                 return _interrupted()
             message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
@@ -105,18 +106,6 @@ _REINTERRUPT_S = 0.5
 def _interrupted() -> int:
     print("pendulab: interrupted", file=sys.stderr)
     return 130
-
-
-def _mentions_interrupt(exc: BaseException) -> bool:
-    """True when ``exc`` (or an exception it was raised from) is an interrupt in disguise."""
-    seen: set[int] = set()
-    e: BaseException | None = exc
-    while e is not None and id(e) not in seen:
-        seen.add(id(e))
-        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
-            return True
-        e = e.__cause__ or e.__context__
-    return False
 
 
 class _InterruptGuard:

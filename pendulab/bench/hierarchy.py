@@ -38,13 +38,14 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import is_interrupt
 from ..integrate import simulate, time_grid
 from ..integrate.trajectory import Trajectory
 from ..model.counterpart import rigid_counterpart
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_lengths, quasi_static_state
 from ..scene import Scene
-from .workprecision import is_interrupt, watch_interrupt
+from .workprecision import watch_interrupt
 
 __all__ = [
     "LevelResult",

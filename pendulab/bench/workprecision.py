@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import is_interrupt
 from .._io import atomic_open
 from ..integrate import SimulationError
 from ..model.model import Model
@@ -250,29 +251,6 @@ def run_work_precision(
                 if progress is not None:
                     progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
     return rows
-
-
-def is_interrupt(exc: BaseException) -> bool:
-    """True when ``exc`` is a Ctrl-C that a native solver (CasADi, IPOPT, SUNDIALS) turned into an error.
-
-    Parameters
-    ----------
-    exc : BaseException
-        The caught exception; its ``__cause__`` / ``__context__`` chain is searched too.
-
-    Returns
-    -------
-    bool
-        ``KeyboardInterrupt`` in the chain, or a message naming it.
-    """
-    seen: set[int] = set()
-    e: BaseException | None = exc
-    while e is not None and id(e) not in seen:
-        seen.add(id(e))
-        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
-            return True
-        e = e.__cause__ or e.__context__
-    return False
 
 
 @contextlib.contextmanager

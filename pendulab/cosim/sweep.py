@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
+from .._checks import is_interrupt
 from ..control.feedback import (
     LinearStateFeedback,
     as_feedback,
@@ -217,17 +218,6 @@ def contraction_factor(err: np.ndarray, floor: float = 1e-7, ceiling: float = 0.
     return float(np.exp(slope))
 
 
-def _is_interrupt(exc: BaseException) -> bool:
-    seen: set[int] = set()
-    e: BaseException | None = exc
-    while e is not None and id(e) not in seen:
-        seen.add(id(e))
-        if isinstance(e, KeyboardInterrupt) or "KeyboardInterrupt" in str(e):
-            return True
-        e = e.__cause__ or e.__context__
-    return False
-
-
 def _run_point(model, ctrl, run, h, amplitude, n_min, t_min):
     x_eq = upright_state(model)
     x0 = x_eq.copy()
@@ -237,7 +227,7 @@ def _run_point(model, ctrl, run, h, amplitude, n_min, t_min):
     try:
         traj = run(ctrl, h, x0, n * h)
     except (RuntimeError, ValueError) as exc:
-        if _is_interrupt(exc):  # a Ctrl-C that CasADi or the FMU layer turned into an error: no failed point
+        if is_interrupt(exc):  # a Ctrl-C that CasADi or the FMU layer turned into an error: no failed point
             raise KeyboardInterrupt from exc
         return np.array([np.linalg.norm([amplitude, amplitude]), math.inf])
     err = _angular_error(model, traj, x_eq)
