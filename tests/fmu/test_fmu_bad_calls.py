@@ -204,3 +204,17 @@ def test_solver_failure_is_an_error_and_the_instance_stays_in_error_state(fmu_bu
     assert status_of(_do_step(d, 0.0, 0.1)) == ERROR
     assert "not allowed in state Error" in capsys.readouterr().out
     d.fmu.freeInstance()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_spring_length_must_stay_positive(fmu_builds, version, capsys):
+    """The elastic model is singular at r = 0: a setter with r <= 0 is an Error with a log line and changes nothing."""
+    d = Driver(fmu_builds[("elastic", version)])  # start values are set before initialization
+    capsys.readouterr()
+    assert status_of(lambda: d.set(r1=0.0)) == ERROR
+    assert "spring length r1" in capsys.readouterr().out
+    assert status_of(lambda: d.set(r1=-0.5)) == ERROR
+    d.initialize()
+    assert d.get("r1")[0] > 0.5  # the start value stayed (the static length, ~1 m), not 0 or -0.5
+    d.step(0.01)  # still usable: a rejected argument is not a solver failure
+    d.close()

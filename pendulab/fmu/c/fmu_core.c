@@ -16,12 +16,10 @@ static const char *const P_NAMES[MODEL_NP] = MODEL_P_NAMES;
 #define TIME_RTOL 1e-9
 
 /* Spring-length states of the elastic model (the model is singular at r = 0): by convention the elastic
- * state is (theta1, theta2, r1, r2, omega1, omega2, v1, v2). With CORE_CHECK_SPRING_LENGTHS defined, every
- * path a state takes (setters, SetContinuousStates, FMU states, the solver's result) requires r > 0.
- * Off by default: the setters have always accepted any finite start value, and an r = 0 start is meant to
- * fail in DoStep (tests/fmu/test_cosim_errors.py); switching it on moves that failure to the setter. */
+ * state is (theta1, theta2, r1, r2, omega1, omega2, v1, v2). Every path a state takes (setters,
+ * SetContinuousStates, FMU states, the solver's result) requires r > 0, as pendulab.simulate does. */
 #ifndef MODEL_NR
-#if defined(CORE_CHECK_SPRING_LENGTHS) && MODEL_NX == 8
+#if MODEL_NX == 8
 #define MODEL_R_INDEX 2
 #define MODEL_NR 2
 #else
