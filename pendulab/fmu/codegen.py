@@ -21,7 +21,7 @@ import numpy as np
 
 from ..model.model import Model
 from ..native.codegen import C_DIR as NATIVE_C_DIR
-from ..native.codegen import SOLVER_HEADERS, SOLVER_SOURCES, c_functions, dependency_pattern, model_c_source
+from ..native.codegen import SOLVER_HEADERS, SOLVER_SOURCES, c_functions, dependency_pattern, identifier_for_kind, model_c_source
 
 __all__ = [
     "C_DIR",
@@ -136,7 +136,7 @@ def identifier_for(model: Model) -> str:
     str
         ``pendulab_<kind>``.
     """
-    return f"pendulab_{model.kind}"
+    return identifier_for_kind(model.kind)
 
 
 def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
