@@ -30,6 +30,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("viz",),
     ("fmu",),
     ("cosim",),
+    ("gym",),
     ("bench",),
     ("commands",),
     ("cli", "__main__"),

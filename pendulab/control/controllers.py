@@ -7,14 +7,19 @@ branch to :func:`make_controller` returning an object that keeps the
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .._checks import positive_float
 from ..model.model import INPUT_NAMES, Model
 from .feedback import SampledController, actuated_inputs, balance_controller, energy_swingup, upright_state
-from .tracking import swingup_reference, tvlqr_tracker
+from .tracking import swingup_reference, tvlqr, tvlqr_tracker
 
-__all__ = ["CONTROLLERS", "make_controller"]
+if TYPE_CHECKING:
+    from .swingup.tasks import Task
+
+__all__ = ["CONTROLLERS", "TASK_CONTROLLERS", "make_controller", "controller_for_task"]
 
 
 #: Names accepted by :func:`make_controller`.
@@ -83,3 +88,57 @@ def make_controller(
         tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
+
+
+#: Names accepted by :func:`controller_for_task`.
+TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup")
+
+
+def controller_for_task(name: str, task: Task, *, sample_time: float | None = None) -> tuple[SampledController, np.ndarray]:
+    """A named controller designed for a swing-up task, and the task's start state.
+
+    Every controller uses the task's model, actuation and torque limit, so the
+    same task compares controllers on equal terms (scorecard, leaderboard).
+
+    Parameters
+    ----------
+    name : {"lqr", "tvlqr", "swingup"}
+        ``lqr``: discrete LQR balance about upright (no swing-up: from hanging it
+        is expected to fail; it is the baseline); ``tvlqr``: TVLQR along the
+        task's optimized swing-up (:func:`pendulab.control.swingup.solve.swing_up`),
+        handing over to LQR balance; ``swingup``: energy pumping with the
+        task's driven torques, then LQR balance.
+    task : Task
+        Swing-up task (model, actuation, torque limit, start).
+    sample_time : float, optional
+        Controller sample time [s]; default the task's ``dt``.
+
+    Returns
+    -------
+    controller : SampledController
+        Saturated at the task's torque limit.
+    x0 : ndarray, shape (nx,)
+        The task's start state.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``name``, a non-positive ``sample_time``, or a swing-up the
+        trajectory optimizer could not solve (``tvlqr``).
+    """
+    from .swingup.solve import swing_up
+
+    h = positive_float("sample_time", task.dt if sample_time is None else sample_time)
+    pb, model = task.problem, task.model
+    if name == "lqr":
+        ctrl: SampledController = balance_controller(model, h, design="discrete", actuation=pb.actuation, u_max=pb.torque_limit)
+    elif name == "tvlqr":
+        res = swing_up(pb, task.method, task.N, degree=task.degree)
+        if not res.success:
+            raise ValueError(f"tvlqr: the swing-up of task {task.name!r} did not solve: {res.message}")
+        ctrl = tvlqr(res, dt=h)
+    elif name == "swingup":
+        ctrl = energy_swingup(model, h, u_max=pb.torque_limit, actuation=pb.actuation)
+    else:
+        raise ValueError(f"controller must be one of {list(TASK_CONTROLLERS)}, got {name!r}")
+    return ctrl, pb.start
