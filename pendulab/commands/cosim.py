@@ -7,13 +7,15 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .._io import atomic_write_text
 from . import CLIError
 
-_DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0}
+_DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0, "nmpc": 10.0}
+_CONTROLLERS = ("lqr", "swingup", "tvlqr", "nmpc")  # = pendulab.control.controllers.CONTROLLERS (not imported at parser build)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -27,10 +29,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--fmu", type=Path, help="pendulab FMU; default: export one for --kind into --out")
     p.add_argument("--kind", choices=("rigid", "elastic"), default="rigid", help="model exported when --fmu is not given")
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the exported FMU")
-    p.add_argument("--controller", choices=("lqr", "swingup", "tvlqr"), default="lqr")
-    p.add_argument("--comm-step", type=float, default=0.01, help="communication step [s] (default 0.01)")
-    p.add_argument("--sample-time", type=float, help="controller sample time [s], a multiple of --comm-step (default: equal)")
-    p.add_argument("--t-final", type=float, help="horizon [s] (default: lqr 5, swingup 10, tvlqr 8)")
+    p.add_argument("--controller", choices=_CONTROLLERS, default="lqr")
+    p.add_argument(
+        "--task",
+        help="shipped swing-up task (e.g. swingup_pendubot): the FMU gets the task's model, the controller its actuation "
+        "and torque limit; start, t_final and comm step from the task; summary.json gets the success flag",
+    )
+    p.add_argument("--nmpc-solver", choices=("sqp", "ipopt", "fatrop"), default="sqp", help="NLP solver of nmpc (default sqp)")
+    p.add_argument("--comm-step", type=float, help="communication step [s] (default 0.01, or the task's dt)")
+    p.add_argument(
+        "--sample-time", type=float, help="controller sample time [s], a multiple of --comm-step (default: equal; nmpc 0.02)"
+    )
+    p.add_argument("--t-final", type=float, help="horizon [s] (default: lqr 5, swingup 10, tvlqr 8, nmpc 10, or the task's)")
     p.add_argument(
         "--reference",
         type=Path,
@@ -75,15 +85,15 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def _fmu_for(kind: str, fmu: Path | None, version: int, out: Path) -> Path:
+def _fmu_for(kind: str, fmu: Path | None, version: int, out: Path, model: Any = None, label: str = "") -> Path:
     if fmu is not None:
         return fmu
     from .. import make_model
     from ..fmu.export import export
 
-    path = out / f"{kind}_fmi{version}.fmu"
-    _progress(f"exporting the {kind} model to {path}")
-    return export(make_model(kind), path, version)
+    path = out / f"{label or kind}_fmi{version}.fmu"
+    _progress(f"exporting the {label or kind} model to {path}")
+    return export(make_model(kind) if model is None else model, path, version)
 
 
 def _named_values(items: list[str], names: tuple[str, ...], flag: str) -> dict[str, float]:
@@ -106,8 +116,17 @@ def _init_state(x0: np.ndarray, names: tuple[str, ...], items: list[str]) -> np.
     return x
 
 
+def _load_task(name: str) -> Any:
+    from ..control.swingup.tasks import load_task
+
+    try:
+        return load_task(name)
+    except (FileNotFoundError, ValueError) as exc:
+        raise CLIError(f"--task: {exc}") from None
+
+
 def run(args: argparse.Namespace) -> int:
-    from ..control.controllers import make_controller
+    from ..control.controllers import controller_for_task, make_controller
     from ..control.tracking import load_reference_csv
     from ..cosim import cosim, inspect_fmu
     from ..cosim.plots import animate_cosim, plot_cosim
@@ -118,29 +137,51 @@ def run(args: argparse.Namespace) -> int:
             raise CLIError(f"{flag} must be a positive number [s], got {value!r}")
     if args.gif_fps < 1:
         raise CLIError(f"--gif-fps must be a positive integer, got {args.gif_fps!r}")
-    fmu = _fmu_for(args.kind, args.fmu, args.fmi_version, out)
+    task = _load_task(args.task) if args.task is not None else None
+    if task is not None and (args.reference is not None or args.param):
+        raise CLIError("--task sets the model and the plan; it cannot be combined with --reference or --param")
+    comm_step = args.comm_step if args.comm_step is not None else (task.dt if task is not None else 0.01)
+    if task is None:
+        fmu = _fmu_for(args.kind, args.fmu, args.fmi_version, out)
+    else:
+        fmu = _fmu_for(task.model.kind, args.fmu, args.fmi_version, out, task.model, task.name)
     info = inspect_fmu(fmu)
-    params = _named_values(args.param, info.parameter_names, "--param")
+    if task is not None:
+        # The task's parameters also go to the FMU explicitly (a user --fmu may carry other start values).
+        params = {n: float(getattr(task.model.params, n)) for n in info.parameter_names if n in task.model.param_names}
+    else:
+        params = _named_values(args.param, info.parameter_names, "--param")
     model = info.model(params)
-    sample_time = args.sample_time if args.sample_time is not None else args.comm_step
-    t_final = args.t_final if args.t_final is not None else _DEFAULT_T_FINAL[args.controller]
-    if args.controller == "tvlqr":
-        _progress("computing the TVLQR gains" + ("" if args.reference else " along the native energy swing-up"))
+    default_ts = 0.02 if args.controller == "nmpc" else comm_step
+    sample_time = args.sample_time if args.sample_time is not None else default_ts
+    t_final = args.t_final if args.t_final is not None else (task.t_final if task else _DEFAULT_T_FINAL[args.controller])
+    if args.controller in ("tvlqr", "nmpc"):
+        _progress(f"planning the {args.controller} reference" + ("" if args.reference or task else " (native model)"))
     reference = None
     if args.reference is not None:
-        if args.controller != "tvlqr":
-            raise CLIError(f"--reference is for --controller tvlqr, got --controller {args.controller}")
+        if args.controller not in ("tvlqr", "nmpc"):
+            raise CLIError(f"--reference is for --controller tvlqr or nmpc, got --controller {args.controller}")
         reference = load_reference_csv(str(args.reference), model)
-    ctrl, x0 = make_controller(
-        args.controller, model, sample_time, u_max=args.u_max, reference=reference, actuation=args.actuation
-    )
+    try:
+        if task is not None:
+            ctrl, x0 = controller_for_task(args.controller, task, sample_time=sample_time, nmpc_solver=args.nmpc_solver)
+        else:
+            ctrl, x0 = make_controller(
+                args.controller, model, sample_time, u_max=args.u_max, reference=reference, actuation=args.actuation,
+                nmpc_solver=args.nmpc_solver,
+            )  # fmt: skip
+    except ValueError as exc:
+        raise CLIError(f"--controller {args.controller}: {exc}") from None
     x0 = _init_state(x0, info.state_names, args.init)
-    t_final = max(1, round(t_final / args.comm_step)) * args.comm_step  # a whole number of steps
+    t_final = max(1, round(t_final / comm_step)) * comm_step  # a whole number of steps
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")
-    traj = cosim(fmu, ctrl, args.comm_step, t_final, x0=x0, params=params, solver=args.solver, tolerance=args.tolerance)
+    try:
+        traj = cosim(fmu, ctrl, comm_step, t_final, x0=x0, params=params, solver=args.solver, tolerance=args.tolerance)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
     out.mkdir(parents=True, exist_ok=True)
     traj.to_csv(out / "cosim.csv")
-    title = f"{info.kind} FMU, {args.controller}, comm step {args.comm_step:g} s"
+    title = f"{info.kind} FMU, {args.controller}, comm step {comm_step:g} s"
     plot_cosim(traj, out / "cosim.png", title)
     if not args.no_gif:
         animate_cosim(traj, out / "cosim.gif", fps=args.gif_fps, title=f"{args.controller}: ")
@@ -149,9 +190,9 @@ def run(args: argparse.Namespace) -> int:
         "kind": info.kind,
         "fmi_version": info.fmi_version,
         "controller": args.controller,
-        "actuation": args.actuation,
+        "actuation": task.problem.actuation if task is not None else args.actuation,
         "params": params,
-        "comm_step": args.comm_step,
+        "comm_step": comm_step,
         "sample_time": sample_time,
         "t_final": float(traj.t[-1]),
         "x0": dict(zip(info.state_names, x0.tolist(), strict=True)),
@@ -160,12 +201,48 @@ def run(args: argparse.Namespace) -> int:
         "caught_at": getattr(ctrl, "caught_at", None),
         "stats": {k: float(v) for k, v in traj.stats.items()},
     }
+    summary.update(_controller_summary(ctrl))
+    if task is not None:
+        summary.update(_task_summary(task, traj))
     # Atomic, and last: a summary.json means every other output of the run is complete.
     atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
     print(f"wrote {out / 'cosim.csv'}, cosim.png{'' if args.no_gif else ', cosim.gif'}, summary.json")
     wall, inside = traj.stats["wall_time"] * 1e3, traj.stats["time_in_do_step"] * 1e3
     print(f"{traj.message}; wall {wall:.1f} ms, of which doStep {inside:.1f} ms")
+    if "solve_time_median" in summary:
+        med, mx = summary["solve_time_median"] * 1e3, summary["solve_time_max"] * 1e3
+        print(f"controller solve time median {med:.2f} ms, max {mx:.2f} ms, failures {summary['failures']}")
+    if task is not None:
+        print(f"task {task.name}: {'success' if summary['success'] else 'FAILED'} (t_up {summary['t_up']})")
     return 0
+
+
+def _controller_summary(ctrl: Any) -> dict[str, Any]:
+    """Solve-time statistics of controllers that keep them (NMPC); nothing for the others."""
+    if not callable(getattr(ctrl, "stats", None)):
+        return {}
+    st = ctrl.stats()
+    return {
+        "solve_time_median": st["solve_time_median"],
+        "solve_time_max": st["solve_time_max"],
+        "iterations": {"median": st["iterations_median"], "max": st["iterations_max"]},
+        "failures": st["failures"],
+        "controller_stats": st,
+    }
+
+
+def _task_summary(task: Any, traj: Any) -> dict[str, Any]:
+    """RealAIGym criterion: the end effector above ``fraction (L1 + L2)`` over the whole last second."""
+    from ..control.swingup.check import height_success
+
+    check = height_success(traj, task.rest_lengths, task.success_fraction)
+    success = bool(check.success and check.t_up <= traj.t[-1] - 1.0 + 1e-9)
+    return {
+        "task": task.name,
+        "success": success,
+        "t_up": None if math.isnan(check.t_up) else check.t_up,
+        "height_threshold": check.threshold,
+    }
 
 
 def _steps(text: str) -> list[float]:

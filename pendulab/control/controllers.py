@@ -23,7 +23,7 @@ __all__ = ["CONTROLLERS", "TASK_CONTROLLERS", "make_controller", "controller_for
 
 
 #: Names accepted by :func:`make_controller`.
-CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr")
+CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr", "nmpc")
 
 
 def make_controller(
@@ -35,17 +35,21 @@ def make_controller(
     t_ref: float = 6.0,
     reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     actuation: str = "full",
+    nmpc_solver: str = "sqp",
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller for ``model`` and its natural start state.
 
     Parameters
     ----------
-    name : {"lqr", "swingup", "tvlqr"}
+    name : {"lqr", "swingup", "tvlqr", "nmpc"}
         ``lqr``: continuous LQR balance (start 0.1 rad off upright);
         ``swingup``: energy pumping + LQR catch (start hanging, theta1 = 0.1);
         ``tvlqr``: discrete TVLQR tracking of ``reference`` (default: the native
         energy swing-up, :func:`swingup_reference`, ``t_ref`` seconds) then
-        discrete LQR balance; starts at the reference's first state.
+        discrete LQR balance; starts at the reference's first state;
+        ``nmpc``: tracking NMPC (:func:`pendulab.control.nmpc.nmpc_swingup`) of
+        ``reference`` or of a swing-up planned for ``model``, ``actuation`` and
+        ``u_max`` (3 s), then regulation upright; starts hanging at rest.
     model : Model
         Design model (e.g. ``FmuInfo.model()`` for an FMU's parameters).
     sample_time : float
@@ -58,7 +62,9 @@ def make_controller(
         Reference to track with ``tvlqr`` (any grid; e.g. an optimized swing-up or
         :func:`load_reference_csv`).
     actuation : {"full", "pendubot", "acrobot"}
-        Driven torques of ``lqr`` and ``tvlqr`` (``swingup`` needs both).
+        Driven torques of ``lqr``, ``tvlqr`` and ``nmpc`` (``swingup`` needs both).
+    nmpc_solver : {"sqp", "ipopt", "fatrop"}
+        NLP solver of ``nmpc``.
 
     Returns
     -------
@@ -71,7 +77,8 @@ def make_controller(
     ------
     ValueError
         Unknown ``name``, non-positive ``sample_time`` (or ``t_ref``), or
-        ``swingup`` with an actuation other than ``"full"``.
+        ``swingup`` with an actuation other than ``"full"``; an ``nmpc`` plan
+        that did not solve.
     """
     h = positive_float("sample_time", sample_time)
     if name == "lqr":
@@ -87,14 +94,20 @@ def make_controller(
             reference = swingup_reference(model, h, round(positive_float("t_ref", t_ref) / h) * h, u_max=u_max)
         tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
+    if name == "nmpc":
+        from .nmpc import nmpc_swingup
+
+        return nmpc_swingup(model, h, actuation=actuation, u_max=u_max, reference=reference, solver=nmpc_solver)
     raise ValueError(f"controller must be one of {list(CONTROLLERS)}, got {name!r}")
 
 
 #: Names accepted by :func:`controller_for_task`.
-TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup")
+TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
 
 
-def controller_for_task(name: str, task: Task, *, sample_time: float | None = None) -> tuple[SampledController, np.ndarray]:
+def controller_for_task(
+    name: str, task: Task, *, sample_time: float | None = None, nmpc_solver: str = "sqp"
+) -> tuple[SampledController, np.ndarray]:
     """A named controller designed for a swing-up task, and the task's start state.
 
     Every controller uses the task's model, actuation and torque limit, so the
@@ -102,16 +115,20 @@ def controller_for_task(name: str, task: Task, *, sample_time: float | None = No
 
     Parameters
     ----------
-    name : {"lqr", "tvlqr", "swingup"}
+    name : {"lqr", "tvlqr", "swingup", "nmpc"}
         ``lqr``: discrete LQR balance about upright (no swing-up: from hanging it
         is expected to fail; it is the baseline); ``tvlqr``: TVLQR along the
         task's optimized swing-up (:func:`pendulab.control.swingup.solve.swing_up`),
         handing over to LQR balance; ``swingup``: energy pumping with the
-        task's driven torques, then LQR balance.
+        task's driven torques, then LQR balance; ``nmpc``: tracking NMPC of the
+        task's optimized swing-up, then regulation upright
+        (:func:`pendulab.control.nmpc.nmpc_for_task`).
     task : Task
         Swing-up task (model, actuation, torque limit, start).
     sample_time : float, optional
-        Controller sample time [s]; default the task's ``dt``.
+        Controller sample time [s]; default the task's ``dt`` (``nmpc``: 0.02 s).
+    nmpc_solver : {"sqp", "ipopt", "fatrop"}
+        NLP solver of ``nmpc``.
 
     Returns
     -------
@@ -128,6 +145,10 @@ def controller_for_task(name: str, task: Task, *, sample_time: float | None = No
     """
     from .swingup.solve import swing_up
 
+    if name == "nmpc":
+        from .nmpc import nmpc_for_task
+
+        return nmpc_for_task(task, sample_time=0.02 if sample_time is None else sample_time, solver=nmpc_solver)
     h = positive_float("sample_time", task.dt if sample_time is None else sample_time)
     pb, model = task.problem, task.model
     if name == "lqr":

@@ -11,8 +11,8 @@ Controllers:
 * :class:`LinearStateFeedback` (from :func:`balance_controller`): LQR balance
   about the upright equilibrium, a continuous-time gain applied with a ZOH or
   a discrete gain designed at the sample time;
-* :class:`EnergySwingUp` (from :func:`energy_swingup`): energy pumping on
-  ``tau1`` while ``tau2`` keeps the links aligned, then a switch to LQR balance;
+* :class:`EnergySwingUp` (from :func:`energy_swingup`): energy pumping with
+  the driven torque(s) (full, pendubot or acrobot), then a switch to LQR balance;
 * :class:`~pendulab.control.tracking.TVLQRTracker` (in :mod:`.tracking`, with
   its design): tracks a reference with time-varying gains, then hands over to a
   final controller.
@@ -304,39 +304,53 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
 
 @dataclass
 class EnergySwingUp:
-    """Energy pumping with ``tau1``, link alignment with ``tau2``, then LQR balance.
+    """Energy pumping with the driven torques, then LQR balance.
 
-    Away from the top, ``tau1 = sat(k_energy (E_up - E) omega1)`` pumps energy
-    (power ``tau1 omega1`` has the sign of the energy deficit) and ``tau2 =
-    -kp (theta2 - theta1) - kd (omega2 - omega1)`` keeps the pair close to a
-    single pendulum. When the LQR cost-to-go falls below ``catch_cost`` the
-    controller switches to ``balance`` for good (until :meth:`reset`). All
-    torques are clipped to ``[-u_max, u_max]``. Build it with :func:`energy_swingup`.
+    Away from the top the controller pumps energy with one torque so that the
+    power it delivers has the sign of the energy deficit ``E_up - E``:
+
+    * ``actuation="full"``: ``tau1 = sat(k_energy (E_up - E) omega1)`` pumps and
+      ``tau2 = -kp (theta2 - theta1) - kd (omega2 - omega1)`` keeps the pair
+      close to a single pendulum;
+    * ``"pendubot"``: ``tau1 = sat(k_energy (E_up - E) omega1)`` (power
+      ``tau1 omega1``), ``tau2 = 0``;
+    * ``"acrobot"``: ``tau2 = sat(k_energy (E_up - E) (omega2 - omega1))`` (power
+      ``tau2 (omega2 - omega1)``), ``tau1 = 0``.
+
+    When the LQR cost-to-go falls below ``catch_cost`` the controller switches
+    to ``balance`` (designed for the same actuation); it stays there until
+    :meth:`reset`, or, with ``release_factor``, until the cost-to-go exceeds
+    ``release_factor * catch_cost`` (a failed catch: pump again and retry).
+    All torques are clipped to ``[-u_max, u_max]``. Build it with :func:`energy_swingup`.
 
     Attributes
     ----------
     model : Model
         Plant (energy, state layout).
     balance : LinearStateFeedback
-        Upright LQR that takes over at the catch.
+        Upright LQR that takes over at the catch (same ``input_names``).
     sample_time : float
         Sample period [s].
     k_energy : float
         Pumping gain [N.m / (J rad/s)].
     kp : float
-        Alignment stiffness on ``theta2 - theta1`` [N.m/rad].
+        Alignment stiffness on ``theta2 - theta1`` [N.m/rad] (full actuation only).
     kd : float
-        Alignment damping on ``omega2 - omega1`` [N.m s/rad].
+        Alignment damping on ``omega2 - omega1`` [N.m s/rad] (full actuation only).
     u_max : float
         Symmetric torque limit [N.m].
     catch_cost : float
         Switch to ``balance`` once ``balance.cost(x)`` is below this.
     input_names : tuple of str
-        Driven torques, ("tau1", "tau2").
+        Driven torques: ("tau1", "tau2") for full actuation, ("tau1",) for the
+        pendubot, ("tau2",) for the acrobot.
     e_up : float
         Energy of the upright equilibrium [J] (set at construction).
+    release_factor : float or None
+        Back to pumping when ``balance.cost(x)`` exceeds ``release_factor *
+        catch_cost`` after a catch; None: never.
     caught_at : float or None
-        Time of the switch to ``balance`` [s]; None while pumping.
+        Time of the (last) switch to ``balance`` [s]; None while pumping.
     """
 
     model: Model
@@ -348,62 +362,104 @@ class EnergySwingUp:
     u_max: float = 20.0
     catch_cost: float = 20.0
     input_names: tuple[str, ...] = INPUT_NAMES
+    release_factor: float | None = None
     e_up: float = field(init=False)
     caught_at: float | None = field(init=False, default=None)
 
     def __post_init__(self) -> None:
         self.e_up = float(self.model.energy(upright_state(self.model)))
 
+    @property
+    def actuation(self) -> str:
+        """``"full"``, ``"pendubot"`` or ``"acrobot"`` (from ``input_names``)."""
+        return actuation_name(self.input_names)
+
     def reset(self) -> None:
         """Back to the pumping mode."""
         self.caught_at = None
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
-        if self.caught_at is None and self.balance.cost(x) < self.catch_cost:
+        cost = self.balance.cost(x)
+        if self.caught_at is None and cost < self.catch_cost:
             self.caught_at = float(t)
+        elif self.caught_at is not None and self.release_factor is not None and cost > self.release_factor * self.catch_cost:
+            self.caught_at = None  # the catch failed: pump again
         if self.caught_at is not None:
             return np.clip(self.balance(t, x), -self.u_max, self.u_max)
         th1, th2 = x[0], x[1]
         w1, w2 = x[self.model.nq], x[self.model.nq + 1]
         deficit = self.e_up - float(self.model.energy(x))
-        # Start from rest: no velocity to pump with, so kick.
-        tau1 = self.k_energy * deficit * w1 if abs(w1) > 1e-3 else self.u_max
+        actuation = self.actuation
+        # The pumping joint's rate: the power of the pumping torque is torque * rate.
+        rate = w2 - w1 if actuation == "acrobot" else w1
+        # Start from rest: no velocity to pump with, so kick (in the direction that adds energy next).
+        pump = self.k_energy * deficit * rate if abs(rate) > 1e-3 else self.u_max * np.sign(deficit)
+        if actuation != "full":
+            return np.clip(np.array([pump]), -self.u_max, self.u_max)
         rel = (th2 - th1 + np.pi) % (2 * np.pi) - np.pi
         tau2 = -self.kp * rel - self.kd * (w2 - w1)
-        return np.clip(np.array([tau1, tau2]), -self.u_max, self.u_max)
+        return np.clip(np.array([pump, tau2]), -self.u_max, self.u_max)
+
+
+#: Default (k_energy [N.m / (J rad/s)], catch_cost) of :func:`energy_swingup` per actuation. The pendubot and
+#: acrobot values were picked on the RealAIGym tasks (swingup_pendubot, swingup_acrobot: 6 N.m, 10 s) from
+#: k_energy in {1, 2, 3, 5} x catch_cost in {5, 10, 20}, 6 runs each (nominal + 5 with 0.05 rad/s rate noise):
+#: these two succeeded 6/6 on both tasks; many neighbours did not (the pumping phase is chaotic).
+ENERGY_SWINGUP_DEFAULTS: dict[str, tuple[float, float]] = {"full": (2.0, 20.0), "pendubot": (1.0, 10.0), "acrobot": (1.0, 10.0)}
+# One-joint swing-ups re-arm the pumping when a catch fails (cost-to-go above 4x catch_cost): more tries per episode.
+_RELEASE_FACTOR = 4.0
 
 
 def energy_swingup(
     model: Model,
     sample_time: float,
     *,
-    k_energy: float = 2.0,
+    k_energy: float | None = None,
     u_max: float = 20.0,
-    catch_cost: float = 20.0,
+    catch_cost: float | None = None,
+    actuation: str | Sequence[str] = "full",
 ) -> EnergySwingUp:
-    """Energy-pumping swing-up (full actuation) switching to continuous LQR balance.
+    """Energy-pumping swing-up switching to continuous LQR balance, for full, pendubot or acrobot actuation.
 
     Parameters
     ----------
     model : Model
+        Rigid or elastic plant (design model).
     sample_time : float
         [s].
-    k_energy : float
-        Pumping gain [N.m / (J rad/s)].
+    k_energy : float, optional
+        Pumping gain [N.m / (J rad/s)]; default per actuation (:data:`ENERGY_SWINGUP_DEFAULTS`).
     u_max : float
         Torque limit [N.m].
-    catch_cost : float
-        Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this.
+    catch_cost : float, optional
+        Switch to LQR when the LQR cost-to-go ``e' P e`` falls below this; default per actuation.
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        Driven torques: full pumps with ``tau1`` and aligns the links with
+        ``tau2``; the pendubot pumps with ``tau1`` alone, the acrobot with ``tau2``
+        alone (see :class:`EnergySwingUp`).
 
     Returns
     -------
     EnergySwingUp
         Pumping controller whose ``balance`` is the continuous-design upright
-        LQR (:func:`balance_controller`) saturated at ``u_max``.
+        LQR (:func:`balance_controller`) for the same actuation, saturated at ``u_max``.
+
+    Raises
+    ------
+    ValueError
+        Non-positive ``sample_time`` or ``u_max``, or an unknown ``actuation``.
+    UncontrollableError
+        The actuation cannot balance the upright equilibrium.
     """
     h = positive_float("sample_time", sample_time)
-    balance = balance_controller(model, h, u_max=u_max)
-    return EnergySwingUp(model, balance, h, k_energy=k_energy, u_max=positive_float("u_max", u_max), catch_cost=catch_cost)
+    limit = positive_float("u_max", u_max)
+    names = actuated_inputs(actuation)
+    k_default, catch_default = ENERGY_SWINGUP_DEFAULTS[actuation_name(names)]
+    k = k_default if k_energy is None else positive_float("k_energy", k_energy)
+    catch = catch_default if catch_cost is None else positive_float("catch_cost", catch_cost)
+    balance = balance_controller(model, h, u_max=limit, actuation=names)
+    release = None if names == INPUT_NAMES else _RELEASE_FACTOR
+    return EnergySwingUp(model, balance, h, k, u_max=limit, catch_cost=catch, input_names=names, release_factor=release)
 
 
 # -- glue -----------------------------------------------------------------------------

@@ -36,7 +36,8 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
     -------
     list of Path
         ``states_torques.png``, ``phase.png``, then ``height.png`` (when the
-        closed loop and its height check exist) and ``stretch.png`` (elastic).
+        closed loop and its height check exist), ``stretch.png`` (elastic) and
+        ``error.png`` (when the plan has an error estimate).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -72,13 +73,17 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
         axes[2].step(res.t[:-1], res.u[:, i], where="post", ls="--", color="k", lw=1.0, label=f"{name} optimal")
     axes[2].axhline(lim, color="r", lw=0.8, ls=":", label="torque limit")
     axes[2].axhline(-lim, color="r", lw=0.8, ls=":")
+    if task.problem.margin < 1.0:
+        plan_lim = task.problem.plan_torque_limit
+        axes[2].axhline(plan_lim, color="C1", lw=0.8, ls="--", label=f"plan limit ({task.problem.margin:g} x)")
+        axes[2].axhline(-plan_lim, color="C1", lw=0.8, ls="--")
     axes[2].set_ylabel("torque [N.m]")
     axes[2].set_xlabel("time [s]")
     axes[2].legend(fontsize=8, ncol=3)
     for ax in axes:
         ax.axvline(T, color="grey", lw=0.8, ls="-.")
         ax.grid(alpha=0.3)
-    axes[0].set_title(f"{task.name}: swing-up ({res.method}, N={res.N}); TVLQR to T = {T:g} s, then LQR")
+    axes[0].set_title(f"{task.name}: swing-up ({res.method}, N={res.N}); TVLQR to T = {T:.3g} s, then LQR")
     finish(fig, "states_torques.png")
 
     fig, axes = plt.subplots(1, 2, figsize=(9, 4))
@@ -128,7 +133,39 @@ def plot_episode(ep: Episode, out_dir: str | Path) -> list[Path]:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=2)
         finish(fig, "stretch.png")
+
+    if ep.error is not None:
+        _error_figure(ep, finish)
     return paths
+
+
+def _error_figure(ep: Episode, finish) -> None:
+    """Per-interval relative defect on the (possibly non-uniform) mesh, with the tolerance, and the interval widths."""
+    est, res = ep.error, ep.result
+    t = np.asarray(res.t)
+    h = np.diff(t)
+    worst = np.maximum(est.interval_worst, 1e-16)  # log axis: an exact zero shows at the floor
+    fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    ax = axes[0]
+    # One bar per interval, as wide as the interval: refined regions show as narrow bars.
+    colors = np.where(worst <= est.tolerance, "C0", "C3")
+    ax.bar(t[:-1], worst, width=h, align="edge", color=colors, edgecolor="k", linewidth=0.2)
+    ax.axhline(est.tolerance, color="r", ls="--", lw=1.0, label=f"tolerance {est.tolerance:.0e}")
+    ax.set_yscale("log")
+    ax.set_ylabel("relative defect per interval [-]")
+    verdict = "pass" if est.passed else "FAIL"
+    level = f", planned on {ep.plan.level}" if ep.plan is not None else ""
+    ax.set_title(
+        f"{ep.task.name}: error estimate ({est.method}) worst {est.worst:.2e}: {verdict}; N = {res.N}{level}", fontsize=10
+    )
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    axes[1].stairs(1e3 * h, t, baseline=None, color="k", lw=1.0)
+    axes[1].set_ylabel("interval width [ms]")
+    axes[1].set_xlabel("time [s]")
+    axes[1].set_ylim(0.0, 1.15e3 * h.max())
+    axes[1].grid(alpha=0.3)
+    finish(fig, "error.png")
 
 
 def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: float | None = None) -> Path:

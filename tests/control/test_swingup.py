@@ -16,7 +16,8 @@ def pendubot():
 
 @pytest.fixture(scope="module")
 def solved(pendubot):
-    return {N: swing_up(pendubot, "radau", N) for N in (40, 80)}
+    # Fixed meshes (no estimate, no refinement): the convergence test needs N = 40 and 80 as given.
+    return {N: swing_up(pendubot, "radau", N, tolerance=None) for N in (40, 80)}
 
 
 def test_optimum_satisfies_dynamics_and_converges(solved):
@@ -50,7 +51,7 @@ def test_velocity_limit_is_honoured(pendubot):
 
 
 def test_collocation_and_shooting_agree_on_cost(pendubot):
-    costs = {m: swing_up(pendubot, m, 40).cost for m in ("legendre", "shooting")}
+    costs = {m: swing_up(pendubot, m, 40, tolerance=None).cost for m in ("legendre", "shooting")}
     # Same ZOH problem, different O(h^k) discretisations at N = 40: measured 0.5 % apart; 1.5 % allows for that.
     assert costs["shooting"] == pytest.approx(costs["legendre"], rel=1.5e-2)
 
@@ -95,7 +96,7 @@ def test_free_horizon_mix_beats_fixed_horizon(pendubot):
 
 def test_elastic_solve_starts_from_rigid_counterpart():
     pb = load_task("pendubot_elastic_soft").problem
-    r = swing_up(pb, "radau", 30)
+    r = swing_up(pb, "radau", 30, tolerance=None)  # the guess path only; the error estimate is tested elsewhere
     assert r.success, r.message
     assert r.stages[0]["label"].startswith("rigid:")  # auto guess: rigid point-mass solve, lifted
     smin, smax = pb.stretch_limits

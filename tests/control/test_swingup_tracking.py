@@ -42,9 +42,12 @@ def test_height_criterion_rejects_falling_pendulum():
 def test_all_shipped_tasks_load_with_documented_limits():
     names = task_names()
     assert {"acrobot", "pendubot", "acrobot_elastic", "pendubot_elastic"} <= set(names)
+    assert "pendubot_pointmass" in names
     for name in names:
         task = load_task(name)
-        assert task.problem.torque_limit == 6.0 and task.t_final == 10.0
+        # RealAIGym tasks: 6 N.m; the textbook point-mass pendubot: 10 N.m.
+        assert task.problem.torque_limit == (10.0 if name == "pendubot_pointmass" else 6.0) and task.t_final == 10.0
+        assert task.tolerance == 1e-3 and task.planning == "auto"
         lo, hi = task.problem.torque_bounds()
         assert np.count_nonzero(hi) == 1  # exactly one actuated joint
 

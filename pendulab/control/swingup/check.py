@@ -3,8 +3,9 @@
 * :func:`replay` integrates the optimal torques with the native high-accuracy
   integrator (``pendulab.simulate``, CVODES) - per interval from each grid
   state (the local defect of the transcription, free of chaotic
-  amplification) and open loop over the whole horizon (what happens without
-  feedback).
+  amplification; the same computation as :func:`.errors.estimate_error`, in
+  state units) and open loop over the whole horizon (what happens without
+  feedback). Uniform and non-uniform grids alike.
 * :func:`height_success` applies the benchmark criterion: the end effector
   rises above ``fraction * (L1 + L2)`` and stays there to the end.
 """
@@ -17,6 +18,8 @@ import numpy as np
 
 from ...integrate import simulate
 from ...integrate.trajectory import Trajectory
+from ...model.model import Model
+from .errors import estimate_error_arrays
 from .solve import SwingUpResult
 
 __all__ = ["ReplayReport", "replay", "height_success", "HeightCheck"]
@@ -69,15 +72,29 @@ def replay(result: SwingUpResult, method: str = "cvodes", rtol: float = 1e-10, a
         on the NLP grid, with its deviation from the optimum.
     """
     model = result.problem.model
-    h = result.t[1] - result.t[0]
-    defects = np.empty(result.N)
     # Defects: one integration per interval from the optimal grid state (the torque jumps there).
-    for k in range(result.N):
-        seg = simulate(model, result.x[k], h, dt=h, method=method, rtol=rtol, atol=atol, u=result.u[k])
-        defects[k] = float(np.max(np.abs(seg.x[-1] - result.x[k + 1])))
-    ol = simulate(model, result.x[0], result.horizon, dt=h, method=method, rtol=rtol, atol=atol, u=result.u)
+    est = estimate_error_arrays(model, result.t, result.x, result.u, method=method, rtol=rtol, atol=atol)
+    defects = est.absolute.max(axis=1)
+    ol = _open_loop(model, result, method, rtol, atol)
     dev = np.max(np.abs(ol.x - result.x), axis=1)
     return ReplayReport(float(defects.max()), defects, ol, float(dev.max()), float(dev[-1]), method)
+
+
+def _open_loop(model: Model, result: SwingUpResult, method: str, rtol: float, atol: float) -> Trajectory:
+    """The torques replayed from the start, sampled on the plan's grid (uniform or not)."""
+    h = np.diff(result.t)
+    if np.allclose(h, h[0], rtol=1e-12, atol=0.0):
+        return simulate(model, result.x[0], result.horizon, dt=h[0], method=method, rtol=rtol, atol=atol, u=result.u)
+    # A non-uniform grid: chain one run per interval (simulate's output grid is uniform).
+    x = np.empty_like(result.x)
+    x[0] = result.x[0]
+    for k in range(result.N):
+        x[k + 1] = simulate(model, x[k], h[k], dt=h[k], method=method, rtol=rtol, atol=atol, u=result.u[k]).x[-1]
+    u = np.vstack([result.u, result.u[-1:]])
+    y = np.asarray(model.outputs(x, u), dtype=float)
+    return Trajectory(
+        result.t.copy(), x, u, y, model.state_names, model.input_names, model.output_names, method, stats={"chained": True}
+    )
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,15 @@
-"""One swing-up episode end to end: solve, replay, track with TVLQR + LQR, score.
+"""One swing-up episode end to end: plan (on the model the task needs), prove, replay, track with TVLQR + LQR, score.
 
 Used by the ``pendulab swingup`` command, the example and the benchmarks.
+:func:`closed_loop_success_rate` tracks the *same* plan from randomized starts
+near the task's start: the tracker is what has to absorb a perturbed start
+(re-planning per start would test the planner, which the benchmark does
+separately), and one plan for all starts costs one solve instead of twenty.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -14,11 +18,13 @@ from ...integrate import simulate
 from ...integrate.trajectory import Trajectory
 from ..tracking import TVLQRTracker, tvlqr
 from .check import HeightCheck, ReplayReport, height_success, replay
+from .errors import ErrorEstimate
 from .guess import Guess
-from .solve import SwingUpResult, swing_up
+from .planning import Plan, _solved, plan
+from .solve import SwingUpResult
 from .tasks import Task
 
-__all__ = ["Episode", "run_episode"]
+__all__ = ["Episode", "run_episode", "SuccessRate", "closed_loop_success_rate"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +43,9 @@ class Episode:
     height : HeightCheck or None
     x0 : ndarray, shape (nx,)
         Start state of the closed loop (may differ from the problem's start).
+    plan : Plan or None
+        The planning decision, the levels tried and the error estimate on the
+        task's dynamics (None for episodes built by hand).
     """
 
     task: Task
@@ -46,6 +55,14 @@ class Episode:
     closed_loop: Trajectory | None
     height: HeightCheck | None
     x0: np.ndarray
+    plan: Plan | None = None
+
+    @property
+    def error(self) -> ErrorEstimate | None:
+        """Error estimate of the plan on the task's own dynamics (None without a plan)."""
+        if self.plan is not None and self.plan.estimate is not None:
+            return self.plan.estimate
+        return getattr(self.result, "error", None)
 
     @property
     def success(self) -> bool:
@@ -59,8 +76,14 @@ class Episode:
         -------
         dict
             Task, model, actuation and solver figures (status, iterations,
-            solve and build times [s], horizon [s], cost); the replay defects
-            when replayed; and, when a closed loop ran, ``success``,
+            solve and build times [s], the IPOPT time of the final mesh alone
+            ``final_mesh_solve_time_s``, horizon [s], cost); the planning
+            model (``planning_*``: requested, rule's choice, level used, spring
+            and pendular frequencies [rad/s], levels tried); the error estimate
+            (``error_*``: worst relative defect, tolerance, passed, method, the
+            per-interval worst defects and the grid ``mesh_t_s``); mesh
+            refinements; the torque margin; the replay defects when replayed;
+            and, when a closed loop ran, ``success``,
             ``swing_up_time_s``, ``height_threshold_m``, ``max_torque_Nm``,
             ``torque_limit_Nm``, ``control_energy_N2m2s`` (integral of
             ``tau1^2 + tau2^2``) and ``final_state_error`` (inf-norm). Otherwise
@@ -81,7 +104,41 @@ class Episode:
             "horizon_s": r.horizon,
             "cost": r.cost,
             "message": r.message,
+            "torque_margin": self.task.problem.margin,
+            "plan_torque_limit_Nm": self.task.problem.plan_torque_limit,
+            "refinements": max(len(getattr(r, "mesh_history", ())) - 1, 0),
+            "final_mesh_solve_time_s": round(float(getattr(r, "solve_time", float("nan"))), 4),
         }
+        if self.plan is not None:
+            d = self.plan.decision
+            out.update(
+                {
+                    "planning_requested": d.requested,
+                    "planning_rule_choice": d.chosen,
+                    "planning_model": self.plan.level,
+                    "planning_reason": d.reason,
+                    "spring_frequency_rad_s": d.spring_frequency if np.isfinite(d.spring_frequency) else None,
+                    "pendular_frequency_rad_s": d.pendular_frequency,
+                    "planning_predicted_error": d.predicted,
+                    "planning_attempts": [dict(a) for a in self.plan.attempts],
+                    "plan_time_s": round(self.plan.wall_time, 4),
+                    "plan_build_time_s": round(self.plan.build_time, 4),
+                }
+            )
+        est = self.error
+        if est is not None:
+            out.update(
+                {
+                    "error_worst": est.worst,
+                    "error_tolerance": est.tolerance,
+                    "error_passed": est.passed,
+                    "error_method": est.method,
+                    "error_worst_interval": est.worst_interval,
+                    "error_worst_state": est.worst_state,
+                    "error_interval_worst": est.interval_worst.tolist(),
+                    "mesh_t_s": np.asarray(r.t).tolist(),
+                }
+            )
         if self.replay is not None:
             out["replay_interval_defect"] = self.replay.interval_defect
             out["replay_open_loop_max_deviation"] = self.replay.max_deviation
@@ -113,35 +170,156 @@ def run_episode(
     guess: str | Guess | SwingUpResult = "auto",
     x0: np.ndarray | None = None,
     do_replay: bool = True,
+    tolerance: float | None = None,
+    refine: bool = True,
+    planning: str | None = None,
 ) -> Episode:
-    """Solve the task, replay the optimum, track it in closed loop and score the episode.
+    """Plan the task, prove the plan, replay it, track it in closed loop and score the episode.
 
     Parameters
     ----------
     task : Task
     method, N : optional
-        Override the task's transcription and number of intervals.
+        Override the task's transcription and (initial) number of intervals.
     guess : str, Guess or SwingUpResult
         Initial guess (see :func:`swing_up`).
     x0 : array_like, shape (nx,), optional
         Start of the closed loop (a perturbed start); default the problem's start.
     do_replay : bool
         Run the (slower) open-loop replay check.
+    tolerance : float, optional
+        Relative defect the plan must meet (default the task's ``tolerance``).
+    refine : bool
+        Mesh refinement until the tolerance is met (False: one solve, estimate reported).
+    planning : {"auto", "rigid", "quasi-static", "elastic"}, optional
+        Planning model of an elastic task (default the task's ``planning``).
 
     Returns
     -------
     Episode
-        When the solve fails, only ``task``, ``result`` and ``x0`` are set.
+        From :func:`pendulab.control.swingup.planning.plan`. When no valid plan
+        was found, only ``task``, ``result``, ``x0`` and ``plan`` are set.
         Otherwise the TVLQR tracker (sample time ``task.dt``) is simulated with
         CVODES from ``x0`` over ``task.t_final`` and scored with
-        :func:`height_success`.
+        :func:`height_success`. A plan that solved but misses the tolerance
+        without refinement (``refine=False``) is still tracked and reported.
+
+    Raises
+    ------
+    ValueError
+        Bad overrides (unknown planning name, non-positive tolerance, bad N).
     """
-    res = swing_up(task.problem, method or task.method, N or task.N, degree=task.degree, guess=guess)
+    pl_ = plan(
+        task.problem,
+        planning=task.planning if planning is None else planning,
+        tolerance=task.tolerance if tolerance is None else tolerance,
+        method=method or task.method,
+        N=N or task.N,
+        degree=task.degree,
+        guess=guess,
+        refine=refine,
+    )
+    res = pl_.result
     start = task.problem.start if x0 is None else task.model.check_state(x0, "x0")
-    if not res.success:
-        return Episode(task, res, None, None, None, None, start)
+    # Without refinement a converged plan that misses the tolerance is still tracked (and reported as failed).
+    if not (res.success or (not refine and _solved(res))):
+        return Episode(task, res, None, None, None, None, start, pl_)
     rep = replay(res) if do_replay else None
-    ctrl = tvlqr(res, dt=task.dt)
+    ctrl = tvlqr(res if res.success else replace(res, success=True), dt=task.dt)
     cl = simulate(task.model, start, task.t_final, dt=task.dt, method="cvodes", rtol=1e-8, atol=1e-8, u=ctrl)
     hc = height_success(cl, task.rest_lengths, task.success_fraction)
-    return Episode(task, res, rep, ctrl, cl, hc, start)
+    return Episode(task, res, rep, ctrl, cl, hc, start, pl_)
+
+
+@dataclass(frozen=True)
+class SuccessRate:
+    """Closed-loop success of one plan from randomized starts.
+
+    Attributes
+    ----------
+    successes : int
+        Starts whose closed loop met the height criterion.
+    starts : int
+        Number of starts.
+    x0 : ndarray, shape (starts, nx)
+        The starts.
+    success : ndarray of bool, shape (starts,)
+        Per start.
+    t_up : ndarray, shape (starts,)
+        Swing-up time per start [s] (nan when it failed).
+    angle_spread, rate_spread : float
+        Half-widths of the uniform start perturbation [rad], [rad/s].
+    """
+
+    successes: int
+    starts: int
+    x0: np.ndarray
+    success: np.ndarray
+    t_up: np.ndarray
+    angle_spread: float
+    rate_spread: float
+
+    @property
+    def rate(self) -> float:
+        """Fraction of successful starts."""
+        return self.successes / self.starts
+
+
+def closed_loop_success_rate(
+    task: Task,
+    starts: int = 20,
+    seed: int = 0,
+    *,
+    episode: Episode | None = None,
+    angle_spread: float = 0.05,
+    rate_spread: float = 0.1,
+) -> SuccessRate:
+    """Track one plan of the task from randomized starts near its start and count the successes.
+
+    Parameters
+    ----------
+    task : Task
+    starts : int
+        Number of randomized starts (>= 1).
+    seed : int
+        Seed of :func:`numpy.random.default_rng`.
+    episode : Episode, optional
+        An episode of ``task`` whose plan and tracker are reused (default: one
+        is planned with the task's settings).
+    angle_spread : float
+        Uniform perturbation of both angles, +- this [rad].
+    rate_spread : float
+        Uniform perturbation of both angular rates, +- this [rad/s].
+
+    Returns
+    -------
+    SuccessRate
+        Per start: closed loop (TVLQR + LQR, CVODES at 1e-8, sample time
+        ``task.dt``) over ``task.t_final`` scored with :func:`height_success`.
+        Zero successes when no plan was found.
+
+    Raises
+    ------
+    ValueError
+        ``starts`` < 1, negative spreads, or an episode of another task.
+    """
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
+        raise ValueError(f"starts must be an integer >= 1, got {starts!r}")
+    if not (angle_spread >= 0.0 and rate_spread >= 0.0):
+        raise ValueError(f"angle_spread and rate_spread must be >= 0, got {angle_spread!r} and {rate_spread!r}")
+    if episode is not None and episode.task.name != task.name:
+        raise ValueError(f"episode is of task {episode.task.name!r}, not {task.name!r}")
+    ep = episode if episode is not None else run_episode(task, do_replay=False)
+    rng = np.random.default_rng(seed)
+    model, nq = task.model, task.model.nq
+    x0s = np.tile(task.problem.start, (int(starts), 1))
+    x0s[:, 0:2] += rng.uniform(-angle_spread, angle_spread, (starts, 2))
+    x0s[:, nq : nq + 2] += rng.uniform(-rate_spread, rate_spread, (starts, 2))
+    ok = np.zeros(starts, dtype=bool)
+    t_up = np.full(starts, np.nan)
+    if ep.controller is not None:
+        for i, x0 in enumerate(x0s):
+            cl = simulate(model, x0, task.t_final, dt=task.dt, method="cvodes", rtol=1e-8, atol=1e-8, u=ep.controller)
+            hc = height_success(cl, task.rest_lengths, task.success_fraction)
+            ok[i], t_up[i] = hc.success, hc.t_up
+    return SuccessRate(int(ok.sum()), int(starts), x0s, ok, t_up, float(angle_spread), float(rate_spread))

@@ -164,7 +164,7 @@ def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
     Returns
     -------
     SwingUpProblem
-        Same actuation, limits, horizon settings and objective, named
+        Same actuation, limits (and torque margin), horizon settings and objective, named
         ``problem.name + "-rigid"``.
 
     Raises
@@ -187,6 +187,7 @@ def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
         horizon_bounds=problem.horizon_bounds,
         objective=problem.objective,
         time_weight=problem.time_weight,
+        torque_margin=problem.torque_margin,
         name=problem.name + "-rigid",
     )
 

@@ -17,8 +17,10 @@ from ..._checks import positive_float
 from ...model.model import ACTUATIONS, Model
 from ..feedback import upright_state
 
-__all__ = ["SwingUpProblem", "OBJECTIVES"]
+__all__ = ["SwingUpProblem", "OBJECTIVES", "DEFAULT_MARGINS"]
 
+#: Default torque margin per objective (fraction of the torque limit the plan may use).
+DEFAULT_MARGINS: dict[str, float] = {"effort": 1.0, "time": 0.9, "mix": 0.9}
 #: Objectives: ``effort`` = integral of tau^2; ``time`` = horizon T (free horizon);
 #: ``mix`` = time_weight * T + integral of tau^2.
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
@@ -59,6 +61,14 @@ class SwingUpProblem:
         the bang-bang optimum regular); ``mix``: time_weight * T + effort.
     time_weight : float
         Weight on T in the ``mix`` objective [N^2.m^2].
+    torque_margin : float or None
+        The plan uses at most ``torque_margin * torque_limit`` on each actuated
+        joint, leaving the rest of the actuator to the tracking controller
+        (which saturates at ``torque_limit`` itself). In (0, 1]. None (default)
+        = :data:`DEFAULT_MARGINS` of the objective: 0.9 for ``time`` and
+        ``mix`` (their optima ride the bound, bang-bang, and a tracker with no
+        authority left cannot correct anything), 1.0 for ``effort`` (its
+        optimum stays mostly inside the limit; today's behaviour).
     name : str
         Label of the problem (e.g. the task name); not compared for equality.
 
@@ -81,6 +91,7 @@ class SwingUpProblem:
     horizon_bounds: tuple[float, float] = (0.5, 10.0)
     objective: str = "effort"
     time_weight: float = 1.0
+    torque_margin: float | None = None
     name: str = field(default="swingup", compare=False)
 
     def __post_init__(self) -> None:
@@ -96,6 +107,11 @@ class SwingUpProblem:
             set_("velocity_limit", positive_float("velocity_limit", self.velocity_limit))
         set_("horizon", positive_float("horizon", self.horizon))
         set_("time_weight", positive_float("time_weight", self.time_weight))
+        if self.torque_margin is not None:
+            margin = positive_float("torque_margin", self.torque_margin)
+            if margin > 1.0:
+                raise ValueError(f"torque_margin must lie in (0, 1] (fraction of torque_limit the plan may use), got {margin!r}")
+            set_("torque_margin", margin)
         lo, hi = (
             positive_float("horizon_bounds[0]", self.horizon_bounds[0]),
             positive_float("horizon_bounds[1]", self.horizon_bounds[1]),
@@ -149,6 +165,16 @@ class SwingUpProblem:
         """Goal state as an array, shape (nx,)."""
         return np.array(self.goal)
 
+    @property
+    def margin(self) -> float:
+        """The torque margin in effect: ``torque_margin``, or the objective's default (:data:`DEFAULT_MARGINS`)."""
+        return DEFAULT_MARGINS[self.objective] if self.torque_margin is None else self.torque_margin
+
+    @property
+    def plan_torque_limit(self) -> float:
+        """Largest torque the plan may use, ``margin * torque_limit`` [N.m]."""
+        return self.margin * self.torque_limit
+
     def torque_bounds(self, passive_fraction: float = 0.0, limit_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
         """Lower/upper bounds on (tau1, tau2).
 
@@ -163,11 +189,13 @@ class SwingUpProblem:
         Returns
         -------
         lb, ub : ndarray, shape (2,)
-            ``-ub`` and ``ub`` [N.m]: ``torque_limit * limit_scale`` on the
-            actuated joints, ``passive_fraction`` times that on the others.
+            ``-ub`` and ``ub`` [N.m]: ``plan_torque_limit * limit_scale``
+            (the torque limit times the margin) on the actuated joints,
+            ``passive_fraction`` times that on the others.
         """
-        ub = np.full(2, passive_fraction * self.torque_limit * limit_scale)
-        ub[list(self.actuated)] = self.torque_limit * limit_scale
+        limit = self.plan_torque_limit * limit_scale
+        ub = np.full(2, passive_fraction * limit)
+        ub[list(self.actuated)] = limit
         return -ub, ub
 
     def state_bounds(self) -> tuple[np.ndarray, np.ndarray]:

@@ -14,6 +14,9 @@ section holds what the scene format itself does not (all optional except
     horizon_bounds = [0.5, 10.0]
     objective = "effort"         # effort | time | mix
     time_weight = 1.0
+    torque_margin = 0.9          # plan within this fraction of torque_limit (default: 0.9 time/mix, 1.0 effort)
+    tolerance = 1e-3             # relative defect the plan must meet on the task's dynamics
+    planning = "auto"            # auto | rigid | quasi-static | elastic (planning model of elastic tasks)
     N = 100
     method = "radau"             # radau | legendre | shooting
     degree = 3
@@ -32,6 +35,7 @@ from pathlib import Path
 from ...model.model import Model
 from ...scene import SCENE_DIR, Scene, load_scene
 from ..feedback import upright_state
+from .planning import PLANNING
 from .problem import SwingUpProblem
 
 __all__ = ["Task", "load_task", "task_names"]
@@ -40,6 +44,7 @@ _PREFIX = "swingup_"
 _TASK_KEYS = {
     "actuation", "torque_limit", "velocity_limit", "stretch_limits", "horizon", "free_horizon", "horizon_bounds",
     "objective", "time_weight", "N", "method", "degree", "success_fraction", "goal",
+    "torque_margin", "tolerance", "planning",
 }  # fmt: skip
 
 
@@ -61,6 +66,11 @@ class Task:
         Collocation degree.
     success_fraction : float
         End effector must stay above this fraction of L1 + L2.
+    tolerance : float
+        Relative defect the plan must meet on the task's own dynamics (error estimate).
+    planning : str
+        Planning model of an elastic task (``auto``, ``rigid``, ``quasi-static``,
+        ``elastic``; see :mod:`pendulab.control.swingup.planning`).
     """
 
     scene: Scene
@@ -69,6 +79,8 @@ class Task:
     method: str
     degree: int
     success_fraction: float
+    tolerance: float = 1e-3
+    planning: str = "auto"
 
     @property
     def name(self) -> str:
@@ -135,7 +147,7 @@ def load_task(name_or_path: str | Path) -> Task:
         The scene, its :class:`SwingUpProblem` (goal default upright at rest,
         overridden by ``[task.goal]``) and the solver settings (defaults
         ``N = 100``, ``method = "radau"``, ``degree = 3``,
-        ``success_fraction = 0.9``).
+        ``success_fraction = 0.9``, ``tolerance = 1e-3``, ``planning = "auto"``).
 
     Raises
     ------
@@ -164,12 +176,18 @@ def load_task(name_or_path: str | Path) -> Task:
         if name not in model.state_names:
             raise ValueError(f"unknown state {name!r} in [task.goal]; expected one of {list(model.state_names)}")
         goal[model.state_names.index(name)] = float(value)
-    scalar_keys = ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight")
+    scalar_keys = ("torque_limit", "velocity_limit", "horizon", "free_horizon", "objective", "time_weight", "torque_margin")
     kw = {k: task[k] for k in scalar_keys if k in task}
     for k in ("stretch_limits", "horizon_bounds"):
         if k in task:
             kw[k] = tuple(task[k])
     problem = SwingUpProblem(model=model, actuation=task["actuation"], x0=scene.x0, goal=goal, name=scene.name, **kw)
+    planning = str(task.get("planning", "auto"))
+    if planning not in PLANNING:
+        raise ValueError(f"planning in [task] of {str(scene.path)!r} must be one of {list(PLANNING)}, got {planning!r}")
+    tolerance = task.get("tolerance", 1e-3)
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0.0 < tolerance < 1.0:
+        raise ValueError(f"tolerance in [task] of {str(scene.path)!r} must be a relative defect in (0, 1), got {tolerance!r}")
     return Task(
         scene=scene,
         problem=problem,
@@ -177,4 +195,6 @@ def load_task(name_or_path: str | Path) -> Task:
         method=str(task.get("method", "radau")),
         degree=int(task.get("degree", 3)),
         success_fraction=float(task.get("success_fraction", 0.9)),
+        tolerance=float(tolerance),
+        planning=planning,
     )

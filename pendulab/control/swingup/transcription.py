@@ -11,11 +11,18 @@ Controls are piecewise constant on the ``N`` intervals (the same zero-order
 hold the controller and the co-simulation master use), so both families
 discretise the same continuous problem and agree as their accuracy improves.
 
+The mesh may be non-uniform: interval ``k`` has length ``T * mesh[k]`` with
+positive fractions summing to one (a uniform mesh is ``mesh[k] = 1 / N``).
+
 The NLP is built once per structure (model kind, method, N, degree, free or
-fixed horizon, integrator) and cached: model parameters, the fixed horizon
-and the time weight are NLP parameters; start, goal, torque and state limits
-are variable bounds. Homotopies and randomized starts therefore re-solve the
-same compiled NLP with different bounds and warm starts.
+fixed horizon, integrator, objective, IPOPT options) and cached: model
+parameters, the fixed horizon, the time weight and the mesh fractions are NLP
+parameters; start, goal, torque and state limits are variable bounds.
+Homotopies, randomized starts and mesh refinements that keep N therefore
+re-solve the same compiled NLP with different parameters, bounds and warm
+starts. Only h-refinement is offered (one collocation degree for all
+intervals): a per-interval degree would make the structure depend on the
+degree pattern, i.e. a new NLP build (~1 s) at every refinement.
 """
 
 from __future__ import annotations
@@ -175,22 +182,73 @@ class Transcription:
         ng = nx * N * (self.degree + 1) if self.method in COLLOCATION else nx * N
         return lbx, ubx, np.zeros(ng), np.zeros(ng)
 
-    def parameters(self, problem: SwingUpProblem) -> np.ndarray:
+    def fractions(self, mesh: Any = None) -> np.ndarray:
+        """Checked interval fractions of a mesh.
+
+        Parameters
+        ----------
+        mesh : array_like, shape (N,), or None
+            Positive relative interval lengths (normalised to sum 1 here);
+            None = uniform.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Interval lengths as fractions of the horizon, summing to 1.
+
+        Raises
+        ------
+        ValueError
+            A mesh of the wrong length or with non-positive or non-finite entries.
+        """
+        if mesh is None:
+            return np.full(self.N, 1.0 / self.N)
+        frac = np.asarray(mesh, dtype=float)
+        if frac.shape != (self.N,):
+            raise ValueError(f"mesh must hold N = {self.N} interval fractions, got shape {frac.shape}")
+        if not np.all(np.isfinite(frac)) or np.any(frac <= 0.0):
+            raise ValueError("mesh interval fractions must be positive and finite")
+        return frac / frac.sum()
+
+    def grid(self, T: float, mesh: Any = None) -> np.ndarray:
+        """Grid times of a mesh.
+
+        Parameters
+        ----------
+        T : float
+            Horizon [s].
+        mesh : array_like, shape (N,), or None
+            Interval fractions (see :meth:`fractions`); None = uniform.
+
+        Returns
+        -------
+        ndarray, shape (N + 1,)
+            ``0 = t_0 < ... < t_N = T`` [s] (the last point exactly T).
+        """
+        t = T * np.concatenate([[0.0], np.cumsum(self.fractions(mesh))])
+        t[-1] = T
+        return t
+
+    def parameters(self, problem: SwingUpProblem, mesh: Any = None) -> np.ndarray:
         """NLP parameter vector of one problem.
 
         Parameters
         ----------
         problem : SwingUpProblem
             Gives the model parameters, the horizon and the time weight.
+        mesh : array_like, shape (N,), or None
+            Interval fractions (see :meth:`fractions`); None = uniform.
 
         Returns
         -------
-        ndarray
-            ``[model.p, horizon [s], time_weight]``.
+        ndarray, shape (n_p + 2 + N,)
+            ``[model.p, horizon [s], time_weight, interval fractions]``.
         """
-        return np.concatenate([problem.model.p, [problem.horizon, problem.time_weight]])
+        return np.concatenate([problem.model.p, [problem.horizon, problem.time_weight], self.fractions(mesh)])
 
-    def solve(self, problem: SwingUpProblem, w0: np.ndarray, torque_lb: np.ndarray, torque_ub: np.ndarray) -> dict[str, Any]:
+    def solve(
+        self, problem: SwingUpProblem, w0: np.ndarray, torque_lb: np.ndarray, torque_ub: np.ndarray, mesh: Any = None
+    ) -> dict[str, Any]:
         """Run IPOPT from ``w0`` with the bounds of :meth:`bounds`.
 
         Parameters
@@ -201,6 +259,8 @@ class Transcription:
             Initial guess; clipped into the variable bounds first.
         torque_lb, torque_ub : ndarray, shape (2,)
             Bounds on (tau1, tau2) [N.m].
+        mesh : array_like, shape (N,), or None
+            Interval fractions (see :meth:`fractions`); None = uniform.
 
         Returns
         -------
@@ -211,7 +271,7 @@ class Transcription:
         lbx, ubx, lbg, ubg = self.bounds(problem, torque_lb, torque_ub)
         # IPOPT needs a start within the bounds it treats as hard (fixed start and goal).
         w0 = np.clip(w0, lbx, ubx)
-        out = self.solver(x0=w0, p=self.parameters(problem), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        out = self.solver(x0=w0, p=self.parameters(problem, mesh), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         return {
             "w": np.asarray(out["x"]).ravel(),
             "f": float(out["f"]),
@@ -294,10 +354,12 @@ def _build(
     SX = ca.SX if method in COLLOCATION else ca.MX
     X = SX.sym("X", nx, N + 1)
     U = SX.sym("U", 2, N)
-    P = SX.sym("P", npar + 2)
+    # Parameters: model, fixed horizon, time weight, then the N interval fractions of the mesh
+    # (so a re-meshed problem with the same N reuses this NLP).
+    P = SX.sym("P", npar + 2 + N)
     pm, T_fixed, w_time = P[:npar], P[npar], P[npar + 1]
     T = SX.sym("T") if free else T_fixed
-    h = T / N
+    h = T * P[npar + 2 :].T  # (1, N) interval lengths [s]
     if method in COLLOCATION:
         Xc = SX.sym("Xc", nx, N * degree)
         defects, x_end = _collocation_maps(kind, method, degree, N)(X[:, :N], ca.reshape(Xc, nx * degree, N), U, h, pm)
@@ -310,7 +372,7 @@ def _build(
         w_parts = [ca.vec(X), ca.vec(U)]
     if free:
         w_parts.append(T)
-    effort = h * ca.sumsqr(U)
+    effort = ca.dot(h.T, ca.sum1(U**2).T)
     J = {"effort": effort, "time": T + _TIME_REGULARISER * effort, "mix": w_time * T + effort}[objective]
     nlp = {"x": ca.vertcat(*w_parts), "f": J, "g": g, "p": P}
     ipopt = {"print_level": 0, "sb": "yes", "max_iter": 1000, "tol": 1e-8, "acceptable_tol": 1e-6, "mu_strategy": "adaptive"}

@@ -1,0 +1,435 @@
+"""Tracking NMPC: one receding-horizon controller for swing-up and balance (a :class:`SampledController`).
+
+Each sample solves the multiple-shooting problem of :mod:`.ocp` from the measured
+state: track the reference (an offline-optimized swing-up, resampled to the
+sample grid) over ``horizon`` intervals, with the discrete LQR cost-to-go about
+the goal as terminal cost. After the reference ends the reference is the goal
+itself, so the same problem becomes regulation about upright: one controller
+for swing-up and balance. A from-scratch NMPC over a 0.4 s window cannot see a
+swing-up of under-actuated pendulums through (the energy has to be pumped over
+seconds); the plan supplies that foresight, the NMPC the feedback, torque
+limits and soft state limits the linear TVLQR tracker does not have.
+
+Design choices (measured in ``benchmarks/results/nmpc.md``):
+
+* the warm start shifts the previous solution (states, torques, multipliers) by
+  one stage; the plant angles are wrapped to the branch of the reference;
+* ``solver="sqp"`` (default): CasADi ``sqpmethod`` with the structure-exploiting
+  QP solver ``hpipm`` and a Gauss-Newton Hessian, one SQP iteration per sample
+  (real-time iteration); ``"ipopt"`` solves to convergence; ``"fatrop"`` is the
+  structure-exploiting interior-point alternative;
+* a failed solve never raises: the controller applies the previous plan's next
+  torque (or the LQR fallback), counts the failure and keeps going;
+* an elastic plant is predicted with the elastic model itself (``planning="model"``,
+  the default), tracking the rigid counterpart's swing-up lifted to quasi-static
+  spring lengths (:func:`pendulab.model.quasistatic.quasi_static_lengths`); RK4
+  substeps are chosen for the spring modes. Planning on the rigid counterpart
+  (``planning="rigid"``: angles and rates projected, 4 states, 4x cheaper) was
+  measured to lose the stiff undamped springs of the shipped elastic tasks: the
+  projection hides the spring-driven part of the link rates, the feedback excites
+  the springs and the QP fails (see docs/nmpc.md).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..._checks import positive_float
+from ...model.counterpart import rigid_counterpart, rigid_state
+from ...model.model import INPUT_NAMES, Model
+from ..feedback import actuated_inputs, upright_state
+from ..lqr import lqr_balance, wrap_state_error
+from ..tracking import resample_reference
+from .ocp import SOLVERS, ShootingOCP, build_ocp
+
+__all__ = ["NMPCOptions", "NMPCController", "nmpc_controller"]
+
+# Return statuses, besides success, whose iterate is used: a real-time iteration stops after its iteration
+# cap by design; an interior-point iterate cut short is not feasible and is not used.
+_USABLE = {"sqp": {"Maximum_Iterations_Exceeded"}, "ipopt": {"Solved_To_Acceptable_Level"}, "fatrop": set()}
+
+
+@dataclass(frozen=True)
+class NMPCOptions:
+    """Settings of the NMPC problem and its solver.
+
+    Attributes
+    ----------
+    horizon : int
+        Shooting intervals N (prediction ``N * sample_time`` seconds).
+    sample_time : float
+        Controller sample time and interval length [s].
+    substeps : int or None
+        RK4 steps per interval; default 2 for a rigid planning model, and for an
+        elastic one enough that ``h * omega_fast / substeps <= 1`` (RK4 is stable up to 2.8).
+    planning : {"model", "rigid"}
+        Prediction model of an elastic plant: the elastic model itself (default), or its
+        rigid counterpart (a rigid plant is always predicted with itself).
+    solver : {"sqp", "ipopt", "fatrop"}
+        See :mod:`pendulab.control.nmpc.controller`.
+    max_iter : int or None
+        Iterations per sample; default 1 for ``sqp`` (real-time iteration), 50 otherwise.
+    q_angle, q_rate : float
+        Stage weights on angle errors [1/rad^2] and rate errors [s^2/rad^2].
+    r : float or None
+        Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
+    velocity_limit : float or None
+        Soft bound on |omega1|, |omega2| [rad/s] (slack-penalized).
+    slack_weight : float
+        Weight on the slack of the soft bounds.
+    slack_tol : float
+        A solution whose slack exceeds this [rad/s] counts as infeasible (the hard bound would be violated).
+    """
+
+    horizon: int = 20
+    sample_time: float = 0.02
+    substeps: int | None = None
+    planning: str = "model"
+    solver: str = "sqp"
+    max_iter: int | None = None
+    q_angle: float = 10.0
+    q_rate: float = 1.0
+    r: float | None = None
+    velocity_limit: float | None = None
+    slack_weight: float = 1e3
+    slack_tol: float = 1e-3
+
+    def __post_init__(self) -> None:
+        for name in ("horizon", "substeps", "max_iter"):
+            v = getattr(self, name)
+            if v is None and name != "horizon":
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        if self.planning not in ("rigid", "model"):
+            raise ValueError(f"planning must be 'rigid' or 'model', got {self.planning!r}")
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {list(SOLVERS)}, got {self.solver!r}")
+        positive_float("sample_time", self.sample_time, "[s]")
+        for name in ("q_angle", "q_rate", "slack_weight", "slack_tol"):
+            positive_float(name, getattr(self, name))
+        if self.r is not None:
+            positive_float("r", self.r)
+        if self.velocity_limit is not None:
+            positive_float("velocity_limit", self.velocity_limit, "[rad/s]")
+
+    @property
+    def iterations_cap(self) -> int:
+        """Iteration cap actually used (``max_iter`` or the solver's default)."""
+        return self.max_iter if self.max_iter is not None else (1 if self.solver == "sqp" else 50)
+
+
+@dataclass
+class NMPCController:
+    """Receding-horizon tracking of a reference, then regulation about its end (build with :func:`nmpc_controller`).
+
+    Attributes
+    ----------
+    model : Model
+        Plant model (its state is what ``__call__`` receives).
+    plan_model : Model
+        Prediction model (``model``, or the rigid counterpart of an elastic one with ``planning="rigid"``).
+    options : NMPCOptions
+        Problem and solver settings.
+    input_names : tuple of str
+        Driven torques, in output order.
+    u_max : float
+        Hard torque bound [N.m].
+    x_ref : ndarray, shape (K, nx_plan)
+        Reference states on the sample grid (planning model).
+    u_ref : ndarray, shape (K, m)
+        Reference torques on the sample grid [N.m].
+    goal : ndarray, shape (nx_plan,)
+        Held after the reference (upright at rest by default).
+    ocp : ShootingOCP
+        The built NLP.
+    K_lqr : ndarray, shape (m, nx_plan)
+        Discrete LQR gain about ``goal`` (fallback before any plan exists).
+    solve_times : list of float
+        Wall time of each call [s] (state mapping, solve and warm start included).
+    iterations : list of int
+        Solver iterations of each call.
+    failures : int
+        Calls whose solve failed (a fallback torque was applied).
+    infeasible : int
+        Calls whose solution needed slack above ``options.slack_tol`` on the soft state bounds.
+    last_status : str
+        Solver return status of the latest call.
+    """
+
+    model: Model
+    plan_model: Model
+    options: NMPCOptions
+    input_names: tuple[str, ...]
+    u_max: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    goal: np.ndarray
+    ocp: ShootingOCP
+    K_lqr: np.ndarray
+    solve_times: list[float] = field(default_factory=list)
+    iterations: list[int] = field(default_factory=list)
+    failures: int = 0
+    infeasible: int = 0
+    last_status: str = ""
+
+    def __post_init__(self) -> None:
+        # Warm start (previous solution, multipliers, its sample index): internal, not dataclass fields.
+        self._w: np.ndarray | None = None
+        self._lam_x: np.ndarray | None = None
+        self._lam_g: np.ndarray | None = None
+        self._k_prev = -1
+
+    @property
+    def sample_time(self) -> float:
+        """Sample period [s]."""
+        return self.options.sample_time
+
+    def reset(self) -> None:
+        """Forget the warm start and the statistics before a new run."""
+        self._w = self._lam_x = self._lam_g = None
+        self._k_prev = -1
+        self.solve_times, self.iterations = [], []
+        self.failures = self.infeasible = 0
+        self.last_status = ""
+
+    def plan_state(self, x: np.ndarray) -> np.ndarray:
+        """The planning model's state of a plant state (rigid projection of an elastic state).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            Plant state.
+
+        Returns
+        -------
+        ndarray, shape (nx_plan,)
+            Angles [rad] and rates [rad/s] (and lengths for an elastic planning model).
+        """
+        x = np.asarray(x, dtype=float)
+        return x.copy() if self.plan_model is self.model else rigid_state(self.model, x)
+
+    def window(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Reference over the prediction window starting at sample ``k``; the goal after the reference.
+
+        Parameters
+        ----------
+        k : int
+            Sample index (time ``k * sample_time``).
+
+        Returns
+        -------
+        xr : ndarray, shape (N+1, nx_plan)
+        ur : ndarray, shape (N, m)
+        """
+        N, K = self.ocp.N, len(self.x_ref)
+        idx = np.arange(k, k + N + 1)
+        xr = np.where((idx < K)[:, None], self.x_ref[np.minimum(idx, K - 1)], self.goal)
+        ur = np.where((idx[:N] < K)[:, None], self.u_ref[np.minimum(idx[:N], K - 1)], 0.0)
+        return xr, ur
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,)."""
+        start = time.perf_counter()
+        ocp, m = self.ocp, self.ocp.m
+        k = int(np.floor(t / self.sample_time + 1e-6))
+        xr, ur = self.window(k)
+        xp = self.plan_state(x)
+        xp = xr[0] + wrap_state_error(xp - xr[0], self.plan_model.state_names)  # same branch as the reference
+        w0, lam_x, lam_g = self._guess(k, xr, ur, xp)
+        lbx, ubx = ocp.lbx.copy(), ocp.ubx.copy()
+        lbx[ocp.x_idx[0]] = ubx[ocp.x_idx[0]] = xp
+        w = None
+        try:
+            sol = ocp.solver(x0=w0, p=np.concatenate([xr.ravel(), ur.ravel()]), lbx=lbx, ubx=ubx,
+                             lbg=ocp.lbg, ubg=ocp.ubg, lam_x0=lam_x, lam_g0=lam_g)  # fmt: skip
+            st = ocp.solver.stats()
+            self.last_status = str(st.get("return_status", ""))
+            w = np.asarray(sol["x"], dtype=float).ravel()
+            if not (st.get("success") or self.last_status in _USABLE[self.options.solver]) or not np.all(np.isfinite(w)):
+                w = None
+            iters = int(st.get("iter_count", 0))
+        except RuntimeError as exc:  # a solver exception must not stop the control loop
+            self.last_status, iters = f"error: {exc}".splitlines()[0], 0
+        if w is None:
+            self.failures += 1
+            u = self._fallback(k, xp)
+        else:
+            self._w, self._k_prev = w, k
+            self._lam_x = np.asarray(sol["lam_x"], dtype=float).ravel()
+            self._lam_g = np.asarray(sol["lam_g"], dtype=float).ravel()
+            if ocp.ns and float(np.max(w[ocp.u_idx[:, m:]])) > self.options.slack_tol:
+                self.infeasible += 1
+            u = w[ocp.u_idx[0, :m]]
+        self.iterations.append(iters)
+        self.solve_times.append(time.perf_counter() - start)
+        return np.clip(u, -self.u_max, self.u_max)
+
+    def _guess(self, k: int, xr: np.ndarray, ur: np.ndarray, xp: np.ndarray) -> tuple[np.ndarray, Any, Any]:
+        """Warm start: the previous solution shifted to sample ``k``; cold: the reference window."""
+        ocp = self.ocp
+        if self._w is None or k < self._k_prev:
+            w0 = np.zeros(ocp.n_w)
+            w0[ocp.x_idx] = xr
+            w0[ocp.u_idx[:, : ocp.m]] = ur
+            w0[ocp.x_idx[0]] = xp
+            return w0, 0.0, 0.0
+        s = min(k - self._k_prev, ocp.N)
+        X, U = self._w[ocp.x_idx], self._w[ocp.u_idx]
+        X = np.vstack([X[s:], np.repeat(X[-1:], s, axis=0)])
+        U = np.vstack([U[s:], np.repeat(U[-1:], s, axis=0)])
+        w0 = np.empty(ocp.n_w)
+        w0[ocp.x_idx], w0[ocp.u_idx] = X, U
+        w0[ocp.x_idx[0]] = xp
+        lx = self._lam_x.copy()
+        lx[ocp.u_idx] = np.vstack([self._lam_x[ocp.u_idx][s:], np.repeat(self._lam_x[ocp.u_idx][-1:], s, axis=0)])
+        G = self._lam_g.reshape(ocp.N, ocp.g_rows)
+        lg = np.vstack([G[s:], np.repeat(G[-1:], s, axis=0)]).ravel()
+        return w0, lx, lg
+
+    def _fallback(self, k: int, xp: np.ndarray) -> np.ndarray:
+        """The previous plan's torque for sample ``k`` while it lasts, else LQR about the goal."""
+        s = k - self._k_prev
+        if self._w is not None and 0 <= s < self.ocp.N:
+            return self._w[self.ocp.u_idx[s, : self.ocp.m]]
+        return -self.K_lqr @ wrap_state_error(xp - self.goal, self.plan_model.state_names)
+
+    def stats(self) -> dict[str, float | int | str]:
+        """Per-call statistics of the run so far.
+
+        Returns
+        -------
+        dict
+            ``solve_time_median``, ``solve_time_max`` [s], ``iterations_median``,
+            ``iterations_max``, ``failures`` and ``infeasible`` (counts of calls),
+            ``n_calls``, ``solver`` and ``last_status``. Times are nan before the first call.
+        """
+        ts, it = np.asarray(self.solve_times), np.asarray(self.iterations)
+        n = len(ts)
+        return {
+            "solver": self.options.solver,
+            "n_calls": n,
+            "solve_time_median": float(np.median(ts)) if n else float("nan"),
+            "solve_time_max": float(ts.max()) if n else float("nan"),
+            "iterations_median": float(np.median(it)) if n else float("nan"),
+            "iterations_max": int(it.max()) if n else 0,
+            "failures": int(self.failures),
+            "infeasible": int(self.infeasible),
+            "last_status": self.last_status,
+        }
+
+
+def nmpc_controller(
+    model: Model,
+    *,
+    actuation: str | Sequence[str] = "full",
+    u_max: float = 20.0,
+    reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    goal: np.ndarray | None = None,
+    options: NMPCOptions | None = None,
+    **option_changes: Any,
+) -> NMPCController:
+    """Build an NMPC controller tracking ``reference`` (if any), then holding ``goal``.
+
+    Parameters
+    ----------
+    model : Model
+        Plant model (rigid or elastic; see ``NMPCOptions.planning``).
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        Driven torques.
+    u_max : float
+        Hard torque bound [N.m].
+    reference : (t, x, u), optional
+        Reference times [s] shape (K,), states shape (K, nx) of ``model`` or
+        rigid states shape (K, 4) (lifted to quasi-static spring lengths for an
+        elastic prediction model), torques (tau1, tau2) [N.m] shape (K, 2) or (K-1, 2).
+        None: regulation about ``goal`` only.
+    goal : ndarray, shape (nx_plan,), optional
+        Planning-model state held after the reference; default upright at rest.
+    options : NMPCOptions, optional
+        Settings (default :class:`NMPCOptions`).
+    **option_changes
+        :class:`NMPCOptions` fields overriding ``options`` (e.g. ``solver="ipopt"``, ``horizon=30``).
+
+    Returns
+    -------
+    NMPCController
+        Ready to run (call :meth:`NMPCController.reset` between runs).
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a Model, or an unknown option name.
+    ValueError
+        Bad options, torque limit, actuation or reference shapes.
+    """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
+    opts = options if options is not None else NMPCOptions()
+    unknown = sorted(set(option_changes) - set(NMPCOptions.__dataclass_fields__))
+    if unknown:
+        raise TypeError(f"unknown NMPC option(s) {unknown}; expected some of {sorted(NMPCOptions.__dataclass_fields__)}")
+    opts = NMPCOptions(**{**opts.__dict__, **option_changes})
+    u_max = positive_float("u_max", u_max, "[N.m]")
+    names = actuated_inputs(actuation)
+    plan = rigid_counterpart(model) if opts.planning == "rigid" else model
+    h = opts.sample_time
+    goal = upright_state(plan) if goal is None else plan.check_state(goal, "goal")
+    if goal.ndim != 1:
+        raise ValueError(f"goal must be a single state of shape ({plan.nx},), got {goal.shape}")
+    cols = [INPUT_NAMES.index(n) for n in names]
+    if reference is None:
+        x_ref, u_ref = goal[None, :], np.zeros((1, len(names)))
+    else:
+        t, x, u = reference
+        x = np.asarray(x, dtype=float)
+        u = np.asarray(u, dtype=float)
+        if u.ndim != 2 or u.shape[1] != len(INPUT_NAMES):
+            raise ValueError(f"reference torques must have shape (K, 2) (tau1, tau2), got {u.shape}")
+        if x.ndim == 2 and x.shape[1] == model.nx and plan is not model:
+            x = rigid_state(model, x)
+        elif x.ndim == 2 and x.shape[1] == 4 and plan.kind == "elastic":
+            x = _lift_quasi_static(plan, x, u)
+        if x.ndim != 2 or x.shape[1] != plan.nx:
+            raise ValueError(f"reference states must have shape (K, {model.nx}) or (K, 4), got {x.shape}")
+        _, x_ref, u_full = resample_reference(t, x, u, h, plan)
+        x_ref, u_ref = x_ref, u_full[:, cols]
+    n_ang = [i for i, n in enumerate(plan.state_names) if n.startswith("theta")]
+    n_rate = [i for i, n in enumerate(plan.state_names) if n.startswith("omega")]
+    Q = np.zeros((plan.nx, plan.nx))
+    Q[n_ang, n_ang], Q[n_rate, n_rate] = opts.q_angle, opts.q_rate
+    n_len = [i for i, n in enumerate(plan.state_names) if n[0] in "rv"]
+    Q[n_len, n_len] = [100.0 if plan.state_names[i][0] == "r" else 0.1 for i in n_len]  # springs: as default_weights
+    R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)
+    top = lqr_balance(plan, names, Q, R, h, at=goal)
+    ocp = build_ocp(
+        plan, names, N=opts.horizon, sample_time=h, substeps=_substeps(plan, h, opts.substeps), Q=Q, R=R, P=top.P, u_max=u_max,
+        velocity_limit=opts.velocity_limit, slack_weight=opts.slack_weight, solver=opts.solver, max_iter=opts.iterations_cap,
+    )  # fmt: skip
+    return NMPCController(model, plan, opts, names, u_max, x_ref, u_ref, goal, ocp, top.K)
+
+
+def _substeps(plan: Model, h: float, substeps: int | None) -> int:
+    """RK4 steps per interval: given, 2 for a rigid model, or ``h * omega_fast`` rounded up for an elastic one."""
+    if substeps is not None:
+        return int(substeps)
+    if plan.kind == "rigid":
+        return 2
+    from ...analysis.equilibria import equilibrium
+    from ...analysis.linearize import linearize
+
+    fast = float(np.max(np.abs(linearize(plan, equilibrium(plan, "down-down")).eigenvalues)))
+    return max(2, int(np.ceil(h * fast)))
+
+
+def _lift_quasi_static(plan: Model, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Elastic states of a rigid reference: same angles and rates, quasi-static spring lengths, v = 0."""
+    from ...model.quasistatic import quasi_static_lengths
+
+    r = np.array([quasi_static_lengths(plan, xk[:2], xk[2:], u[min(k, len(u) - 1)]) for k, xk in enumerate(x)])
+    return np.column_stack([x[:, :2], r, x[:, 2:], np.zeros_like(r)])

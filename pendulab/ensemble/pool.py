@@ -1,0 +1,125 @@
+"""A generic parallel map over independent runs: forked worker processes on Linux, in-process otherwise.
+
+The ensemble engine (:mod:`.engine`) integrates many states of one model in
+heyoka's batch mode; closed loops with a Python controller per run (the
+robustness scorecard) cannot be batched that way, but they are independent and
+each costs tens of milliseconds, so whole runs go to worker processes.
+
+Workers are *forked*: they inherit the caller's memory, so ``fn`` may be a
+closure over unpicklable objects (CasADi Functions, a solved trajectory
+optimization); only the items and the results cross the process boundary.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any, TypeVar
+
+__all__ = ["map_runs", "default_workers"]
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+# Functions being mapped, by job id; set before the fork so the workers inherit them (never pickled).
+_JOBS: dict[int, Callable[[Any], Any]] = {}
+_IDS = itertools.count()
+
+
+def default_workers() -> int:
+    """Number of local worker processes by default.
+
+    Returns
+    -------
+    int
+        ``os.cpu_count()`` (at least 1).
+    """
+    return max(1, os.cpu_count() or 1)
+
+
+def _run_chunk(job: int, chunk: list[Any]) -> list[Any]:
+    fn = _JOBS[job]
+    return [fn(item) for item in chunk]
+
+
+def map_runs(
+    fn: Callable[[T], R],
+    items: Iterable[T],
+    *,
+    workers: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    chunks_per_worker: int = 4,
+) -> list[R]:
+    """``[fn(item) for item in items]``, spread over forked worker processes.
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(item) -> result``; any callable (a closure is fine: workers are
+        forked, ``fn`` is not pickled). Items and results must be picklable.
+    items : iterable
+        The runs, e.g. small run descriptions.
+    workers : int, optional
+        Worker processes (default :func:`default_workers`). With 1 worker, a
+        single item, or where ``fork`` is unavailable the map runs in this
+        process (same results: ``fn`` must not depend on where it runs).
+    progress : callable, optional
+        ``progress(done, total)`` after every finished chunk of items.
+    chunks_per_worker : int
+        Items are sent in about ``workers * chunks_per_worker`` chunks (fewer
+        round trips; more chunks balance uneven run times better).
+
+    Returns
+    -------
+    list
+        Results in the order of ``items``.
+
+    Raises
+    ------
+    ValueError
+        ``workers`` or ``chunks_per_worker`` below 1.
+    Exception
+        Whatever ``fn`` raises (the first failure ends the map).
+    """
+    todo = list(items)
+    total = len(todo)
+    n_workers = default_workers() if workers is None else int(workers)
+    if n_workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers!r}")
+    if chunks_per_worker < 1:
+        raise ValueError(f"chunks_per_worker must be >= 1, got {chunks_per_worker!r}")
+    n_workers = min(n_workers, max(total, 1))
+    if n_workers == 1 or total <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+        out: list[R] = []
+        for k, item in enumerate(todo, 1):
+            out.append(fn(item))
+            if progress is not None:
+                progress(k, total)
+        return out
+    size = max(1, math.ceil(total / (n_workers * chunks_per_worker)))
+    starts = list(range(0, total, size))
+    results: list[list[R] | None] = [None] * len(starts)
+    job = next(_IDS)
+    _JOBS[job] = fn
+    try:
+        ctx = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
+            futures = {pool.submit(_run_chunk, job, todo[s : s + size]): i for i, s in enumerate(starts)}
+            done = 0
+            try:
+                for fut in as_completed(futures):
+                    results[futures[fut]] = fut.result()
+                    done += len(results[futures[fut]] or ())
+                    if progress is not None:
+                        progress(done, total)
+            except BaseException:
+                # A failed run or Ctrl-C: drop the queued chunks instead of finishing them.
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise
+    finally:
+        del _JOBS[job]
+    return [r for chunk in results for r in (chunk or ())]

@@ -1,0 +1,150 @@
+"""NMPC (pendulab.control.nmpc): balance, limits, warm start, solver agreement, bad input, and the cosim CLI."""
+
+import json
+
+import numpy as np
+import pytest
+
+import pendulab as pl
+from pendulab.control.feedback import SampledController, as_feedback, upright_state
+from pendulab.control.nmpc import NMPCOptions, nmpc_controller
+from pendulab.control.swingup.tasks import load_task
+
+
+@pytest.fixture(scope="module")
+def pendubot():
+    return load_task("swingup_pendubot").model
+
+
+def _run(model, ctrl, x0, t_final):
+    ctrl.reset()
+    return pl.simulate(model, x0, t_final, dt=ctrl.sample_time, u=as_feedback(ctrl, model), rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("actuation", ["pendubot", "full"])
+def test_catches_upright_perturbation_within_torque_limit(pendubot, actuation):
+    ctrl = nmpc_controller(pendubot, actuation=actuation, u_max=6.0, horizon=15)
+    assert isinstance(ctrl, SampledController)
+    x0 = upright_state(pendubot) + np.array([0.15, -0.1, 0.3, 0.0])
+    traj = _run(pendubot, ctrl, x0, 3.0)
+    err = np.abs(traj.x[-1] - upright_state(pendubot))
+    # 3 s is ~10 closed-loop time constants of the terminal LQR: the error is down by orders of magnitude.
+    assert err.max() < 1e-3
+    assert np.abs(traj.u).max() <= 6.0 + 1e-12  # hard torque bound (plus float rounding)
+    st = ctrl.stats()
+    assert st["failures"] == 0 and st["infeasible"] == 0 and st["n_calls"] == 150
+    assert 0 < st["solve_time_median"] <= st["solve_time_max"]
+    if actuation == "pendubot":
+        assert np.all(traj.u[:, 1] == 0.0)  # the passive elbow gets no torque
+
+
+def test_tiny_torque_limit_is_reported_not_raised(pendubot):
+    # 0.01 N.m cannot hold a 0.3 rad lean: the soft rate bound must be violated, and said so.
+    ctrl = nmpc_controller(pendubot, actuation="pendubot", u_max=0.01, horizon=10, velocity_limit=2.0)
+    x0 = upright_state(pendubot) + np.array([0.3, 0.0, 0.0, 0.0])
+    traj = _run(pendubot, ctrl, x0, 2.0)
+    st = ctrl.stats()
+    assert st["infeasible"] > 0 and st["n_calls"] == 100
+    assert np.abs(traj.u[:, 0]).max() <= 0.01 + 1e-15  # torques stay within the tiny limit
+    assert np.abs(traj.x[-1, 0] - np.pi) > 0.5  # it falls: nothing is caught with 0.01 N.m
+
+
+def test_failed_solve_falls_back_without_raising(pendubot):
+    # One interior-point iteration cannot converge from a cold start: counted as a failure, loop continues.
+    ctrl = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=10, solver="ipopt", max_iter=1)
+    x0 = upright_state(pendubot) + np.array([0.1, 0.0, 0.0, 0.0])
+    u = ctrl(0.0, x0)
+    assert ctrl.stats()["failures"] == 1 and np.isfinite(u).all() and abs(u[0]) <= 6.0
+
+
+def test_warm_start_reduces_iterations(pendubot):
+    ctrl = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=15, solver="ipopt")
+    x0 = upright_state(pendubot) + np.array([0.2, -0.1, 0.0, 0.0])
+    traj = _run(pendubot, ctrl, x0, 0.4)
+    warm = ctrl.iterations[1:]
+    cold = []
+    for k in range(1, len(warm) + 1):
+        ctrl.reset()  # forget the previous solution: start from the reference window
+        ctrl(traj.t[k], traj.x[k])
+        cold.append(ctrl.iterations[0])
+    assert np.mean(warm) < np.mean(cold)
+
+
+def test_solvers_agree_on_first_move(pendubot):
+    x0 = upright_state(pendubot) + np.array([0.1, -0.05, 0.0, 0.2])
+    moves = {}
+    for solver, max_iter in (("ipopt", 100), ("sqp", 30), ("fatrop", 100)):
+        ctrl = nmpc_controller(pendubot, actuation="full", u_max=6.0, horizon=10, solver=solver, max_iter=max_iter)
+        moves[solver] = ctrl(0.0, x0)
+        assert ctrl.stats()["failures"] == 0, solver
+    # Converged solutions of one NLP: agreement to the solvers' tolerances (1e-6 on optimality).
+    np.testing.assert_allclose(moves["sqp"], moves["ipopt"], atol=1e-4)
+    np.testing.assert_allclose(moves["fatrop"], moves["ipopt"], atol=1e-4)
+
+
+def test_rti_iterations_converge_to_full_solve(pendubot):
+    x0 = upright_state(pendubot) + np.array([0.05, 0.0, 0.0, 0.0])
+    rti = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=10)
+    full = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=10, max_iter=30)
+    u_full = full(0.0, x0)
+    # Near upright the NLP is almost a QP: one Gauss-Newton step from the cold guess lands within 10 %.
+    np.testing.assert_allclose(rti(0.0, x0), u_full, rtol=0.1)
+    for _ in range(5):  # same sample again: each call is one more SQP iteration from the previous iterate
+        u = rti(0.0, x0)
+    np.testing.assert_allclose(u, u_full, rtol=1e-6)  # converged to the full solve's tolerance
+
+
+def test_elastic_plant_prediction_models():
+    model = pl.elastic(k1=2000.0, k2=2000.0)
+    x = upright_state(model)
+    rigid = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, planning="rigid")
+    assert rigid.plan_model.kind == "rigid" and rigid.ocp.nx == 4
+    np.testing.assert_array_equal(rigid.plan_state(x), x[[0, 1, 4, 5]])  # angles and link rates kept
+    # Default: the elastic model itself, tracking a rigid reference lifted to quasi-static spring lengths.
+    ref = (np.array([0.0, 0.5]), np.array([[np.pi, np.pi, 0.0, 0.0]] * 2), np.zeros((2, 2)))
+    own = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, reference=ref, sample_time=0.02)
+    assert own.plan_model is model and own.ocp.nx == 8
+    np.testing.assert_allclose(own.x_ref[0], x, atol=1e-9)  # quasi-static at rest upright = the equilibrium
+    assert own.ocp.step.numel_out() == 8
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "match"),
+    [
+        ({"solver": "nope"}, ValueError, "solver"),
+        ({"horizon": 0}, ValueError, "horizon"),
+        ({"sample_time": -0.02}, ValueError, "sample_time"),
+        ({"u_max": float("nan")}, ValueError, "u_max"),
+        ({"actuation": "both"}, ValueError, "actuation"),
+        ({"wibble": 1}, TypeError, "wibble"),
+        ({"reference": (np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 2)))}, ValueError, "reference states"),
+        ({"reference": (np.arange(3.0), np.zeros((3, 4)), np.zeros((3, 1)))}, ValueError, "reference torques"),
+    ],
+)
+def test_bad_input(pendubot, kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        nmpc_controller(pendubot, **kwargs)
+
+
+def test_bad_model_and_options():
+    with pytest.raises(TypeError, match="model"):
+        nmpc_controller("rigid")
+    with pytest.raises(ValueError, match="max_iter"):
+        NMPCOptions(max_iter=0)
+
+
+@pytest.mark.needs_cc
+def test_cosim_cli_swingup_through_fmu(tmp_path):
+    from pendulab.cli import main
+
+    out = tmp_path / "nmpc"
+    status = main(["cosim", "--task", "swingup_acrobot", "--controller", "nmpc", "--t-final", "4", "--no-gif", "--out", str(out)])
+    s = json.loads((out / "summary.json").read_text())
+    assert status == 0 and s["controller"] == "nmpc" and s["task"] == "swingup_acrobot" and s["actuation"] == "acrobot"
+    assert s["success"] is True and s["t_up"] < 3.0  # the 3 s plan is tracked, then held upright
+    assert s["x0"] == {"theta1": 0.0, "theta2": 0.0, "omega1": 0.0, "omega2": 0.0}  # from hanging at rest
+    assert abs(s["x_final"]["theta1"] - np.pi) < 1e-2 and abs(s["x_final"]["theta2"] - np.pi) < 1e-2  # held upright
+    assert s["max_abs_torque"] <= 6.0 + 1e-12  # the task's torque limit
+    assert 0 < s["solve_time_median"] <= s["solve_time_max"]
+    assert s["iterations"] == {"median": 1.0, "max": 1}  # real-time iteration: one SQP step per sample
+    assert s["failures"] == 0 and s["controller_stats"]["n_calls"] == 200 and s["sample_time"] == 0.02

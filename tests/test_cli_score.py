@@ -1,0 +1,75 @@
+"""The ``pendulab score`` command: scorecard files and JSON, bad input, Ctrl-C, --realai wiring."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from pendulab.cli import main
+
+
+def test_score_writes_json_markdown_png(tmp_path, capsys):
+    argv = ["score", "--controller", "lqr", "--task", "pendubot", "--runs", "2", "--categories", "delay,torque_noise"]
+    status = main([*argv, "--json", "--out", str(tmp_path), "--no-progress", "--workers", "1"])
+    assert status == 0
+    printed = json.loads(capsys.readouterr().out)
+    written = json.loads((tmp_path / "scorecard.json").read_text())
+    assert printed["categories"] == written["categories"]
+    assert [c["name"] for c in written["categories"]] == ["delay", "torque_noise"]
+    # delay is deterministic (one run per level), torque noise stochastic (--runs per level).
+    assert written["categories"][0]["runs"] == [1] * 5 and written["categories"][1]["runs"] == [2] * 5
+    # LQR balance started hanging never swings up: every run fails, and says why.
+    assert written["overall"] == 0.0 and written["n_runs"] == 15 and len(written["failures"]) == 15
+    assert all("end effector below" in f["reason"] for f in written["failures"])
+    assert "| delay |" in (tmp_path / "scorecard.md").read_text()
+    assert (tmp_path / "scorecard.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--controller", "pid", "--task", "pendubot"], "--controller 'pid'"),
+        (["--controller", "lqr", "--task", "nope"], "unknown task"),
+        (["--controller", "lqr", "--task", "pendubot", "--categories", "gravity"], "unknown ['gravity']"),
+        (["--controller", "lqr", "--task", "pendubot", "--runs", "0"], "--runs '0'"),
+        (["--controller", "lqr", "--task", "pendubot", "--categories", "stiffness"], "does not apply"),
+        (["--task", "pendubot"], "--controller and --task are required"),
+        (["--realai", "--controller", "best", "--task", "pendubot_elastic"], "pendubot or acrobot"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(argv, message, capsys):
+    assert main(["score", *argv, "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_ctrl_c_exits_130(monkeypatch, capsys):
+    import pendulab.control.scorecard as sc
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sc, "score", interrupted)
+    assert main(["score", "--controller", "lqr", "--task", "pendubot", "--no-progress"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+
+
+def test_realai_calls_realai_score(monkeypatch, tmp_path, capsys):
+    realai = pytest.importorskip("pendulab.control.realai")
+    calls = {}
+
+    class Result:
+        def to_dict(self):
+            return {"task": "acrobot", "controller": "best", "success": True, "score": 0.5, "criteria": {"swingup_time": 1.0}}
+
+    def fake(task, controller="best", *, csv_path=None):
+        calls.update(task=task, controller=controller, csv_path=csv_path)
+        return Result()
+
+    monkeypatch.setattr(realai, "realai_score", fake, raising=False)
+    status = main(["score", "--realai", "--task", "acrobot", "--controller", "best", "--out", str(tmp_path), "--json"])
+    assert status == 0
+    assert calls == {"task": "acrobot", "controller": "best", "csv_path": tmp_path / "realai.csv"}
+    assert json.loads(capsys.readouterr().out)["score"] == 0.5
+    assert json.loads((tmp_path / "realai.json").read_text())["success"] is True
