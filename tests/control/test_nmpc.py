@@ -126,6 +126,14 @@ def test_bad_input(pendubot, kwargs, exc, match):
         nmpc_controller(pendubot, **kwargs)
 
 
+def test_bad_measurement_raises(pendubot):
+    ctrl = nmpc_controller(pendubot, actuation="pendubot", horizon=5)
+    with pytest.raises(ValueError, match="finite state"):
+        ctrl(0.0, np.array([np.nan, 0.0, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="shape"):
+        ctrl(0.0, np.zeros(3))
+
+
 def test_bad_model_and_options():
     with pytest.raises(TypeError, match="model"):
         nmpc_controller("rigid")
@@ -148,3 +156,10 @@ def test_cosim_cli_swingup_through_fmu(tmp_path):
     assert 0 < s["solve_time_median"] <= s["solve_time_max"]
     assert s["iterations"] == {"median": 1.0, "max": 1}  # real-time iteration: one SQP step per sample
     assert s["failures"] == 0 and s["controller_stats"]["n_calls"] == 200 and s["sample_time"] == 0.02
+
+
+def test_cosim_cli_unknown_task_exits_2(tmp_path, capsys):
+    from pendulab.cli import main
+
+    assert main(["cosim", "--task", "nope", "--controller", "nmpc", "--out", str(tmp_path)]) == 2
+    assert "--task" in capsys.readouterr().err

@@ -234,8 +234,15 @@ class NMPCController:
         return xr, ur
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
-        """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,)."""
+        """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).
+
+        Raises ValueError for a non-finite ``t`` or ``x``, or ``x`` of the wrong shape (a bad measurement,
+        not a solver failure: those are counted in :meth:`stats` and never raise).
+        """
         start = time.perf_counter()
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.model.nx,) or not np.all(np.isfinite(x)) or not np.isfinite(t):
+            raise ValueError(f"x must be a finite state of shape ({self.model.nx},) at a finite t, got {x!r} at t={t!r}")
         ocp, m = self.ocp, self.ocp.m
         k = int(np.floor(t / self.sample_time + 1e-6))
         xr, ur = self.window(k)

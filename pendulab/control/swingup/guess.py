@@ -7,7 +7,10 @@
   already swings;
 * :func:`rigid_counterpart` / :func:`lift_to_elastic` - solve the elastic task
   first on the rigid point-mass pendulum with the same masses and lengths, then
-  lift it with quasi-static spring lengths.
+  lift it with quasi-static spring lengths;
+* :func:`lift_plan` - a rigid plan lifted to elastic states for a planning level
+  of :mod:`.planning` (springs rigid at rest length, or at their exact
+  quasi-static lengths under the plan's torques).
 
 The homotopies (full -> under-actuated, loose -> real torque limit) re-solve
 the same compiled NLP with changed bounds and live in :mod:`.swingup`.
@@ -21,10 +24,12 @@ import numpy as np
 
 from ...integrate import simulate
 from ...model import counterpart
+from ...model.model import Model
+from ...model.quasistatic import quasi_static_lengths
 from ...model.statics import static_spring_lengths, static_spring_rates
 from .problem import SwingUpProblem
 
-__all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic"]
+__all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic", "lift_plan"]
 
 
 @dataclass(frozen=True)
@@ -221,3 +226,52 @@ def lift_to_elastic(problem: SwingUpProblem, t: np.ndarray, x_rigid: np.ndarray,
     r = static_spring_lengths(pr, theta)
     v = static_spring_rates(pr, theta, omega)
     return Guess(np.asarray(t), np.column_stack([theta, r, omega, v]), np.asarray(u))
+
+
+def lift_plan(model: Model, level: str, t: np.ndarray, x_rigid: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Lift a rigid plan to elastic states for one planning level.
+
+    Parameters
+    ----------
+    model : Model
+        The elastic model.
+    level : {"rigid", "rigid+quasi-static"}
+        ``rigid``: springs at rest length, v = 0. ``rigid+quasi-static``:
+        quasi-static lengths under the mean of the torques held before and after
+        each node (the torque jumps there), v = dr/dt by second-order differences.
+    t : ndarray, shape (K,)
+        Grid times [s].
+    x_rigid : ndarray, shape (K, 4)
+        Rigid states (theta1, theta2, omega1, omega2).
+    u : ndarray, shape (K - 1, 2)
+        Torques held on the intervals [N.m].
+
+    Returns
+    -------
+    ndarray, shape (K, 8)
+        Elastic states (theta1, theta2, r1, r2, omega1, omega2, v1, v2).
+
+    Raises
+    ------
+    ValueError
+        Not an elastic model, an unknown level, or mismatched shapes.
+    RuntimeError
+        No quasi-static lengths at some node (springs too soft for the motion).
+    """
+    if not isinstance(model, Model) or model.kind != "elastic":
+        raise ValueError("model must be an elastic pendulab Model to lift a rigid plan onto")
+    t, x_rigid, u = np.asarray(t, float), np.asarray(x_rigid, float), np.asarray(u, float)
+    K = t.size
+    if x_rigid.shape != (K, 4) or u.shape != (K - 1, 2):
+        raise ValueError(f"x_rigid must have shape ({K}, 4) and u ({K - 1}, 2), got {x_rigid.shape} and {u.shape}")
+    theta, omega = x_rigid[:, :2], x_rigid[:, 2:]
+    if level == "rigid":
+        r = np.tile([model.params.L1, model.params.L2], (K, 1))
+        v = np.zeros((K, 2))
+    elif level == "rigid+quasi-static":
+        u_node = np.vstack([u[:1], 0.5 * (u[1:] + u[:-1]), u[-1:]])
+        r = np.array([quasi_static_lengths(model, theta[k], omega[k], u_node[k]) for k in range(K)])
+        v = np.gradient(r, t, axis=0)
+    else:
+        raise ValueError(f"level must be 'rigid' or 'rigid+quasi-static' to lift a rigid plan, got {level!r}")
+    return np.column_stack([theta, r, omega, v])

@@ -15,17 +15,34 @@ a few sizes and reuse a few cached NLPs instead of building one per refinement.
 anywhere in the horizon, so a re-solve on a refined mesh starts from the
 previous solution exactly (every new interval lies inside an old one, whose
 held torque it inherits).
+
+:func:`radau_resolution` and :func:`oscillation_mesh` are the p-refinement
+rule of stiff elastic tasks: Radau IIA collocation of degree ``d`` propagates
+an undamped oscillation ``y' = i w y`` over one interval with the stability
+function ``R`` = the (d - 1, d) Padé approximant of ``exp``, so the per-interval
+error of a mode is ``|R(i h w) - exp(i h w)|`` times its amplitude. Degree 3
+keeps that below 1e-3 only up to ``h w`` = 1.41, degree 7 up to 6.6: a spring
+mode of 346 rad/s needs ~740 intervals over 3 s at degree 3 and ~160 at degree 7.
 """
 
 from __future__ import annotations
 
 import heapq
+import math
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-__all__ = ["MESH_SIZES", "refine_mesh", "mesh_size", "collocation_states", "parent_intervals"]
+__all__ = [
+    "MESH_SIZES",
+    "refine_mesh",
+    "mesh_size",
+    "collocation_states",
+    "parent_intervals",
+    "radau_resolution",
+    "oscillation_mesh",
+]
 
 #: Interval counts a refinement rounds up to (beyond the last: multiples of 250).
 MESH_SIZES: tuple[int, ...] = (20, 30, 40, 50, 60, 80, 100, 120, 150, 200, 250, 300, 400, 500, 600, 800, 1000)
@@ -206,3 +223,90 @@ def collocation_states(t: Any, x: Any, xc: Any, degree: int, scheme: str, tq: An
     at_end = tq >= t[-1]
     out[at_end] = x[-1]
     return out
+
+
+def _radau_oscillation_error(z: np.ndarray, degree: int) -> np.ndarray:
+    """|R(iz) - exp(iz)| with R the (d - 1, d) Padé approximant of exp (Radau IIA's stability function)."""
+    k, j = degree - 1, degree
+    iz = 1j * np.asarray(z, dtype=float)
+    num = sum(
+        math.factorial(k + j - n)
+        * math.factorial(k)
+        / (math.factorial(k + j) * math.factorial(n) * math.factorial(k - n))
+        * iz**n
+        for n in range(k + 1)
+    )
+    den = sum(
+        math.factorial(k + j - n)
+        * math.factorial(j)
+        / (math.factorial(k + j) * math.factorial(n) * math.factorial(j - n))
+        * (-iz) ** n
+        for n in range(j + 1)
+    )
+    return np.abs(num / den - np.exp(iz))
+
+
+def radau_resolution(degree: int, tolerance: float) -> float:
+    """Largest ``h w`` at which Radau collocation of ``degree`` follows an undamped oscillation within ``tolerance``.
+
+    Parameters
+    ----------
+    degree : int
+        Collocation degree d (>= 1).
+    tolerance : float
+        Per-interval error allowed, relative to the oscillation's amplitude (0 < tolerance < 1).
+
+    Returns
+    -------
+    float
+        ``h w`` [rad], interval length times angular frequency (e.g. 1.41 for d = 3
+        and 6.6 for d = 7 at 1e-3).
+
+    Raises
+    ------
+    ValueError
+        ``degree`` < 1 or ``tolerance`` outside (0, 1).
+    """
+    if not (isinstance(degree, (int, np.integer)) and degree >= 1):
+        raise ValueError(f"degree must be an integer >= 1, got {degree!r}")
+    if not (0.0 < float(tolerance) < 1.0):
+        raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
+    # The error grows monotonically from 0 up to h w ~ 2 d; beyond, the Padé approximant has nothing left to resolve.
+    z = np.linspace(0.0, 2.0 * degree, 20001)[1:]
+    above = np.nonzero(_radau_oscillation_error(z, int(degree)) > tolerance)[0]
+    if not above.size:
+        return float(z[-1])
+    return float(z[max(int(above[0]) - 1, 0)])
+
+
+def oscillation_mesh(horizon: float, omega: float, degree: int, tolerance: float, N: int = 1) -> int:
+    """Uniform intervals that resolve an oscillation of ``omega`` over ``horizon`` at ``degree`` (at least ``N``).
+
+    Parameters
+    ----------
+    horizon : float
+        Time span [s] (> 0).
+    omega : float
+        Angular frequency to resolve [rad/s] (>= 0; inf raises).
+    degree : int
+        Radau collocation degree.
+    tolerance : float
+        Per-interval error relative to the oscillation's amplitude (see :func:`radau_resolution`).
+    N : int
+        Lower bound on the result (e.g. what the slow motion needs).
+
+    Returns
+    -------
+    int
+        ``max(N, ceil(horizon * omega / radau_resolution(degree, tolerance)))``.
+
+    Raises
+    ------
+    ValueError
+        Non-positive or non-finite ``horizon``, negative or non-finite ``omega``, or bad ``degree`` / ``tolerance``.
+    """
+    if not (math.isfinite(horizon) and horizon > 0.0):
+        raise ValueError(f"horizon must be a positive finite time [s], got {horizon!r}")
+    if not (math.isfinite(omega) and omega >= 0.0):
+        raise ValueError(f"omega must be a finite frequency >= 0 [rad/s], got {omega!r}")
+    return max(int(N), math.ceil(horizon * omega / radau_resolution(degree, tolerance)))

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ErrorEstimate, estimate_error
+from .errors import SCALES, ErrorEstimate, estimate_error
 from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart
 from .mesh import collocation_states, parent_intervals, refine_mesh
 from .problem import SwingUpProblem
@@ -70,6 +70,7 @@ def swing_up(
     max_intervals: int = 600,
     mesh: Any = None,
     error_method: str = "auto",
+    error_scale: str = "state",
 ) -> SwingUpResult:
     """Solve a swing-up problem by direct collocation or multiple shooting with IPOPT, check and refine it.
 
@@ -110,6 +111,10 @@ def swing_up(
         None = uniform.
     error_method : str
         Integrator of the error estimate: ``"auto"`` or a key of :data:`pendulab.METHODS`.
+    error_scale : {"state", "bob-speed"}
+        Normalisation of the error estimate (see
+        :func:`~pendulab.control.swingup.errors.estimate_error`; default: each
+        state's largest magnitude).
 
     Returns
     -------
@@ -122,7 +127,7 @@ def swing_up(
     Raises
     ------
     ValueError
-        Unknown method/guess name, bad N, degree, mesh, tolerance or caps.
+        Unknown method/guess name, bad N, degree, mesh, tolerance, caps or error scale.
     KeyboardInterrupt
         On SIGINT (Ctrl-C), also when it arrives inside an IPOPT iteration;
         no further stage is started.
@@ -133,6 +138,8 @@ def swing_up(
         raise ValueError(f"max_refinements must be an integer >= 0, got {max_refinements!r}")
     if not (isinstance(max_intervals, (int, np.integer)) and max_intervals >= 2):
         raise ValueError(f"max_intervals must be an integer >= 2, got {max_intervals!r}")
+    if error_scale not in SCALES:
+        raise ValueError(f"error_scale must be one of {list(SCALES)}, got {error_scale!r}")
     settings = _Settings(method, N, degree, integrator, ipopt_options)
     with _watch_interrupt() as interrupt:
         t_start = time.perf_counter()
@@ -140,7 +147,16 @@ def swing_up(
         if tolerance is None:
             return res
         return _check_and_refine(
-            problem, settings, res, float(tolerance), refine, max_refinements, max_intervals, error_method, interrupt, t_start
+            problem,
+            settings,
+            res,
+            float(tolerance),
+            refine,
+            max_refinements,
+            max_intervals,
+            (error_method, error_scale),
+            interrupt,
+            t_start,
         )
 
 
@@ -153,11 +169,11 @@ class _Settings:
     ipopt_options: dict[str, Any] | None
 
 
-def _estimate(res: SwingUpResult, tolerance: float, error_method: str) -> tuple[ErrorEstimate | None, float]:
+def _estimate(res: SwingUpResult, tolerance: float, error: tuple[str, str]) -> tuple[ErrorEstimate | None, float]:
     t0 = time.perf_counter()
     if not np.all(np.isfinite(res.x)) or not np.all(np.isfinite(res.u)):
         return None, time.perf_counter() - t0
-    return estimate_error(res, tolerance=tolerance, method=error_method), time.perf_counter() - t0
+    return estimate_error(res, tolerance=tolerance, method=error[0], scale=error[1]), time.perf_counter() - t0
 
 
 def _check_and_refine(
@@ -168,7 +184,7 @@ def _check_and_refine(
     refine: bool,
     max_refinements: int,
     max_intervals: int,
-    error_method: str,
+    error: tuple[str, str],
     interrupt: _Interrupt,
     t_start: float,
 ) -> SwingUpResult:
@@ -181,7 +197,7 @@ def _check_and_refine(
     # -> 0.030 -> 0.032 over N = 20 -> 60 with q = d; pendubot task, mix objective).
     order = max(1, settings.degree - 1) if settings.method in COLLOCATION else 3
     while True:
-        est, t_est = _estimate(res, tolerance, error_method)
+        est, t_est = _estimate(res, tolerance, error)
         history.append(_history_entry(res, est, t_est))
         passed = est is not None and est.passed
         if not res.success or passed or not refine:
