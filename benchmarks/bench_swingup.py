@@ -1,6 +1,6 @@
 """Swing-up benchmark: every shipped task planned, proven, refined and tracked; randomized starts; minimum time with margin.
 
-Run:  PYTHONPATH=$PWD python benchmarks/bench_swingup.py [--quick] [--tasks a,b] [--starts 20]
+Run:  PYTHONPATH=$PWD python benchmarks/bench_swingup.py [--quick] [--tasks a,b] [--starts 20] [--tasks-only]
 Writes benchmarks/results/swingup.md (not with --quick). Progress bars on stderr (tqdm).
 
 * Tasks table: per shipped task, :func:`run_episode` with the task's settings (planning ``auto``,
@@ -176,6 +176,9 @@ def main() -> None:
     ap.add_argument("--starts", type=int, default=20)
     ap.add_argument("--tasks", help="comma-separated task names (default: all shipped)")
     ap.add_argument("--rule-only", action="store_true", help="print only the planning-rule table")
+    ap.add_argument(
+        "--tasks-only", action="store_true", help="print only the 'every shipped task' rows of --tasks (full repeats and starts)"
+    )
     ap.add_argument("--out", type=Path, default=OUT, help=f"results file (default {OUT})")
     args = ap.parse_args()
     if args.rule_only:
@@ -183,6 +186,9 @@ def main() -> None:
         return
     n = 3 if args.quick else max(20, args.starts)
     names = args.tasks.split(",") if args.tasks else list(task_names())
+    if args.tasks_only:
+        print("\n".join(tasks_table(names, 1 if args.quick else 3, n)))
+        return
     rigid = [nm for nm in names if load_task(nm).model.kind == "rigid"]
     t0 = time.perf_counter()
     rows_t = tasks_table(names, 1 if args.quick else 3, n)

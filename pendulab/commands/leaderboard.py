@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._io import atomic_write_text
 from .._version import __version__
 
 __all__ = ["write_leaderboard", "LEADERBOARD_TASKS", "LEADERBOARD_CONTROLLERS", "DEFAULT_PATH"]
@@ -14,6 +15,13 @@ __all__ = ["write_leaderboard", "LEADERBOARD_TASKS", "LEADERBOARD_CONTROLLERS", 
 LEADERBOARD_TASKS: tuple[str, ...] = ("pendubot", "acrobot", "pendubot_elastic_soft", "acrobot_elastic_soft")
 #: Controllers compared (names of ``controller_for_task``).
 LEADERBOARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
+#: Cards not run, with the reason: NMPC on the elastic plants predicts with the 8-state elastic model at
+#: ~68 ms per solve (docs/nmpc.md), so one scorecard would take hours on 2 cores; score it on its own with
+#: ``pendulab score --controller nmpc --task pendubot_elastic_soft --runs 1``.
+SKIPPED: dict[tuple[str, str], str] = {
+    ("nmpc", task): "not scored here (elastic NMPC: ~68 ms per solve, a card takes hours; see docs/nmpc.md)"
+    for task in ("pendubot_elastic_soft", "acrobot_elastic_soft")
+}
 #: Where the leaderboard is written by default.
 DEFAULT_PATH = Path("docs") / "leaderboard.md"
 
@@ -55,6 +63,9 @@ def write_leaderboard(
     for task_name in LEADERBOARD_TASKS:
         task = load_task(task_name)
         for ctrl in LEADERBOARD_CONTROLLERS:
+            if (ctrl, task_name) in SKIPPED:
+                cards[(ctrl, task_name)] = SKIPPED[(ctrl, task_name)]
+                continue
             bar = None
             if progress:
                 from tqdm.auto import tqdm
@@ -68,7 +79,7 @@ def write_leaderboard(
 
             try:
                 cards[(ctrl, task_name)] = score(ctrl, task, runs=runs, workers=workers, progress=report)
-            except (ValueError, RuntimeError, TypeError, KeyError, ImportError, NotImplementedError) as exc:
+            except (ValueError, RuntimeError) as exc:  # e.g. a swing-up the optimizer cannot solve
                 cards[(ctrl, task_name)] = f"not available ({_one_line(exc)})"
             finally:
                 if bar is not None:
@@ -110,7 +121,7 @@ def write_leaderboard(
     lines += ["Categories: " + "; ".join(f"`{c.name}`: {c.description} [{c.unit}]" for c in CATEGORIES.values()), ""]
     lines += _realai_section()
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text("\n".join(lines) + "\n")
+    atomic_write_text(out, "\n".join(lines) + "\n")
     return out
 
 
@@ -123,28 +134,19 @@ def _nominal(card: Any) -> str:
 
 
 def _realai_section() -> list[str]:
+    from ..control.realai import PUBLISHED, realai_score
+
     lines = ["## RealAIGym simulation leaderboard (v2 score)", ""]
-    try:
-        from ..control.realai import PUBLISHED
-    except ImportError as exc:
-        return lines + [f"not available ({_one_line(exc)})", ""]
-    try:
-        from ..control.realai import realai_score
-    except ImportError as exc:
-        realai_score = None
-        missing = _one_line(exc)
+    lines += ["Definitions, and the score-designed swing-up: docs/realai.md.", ""]
     lines += ["| task | entry | score | success | swing-up time [s] |", "|---|---|---|---|---|"]
     for task in ("pendubot", "acrobot"):
         for name, value in sorted(PUBLISHED[task].items(), key=lambda kv: -kv[1]):
             lines.append(f"| {task} | {name} (published) | {value:.3f} | | |")
         for ctrl in ("best", *LEADERBOARD_CONTROLLERS):
-            if realai_score is None:
-                lines.append(f"| {task} | pendulab {ctrl} | not available ({missing}) | | |")
-                continue
             try:
                 d = realai_score(task, ctrl).to_dict()
                 t_up = float(d.get("swingup_time", float("nan")))
                 lines.append(f"| {task} | pendulab {ctrl} | {d['score']:.3f} | {d['success']} | {t_up:.2f} |")
-            except (ValueError, RuntimeError, TypeError, KeyError, NotImplementedError) as exc:
+            except (ValueError, RuntimeError) as exc:
                 lines.append(f"| {task} | pendulab {ctrl} | not available ({_one_line(exc)}) | | |")
     return lines + [""]

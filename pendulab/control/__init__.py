@@ -6,7 +6,9 @@ wrapping; :mod:`.feedback` holds the controller protocol
 (:class:`SampledController`) and the controllers that keep it (state
 feedback, energy swing-up, the TVLQR tracker); :mod:`.tracking` designs the
 TVLQR gains; :mod:`.controllers` names them for the CLI; :mod:`.swingup`
-solves swing-up optimal control.
+solves swing-up optimal control; :mod:`.nmpc` is receding-horizon control on
+the same model; :mod:`.scorecard` (with :mod:`.perturb`) scores a controller's
+robustness; :mod:`.realai` scores swing-ups on RealAIGym's leaderboard.
 
 Inside this package ``import control as ct`` is python-control (absolute
 imports); never add a top-level module named ``control``.
@@ -15,7 +17,7 @@ imports); never add a top-level module named ``control``.
 from .balance import ROAResult, balanced, format_roa, region_of_attraction, simulate_balance
 from .bridge import to_nlsys, to_statespace
 from .controllability import ReportRow, controllability_report, controllable_subspace, finite_gramian, format_report
-from .controllers import CONTROLLERS, make_controller
+from .controllers import CONTROLLERS, TASK_CONTROLLERS, controller_for_task, make_controller
 from .feedback import (
     EnergySwingUp,
     LinearStateFeedback,
@@ -27,8 +29,15 @@ from .feedback import (
     upright_state,
 )
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
+from .nmpc import NMPCController, NMPCOptions, nmpc_controller, nmpc_for_task
+from .perturb import Perturbation
+from .realai import RealAIResult, realai_score
+from .scorecard import CATEGORIES, Scorecard, rerun, score
 from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, swing_up
+from .swingup.episode import SuccessRate, closed_loop_success_rate
+from .swingup.errors import ErrorEstimate, estimate_error, estimate_error_arrays
 from .swingup.guess import Guess, energy_guess, linear_guess
+from .swingup.planning import PlanningDecision, plan, planning_rule
 from .tracking import (
     TVLQRTracker,
     default_weights,
@@ -40,7 +49,28 @@ from .tracking import (
 )
 
 __all__ = [
+    "CATEGORIES",
     "CONTROLLERS",
+    "TASK_CONTROLLERS",
+    "ErrorEstimate",
+    "NMPCController",
+    "NMPCOptions",
+    "Perturbation",
+    "PlanningDecision",
+    "RealAIResult",
+    "Scorecard",
+    "SuccessRate",
+    "closed_loop_success_rate",
+    "controller_for_task",
+    "estimate_error",
+    "estimate_error_arrays",
+    "nmpc_controller",
+    "nmpc_for_task",
+    "plan",
+    "planning_rule",
+    "realai_score",
+    "rerun",
+    "score",
     "GUESSES",
     "OBJECTIVES",
     "TRANSCRIPTIONS",

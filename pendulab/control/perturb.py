@@ -28,6 +28,8 @@ Perturbations (:class:`Perturbation`), in the order they act within a sample:
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
@@ -173,6 +175,12 @@ def substeps(model: Model, sample_time: float, x0: np.ndarray | None = None) -> 
 
 
 @cache
+def _jit_directory() -> str:
+    """A private temporary directory (one per process) for CasADi's JIT sources and libraries."""
+    return tempfile.mkdtemp(prefix="pendulab-jit-")
+
+
+@cache
 def _sample_map(kind: str, n_sub: int) -> ca.Function:
     """``F([x; u; p; cf; h]) -> [x+; y2+]``: ``n_sub`` RK4 steps of ``h`` with held ``u`` and smooth Coulomb friction ``cf``.
 
@@ -203,7 +211,10 @@ def _sample_map(kind: str, n_sub: int) -> ca.Function:
     name = f"sample_rk4_{kind}_{n_sub}"
     args = ([ca.vertcat(x, u, p, cf, h)], [ca.vertcat(z, pos(z, p)[3])])
     try:
-        return ca.Function(name, *args, {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O1"]}})
+        # The compiler's directory: CasADi would otherwise write the generated C into the current
+        # directory (the user's) and does not always remove it.
+        jit = {"flags": ["-O1"], "directory": _jit_directory() + os.sep}
+        return ca.Function(name, *args, {"jit": True, "compiler": "shell", "jit_options": jit})
     except RuntimeError:  # no C compiler: same function, interpreted
         return ca.Function(name, *args)
 

@@ -184,6 +184,7 @@ class NMPCController:
         self._lam_x: np.ndarray | None = None
         self._lam_g: np.ndarray | None = None
         self._k_prev = -1
+        self._restart = False
 
     @property
     def sample_time(self) -> float:
@@ -194,6 +195,7 @@ class NMPCController:
         """Forget the warm start and the statistics before a new run."""
         self._w = self._lam_x = self._lam_g = None
         self._k_prev = -1
+        self._restart = False
         self.solve_times, self.iterations = [], []
         self.failures = self.infeasible = 0
         self.last_status = ""
@@ -266,8 +268,10 @@ class NMPCController:
         if w is None:
             self.failures += 1
             u = self._fallback(k, xp)
+            # The failed iterate (or the shifted one that led to it) is no start for the next solve.
+            self._restart = True
         else:
-            self._w, self._k_prev = w, k
+            self._w, self._k_prev, self._restart = w, k, False
             self._lam_x = np.asarray(sol["lam_x"], dtype=float).ravel()
             self._lam_g = np.asarray(sol["lam_g"], dtype=float).ravel()
             if ocp.ns and float(np.max(w[ocp.u_idx[:, m:]])) > self.options.slack_tol:
@@ -280,7 +284,7 @@ class NMPCController:
     def _guess(self, k: int, xr: np.ndarray, ur: np.ndarray, xp: np.ndarray) -> tuple[np.ndarray, Any, Any]:
         """Warm start: the previous solution shifted to sample ``k``; cold: the reference window."""
         ocp = self.ocp
-        if self._w is None or k < self._k_prev:
+        if self._w is None or k < self._k_prev or self._restart:
             w0 = np.zeros(ocp.n_w)
             w0[ocp.x_idx] = xr
             w0[ocp.u_idx[:, : ocp.m]] = ur

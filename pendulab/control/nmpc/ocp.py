@@ -220,7 +220,9 @@ def _solver_plugin(
     solver: str, nlp: dict, W: ca.SX, Pp: ca.SX, G: ca.SX, max_iter: int, equality: list[bool]
 ) -> tuple[str, dict, dict[str, Any]]:
     """Plugin name, NLP and options of one solver choice."""
-    common: dict[str, Any] = {"print_time": False, "error_on_fail": False}
+    # A solve that meets NaN (a diverged warm start far from the reference) is a counted failure with a
+    # fallback torque (NMPCController), so CasADi's per-evaluation NaN warnings would only flood stderr.
+    common: dict[str, Any] = {"print_time": False, "error_on_fail": False, "show_eval_warnings": False}
     if solver == "ipopt":
         ipopt = {
             "print_level": 0, "max_iter": max_iter, "tol": 1e-6, "acceptable_tol": 1e-4, "sb": "yes",

@@ -554,7 +554,7 @@ def _elastic_warm_start(
     """The rigid plan re-solved on the elastic level's mesh and degree, lifted to quasi-static spring lengths.
 
     An interpolated coarse plan is a poor start for the fine elastic NLP (pendubot_elastic:
-    ~200 IPOPT iterations against ~20 from the re-solved rigid plan, benchmarks/results/swingup.md).
+    ~200 IPOPT iterations against ~20 from the re-solved rigid plan, docs/swingup.md).
     ``build_time`` of the result is the rigid re-solve's NLP build.
     """
     fine = replace(rigid_res, build_time=0.0)  # its build is already counted
