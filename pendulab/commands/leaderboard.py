@@ -16,10 +16,10 @@ LEADERBOARD_TASKS: tuple[str, ...] = ("pendubot", "acrobot", "pendubot_elastic_s
 #: Controllers compared (names of ``controller_for_task``).
 LEADERBOARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
 #: Cards not run, with the reason: NMPC on the elastic plants predicts with the 8-state elastic model at
-#: ~68 ms per solve (docs/nmpc.md), so one scorecard would take hours on 2 cores; score it on its own with
+#: ~50 ms per solve (docs/nmpc.md), so one scorecard would take hours on 2 cores; score it on its own with
 #: ``pendulab score --controller nmpc --task pendubot_elastic_soft --runs 1``.
 SKIPPED: dict[tuple[str, str], str] = {
-    ("nmpc", task): "not scored here (elastic NMPC: ~68 ms per solve, a card takes hours; see docs/nmpc.md)"
+    ("nmpc", task): "not scored here (elastic NMPC: ~50 ms per solve, a card takes hours; see docs/nmpc.md)"
     for task in ("pendubot_elastic_soft", "acrobot_elastic_soft")
 }
 #: Where the leaderboard is written by default.
