@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -122,3 +123,23 @@ def format_summary(summaries: Sequence[dict[str, Any]]) -> str:
         if k == 0:
             lines.append("-" * len(lines[0]))
     return "\n".join(lines)
+
+
+class ProgressBar:
+    """A tqdm bar on stderr fed by a ``progress(done, total)`` callback (ensembles, scorecards); a no-op when disabled."""
+
+    def __init__(self, desc: str, enabled: bool) -> None:
+        self.desc, self.enabled, self.bar = desc, enabled, None
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=self.desc, unit="run", smoothing=0.1, file=sys.stderr)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from . import CLIError
+from ._common import ProgressBar
 
 __all__ = ["register", "run_flipmap", "DEFAULT_K"]
 
@@ -68,33 +69,12 @@ def _positive(option: str, text: str) -> float:
     return value
 
 
-class _Progress:
-    """A tqdm bar fed by the engine's ``progress(done, total)`` callback."""
-
-    def __init__(self, desc: str, enabled: bool) -> None:
-        self.desc, self.enabled, self.bar = desc, enabled, None
-
-    def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, desc=self.desc, unit="run", smoothing=0.1)
-        self.bar.n = done
-        self.bar.refresh()
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: float, rtol: float, threads: Any) -> Any:
     from ..ensemble.flipmap import flip_map
     from ..model.model import make_model
 
     model = make_model(kind, **({"k1": k, "k2": k} if kind == "elastic" else {}))
-    bar = _Progress(f"flip map {kind}", not args.no_progress)
+    bar = ProgressBar(f"flip map {kind}", not args.no_progress)
     try:
         return flip_map(model, grid, t_max, client=args.scheduler, threads=threads, progress=bar, rtol=rtol)
     finally:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from . import CLIError
+from ._common import ProgressBar
 
 __all__ = ["register", "run_score"]
 
@@ -59,26 +60,6 @@ def _int(option: str, text: str, lo: int) -> int:
     return value
 
 
-class _Bar:
-    """A tqdm bar on stderr fed by ``progress(done, total)``."""
-
-    def __init__(self, desc: str, enabled: bool) -> None:
-        self.desc, self.enabled, self.bar = desc, enabled, None
-
-    def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
-        if self.bar is None:
-            from tqdm.auto import tqdm
-
-            self.bar = tqdm(total=total, desc=self.desc, unit="run", file=sys.stderr)
-        self.bar.update(done - self.bar.n)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def run_score(args: argparse.Namespace) -> int:
     """Run ``pendulab score``.
 
@@ -125,7 +106,7 @@ def run_score(args: argparse.Namespace) -> int:
         bad = [c for c in cats if c not in CATEGORIES]
         if bad:
             raise CLIError(f"--categories: unknown {bad}; expected some of {list(CATEGORIES)}")
-    bar = _Bar(f"score {args.controller} on {task.name}", not args.no_progress)
+    bar = ProgressBar(f"score {args.controller} on {task.name}", not args.no_progress)
     try:
         card = score(
             args.controller, task, runs=runs, categories=cats, seed=_int("--seed", args.seed, 0), workers=workers, progress=bar
