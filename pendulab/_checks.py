@@ -5,7 +5,16 @@ from __future__ import annotations
 import math
 from typing import Any
 
-__all__ = ["positive_float", "check_model", "is_interrupt"]
+__all__ = [
+    "positive_float",
+    "relative_tolerance",
+    "bounded_int",
+    "check_model",
+    "check_spring_lengths",
+    "is_interrupt",
+    "MissingExtraError",
+    "require_extra",
+]
 
 
 def positive_float(name: str, value: Any, unit: str = "") -> float:
@@ -97,3 +106,151 @@ def is_interrupt(exc: BaseException) -> bool:
             return True
         e = e.__cause__ or e.__context__
     return False
+
+
+def relative_tolerance(name: str, value: Any) -> float:
+    """``value`` as a relative tolerance in the open interval (0, 1), else ``ValueError`` naming ``name``.
+
+    A relative tolerance of 1 or more asks for no correct digit at all: every error-controlled
+    integrator then takes steps as large as its stability allows and returns a silently wrong
+    answer. Every public entry point with an ``rtol`` (or ``tolerance``) checks it here.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in the message.
+    value : Any
+        Received value.
+
+    Returns
+    -------
+    float
+        The tolerance.
+
+    Raises
+    ------
+    ValueError
+        Not a number, not finite, or outside (0, 1).
+    """
+    v = positive_float(name, value)
+    if v >= 1.0:
+        raise ValueError(f"{name} must be a relative tolerance in (0, 1), got {value!r}: a value >= 1 asks for no correct digit")
+    return v
+
+
+def bounded_int(name: str, value: Any, *, low: int = 1, high: int, why: str) -> int:
+    """``value`` as an integer in ``[low, high]``, else ``ValueError`` naming ``name``, the limit and ``why``.
+
+    Sizes a user passes (grid points, horizons, run counts, mesh intervals) are bounded so that a
+    typo cannot allocate gigabytes or run for days; ``why`` tells the user what the limit protects.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in the message.
+    value : Any
+        Received value (an ``int`` or an integral float such as ``1e3``).
+    low, high : int
+        Inclusive bounds.
+    why : str
+        Reason for the upper bound, e.g. ``"each horizon step is a block of the NLP"``.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    ValueError
+        Not an integer, or outside the bounds.
+    """
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    try:
+        as_float = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}") from exc
+    if not math.isfinite(as_float) or as_float != int(as_float):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    v = int(as_float)
+    if v < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    if v > high:
+        raise ValueError(f"{name} must be at most {high} ({why}), got {value!r}")
+    return v
+
+
+def check_spring_lengths(kind: str, x: Any, name: str = "x0") -> None:
+    """Raise ``ValueError`` when an elastic state (or batch of states) has a spring length <= 0.
+
+    The one physical-state check shared by :func:`pendulab.simulate`, ensembles, Lyapunov
+    exponents and the Gymnasium env: a spring of zero or negative length is not a state of the
+    elastic pendulum (the link direction is undefined), whatever the integrator would return.
+
+    Parameters
+    ----------
+    kind : str
+        The model kind (``"rigid"`` or ``"elastic"``); rigid states pass unchanged.
+    x : ndarray, shape (8,) or (N, 8)
+        State(s), already shape-checked, in the elastic state order (r1, r2 at columns 2, 3) [m].
+    name : str
+        Argument name used in the message.
+
+    Raises
+    ------
+    ValueError
+        Some r1 or r2 is not > 0; the message names the first offending row.
+    """
+    if kind != "elastic":
+        return
+    import numpy as np  # local: keep this module importable without NumPy's start-up cost
+
+    arr = np.asarray(x, dtype=float)
+    r = arr[..., 2:4]
+    bad = ~(r > 0.0)
+    if not bad.any():
+        return
+    if arr.ndim == 1:
+        raise ValueError(f"{name}: spring lengths r1, r2 must be > 0 m, got {r.tolist()}")
+    row = int(np.argwhere(bad.any(axis=-1))[0][0])
+    raise ValueError(f"{name}[{row}]: spring lengths r1, r2 must be > 0 m, got {r[row].tolist()}")
+
+
+class MissingExtraError(ImportError):
+    """An optional dependency is not installed; the message names the pendulab extra that installs it.
+
+    The CLI turns it into a one-line message and exit status 2.
+    """
+
+
+def require_extra(module: str, extra: str, purpose: str) -> Any:
+    """Import ``module`` or raise :class:`MissingExtraError` naming ``pendulab[extra]``.
+
+    Parameters
+    ----------
+    module : str
+        Module to import, e.g. ``"heyoka"`` or ``"dask.distributed"``.
+    extra : str
+        The pendulab extra that installs it, e.g. ``"taylor"``.
+    purpose : str
+        What needs it, e.g. ``"method='taylor'"``.
+
+    Returns
+    -------
+    module
+        The imported module.
+
+    Raises
+    ------
+    MissingExtraError
+        The module cannot be imported.
+    """
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        raise MissingExtraError(
+            f'{purpose} needs {module.split(".")[0]}, which is not installed: pip install "pendulab[{extra}]"'
+        ) from exc

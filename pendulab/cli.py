@@ -22,7 +22,7 @@ import sys
 import threading
 from collections.abc import Iterator, Sequence
 
-from ._checks import is_interrupt
+from ._checks import MissingExtraError, is_interrupt
 from .commands import CLIError
 
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
@@ -54,7 +54,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status.
 
     Errors raised by a command (``ValueError``, ``KeyError``, ``TypeError``,
-    ``FileNotFoundError``, ``RuntimeError``, ``OSError``) are printed as one
+    ``FileNotFoundError``, ``RuntimeError``, ``OSError``, and a missing optional
+    extra, :class:`pendulab._checks.MissingExtraError`) are printed as one
     line on stderr instead of a traceback.
 
     Parameters
@@ -86,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _interrupted() if guard.interrupted else status
         except KeyboardInterrupt:
             return _interrupted()
-        except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError) as exc:
+        except (ValueError, KeyError, TypeError, FileNotFoundError, RuntimeError, OSError, MissingExtraError) as exc:
             if guard.interrupted or is_interrupt(exc):
                 # A native layer (CasADi, IPOPT, SUNDIALS) turned the interrupt into an error.
                 return _interrupted()

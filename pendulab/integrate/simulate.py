@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import check_model, positive_float
+from .._checks import check_model, check_spring_lengths, positive_float, relative_tolerance
 from ..model.model import Model
 from .auto import choose_method
 from .methods import METHODS
@@ -200,12 +200,11 @@ def simulate(
         raise ValueError(f"x0 must have shape ({model.nx},), got {x0.shape}")
     t_final = positive_float("t_final", t_final)
     dt = positive_float("dt", dt)
-    rtol = positive_float("rtol", rtol)
+    rtol = relative_tolerance("rtol", rtol)
     atol = positive_float("atol", atol)
     if max_step is not None:
         max_step = positive_float("max_step", max_step)
-    if model.kind == "elastic" and np.any(x0[2:4] <= 0):
-        raise ValueError(f"x0: spring lengths r1, r2 must be > 0 m, got {x0[2:4].tolist()}")
+    check_spring_lengths(model.kind, x0, "x0")
     t = time_grid(t_final, dt)
     schedule = input_schedule(model, u, t)
     choice = None
