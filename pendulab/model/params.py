@@ -189,7 +189,7 @@ class RigidParams(_ParamsBase):
     def __post_init__(self) -> None:
         super().__post_init__()
         lc2 = self.L2 if self.lc2 is None else self.lc2
-        if self.m2 * lc2**2 + self.I2 == 0.0:
+        if self.m2 * lc2 * lc2 + self.I2 == 0.0:  # lc2 * lc2, not lc2**2: a huge lc2 overflows to inf, not OverflowError
             # The mass matrix is singular: the elbow torque would give link 2 an infinite acceleration.
             raise ValueError(
                 f"link 2 has no inertia about the elbow (m2 lc2^2 + I2 = 0 with lc2 = {lc2!r} m, I2 = {self.I2!r} kg.m2): "

@@ -213,7 +213,7 @@ def cross_field_ok(kind: str, values: dict[str, Any]) -> bool:
         return True
     d = {**pl.RigidParams().resolved(), **{k: float(v) for k, v in values.items() if v is not None}}
     lc2 = d["L2"] if values.get("lc2") is None else d["lc2"]
-    return d["m2"] * lc2**2 + d["I2"] != 0.0
+    return d["m2"] * lc2 * lc2 + d["I2"] != 0.0  # as the package evaluates it (a huge lc2 gives inf, not OverflowError)
 
 
 @st.composite

@@ -6,14 +6,16 @@ import importlib
 import importlib.util
 from typing import Any
 
+from ..._checks import MissingExtraError
+
 __all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module", "unavailable_reason"]
 
 #: How to install heyoka with pendulab (the optional dependency group "taylor").
 EXTRA_HINT = 'pip install "pendulab[taylor]"'
 
 
-class TaylorUnavailableError(ImportError):
-    """heyoka is not importable; the message names the method and the extra to install."""
+class TaylorUnavailableError(MissingExtraError):
+    """heyoka is not importable; the message names the method and the extra to install (the CLI prints it as one line)."""
 
 
 def heyoka_module() -> Any:
@@ -33,7 +35,7 @@ def heyoka_module() -> Any:
         return importlib.import_module("heyoka")
     except ImportError as exc:
         raise TaylorUnavailableError(
-            f"method 'taylor' needs the heyoka package, which is not importable ({exc}); "
+            f"method 'taylor' needs the heyoka package, which is not importable; "
             f"install it with: {EXTRA_HINT} (heyoka's wheels are Linux-only: x86-64, aarch64)"
         ) from exc
 
