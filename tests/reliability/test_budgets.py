@@ -18,6 +18,9 @@ import pendulab as pl
 from pendulab import SimulationError
 
 CHAOTIC = np.array([2.0, 2.0, 0.0, 0.0])
+#: Ceiling [s] on how long a budgeted or interrupted run may take to stop: a hang guard, not a speed test (stops
+#: take well under a second on an idle machine; a loaded 2-core CI host can be 10x slower).
+HANG_GUARD_S = 60.0
 
 
 def _stiff() -> tuple[pl.Model, np.ndarray]:
@@ -55,7 +58,7 @@ def test_sigint_during_integration_is_a_keyboard_interrupt(method):
             )  # fmt: skip
     finally:
         timer.cancel()
-    assert time.perf_counter() - start < 5.0
+    assert time.perf_counter() - start < HANG_GUARD_S
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the front end restored the handler
 
 
@@ -72,7 +75,7 @@ def test_stiff_rk45_ends_at_its_wall_time_budget():
     start = time.perf_counter()
     with pytest.raises(SimulationError, match="wall-time budget exhausted") as exc:
         pl.simulate(model, x0, 1.0, method="RK45", max_step=1e-6, options={"max_wall_time": 0.3})
-    assert time.perf_counter() - start < 2.0  # checked at every RHS evaluation: stops right after 0.3 s
+    assert time.perf_counter() - start < HANG_GUARD_S  # checked at every RHS evaluation (0.3 s + a few ms when idle)
     assert exc.value.n_steps > 0 and 0.0 < exc.value.t_reached < 1.0
     assert "stiff springs" in str(exc.value)
 
@@ -89,15 +92,14 @@ def test_casadi_step_and_wall_budgets():
     start = time.perf_counter()
     with pytest.raises(SimulationError, match="wall-time budget exhausted"):
         pl.simulate(pl.rigid(), CHAOTIC, 1e4, dt=1.0, method="cvodes", rtol=1e-12, atol=1e-12, options={"max_wall_time": 0.2})
-    assert time.perf_counter() - start < 2.0
+    assert time.perf_counter() - start < HANG_GUARD_S
 
 
 @pytest.mark.parametrize("method", ["rk4", "collocation"])
 def test_fixed_step_run_above_the_budget_is_refused_before_starting(method):
-    start = time.perf_counter()
-    with pytest.raises(SimulationError, match=r"needs 100000 fixed steps .* max_steps = 1000; refused before starting"):
+    with pytest.raises(SimulationError, match=r"needs 100000 fixed steps .* max_steps = 1000; refused before starting") as exc:
         pl.simulate(pl.rigid(), CHAOTIC, 10.0, method=method, max_step=1e-4, options={"max_steps": 1000})
-    assert time.perf_counter() - start < 1.0
+    assert exc.value.t_reached == 0.0  # refused at t = 0: no step was taken
 
 
 def test_wall_budget_holds_between_feedback_intervals():

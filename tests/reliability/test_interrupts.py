@@ -77,7 +77,11 @@ def _args(name: str, out: Path) -> list[str]:
     return [a.replace("{out}", str(out)) for a in args]
 
 
-def _interrupt(args: list[str], marker: str, delay: float, timeout: float = 30.0) -> tuple[int, str, str, float]:
+#: Ceiling [s] on the time from SIGINT to exit: a hang guard (see test_sigint_stops_cleanly).
+STOP_CEILING_S = 60.0
+
+
+def _interrupt(args: list[str], marker: str, delay: float, timeout: float = 120.0) -> tuple[int, str, str, float]:
     """Run ``python -m pendulab *args``; SIGINT ``delay`` s after ``marker`` appears in its output.
 
     Returns the exit status, the output (stdout and stderr), the output up to the
@@ -181,7 +185,9 @@ def test_sigint_stops_cleanly(name, moment, tmp_path):
     assert status == 130, f"exit status {status}, stderr:\n{err[-3000:]}"
     assert "interrupted" in err
     assert "Traceback" not in err, err[-3000:]
-    assert elapsed < 10.0, f"took {elapsed:.1f} s to stop"
+    # A hang guard, not a speed test: stops take 0.1-3 s on an idle machine (reported in docs/reliability.md) and
+    # took 13 s on a loaded 2-core host (an IPOPT iteration plus teardown); only a run that ignores Ctrl-C fails.
+    assert elapsed < STOP_CEILING_S, f"took {elapsed:.1f} s to stop"
     if name == "simulate" and (out / "big.csv").read_text() == OLD_CSV:
         (out / "big.csv").unlink()  # the earlier run's file, untouched: fine (not a 300 s trajectory)
     names = _check_outputs(out)

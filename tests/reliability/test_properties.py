@@ -40,10 +40,12 @@ from pendulab.scene import load_scene
 
 #: Example-count multiplier of the long mode.
 LONG_FACTOR = 25
-#: Hypothesis deadline per example [ms]; the first call of a method (JIT / C build) is warmed up before.
-DEADLINE_MS = 2000
-#: Wall-clock limit of one example [s]; exceeding it is reported as a hang.
-HANG_LIMIT_S = 5.0
+#: No Hypothesis deadline: a per-example time limit is a timed assertion, and the suite must pass on a loaded
+#: 2-core host. Speed lives in benchmarks/; here only a hang (HANG_LIMIT_S) fails an example.
+DEADLINE_MS = None
+#: Wall-clock limit of one example [s], a hang guard only: examples take ~0.01-0.5 s on an idle machine, and a
+#: 60 s ceiling leaves a 100x margin for a loaded CI host while still catching a run that never ends.
+HANG_LIMIT_S = 60.0
 
 #: Exception types the public API documents.
 DOCUMENTED = (ValueError, TypeError, KeyError, FileNotFoundError, pl.SimulationError, ImportError)
@@ -91,7 +93,7 @@ def run_property(request: pytest.FixtureRequest, test: Callable[[], None], examp
     try:
         settings(
             max_examples=n,
-            deadline=None if compiling else DEADLINE_MS,
+            deadline=DEADLINE_MS,
             suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much, HealthCheck.data_too_large],
             print_blob=True,
             database=None,  # no .hypothesis example database written by this file
