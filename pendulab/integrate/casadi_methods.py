@@ -104,6 +104,8 @@ _MAX_NUM_STEPS = 100_000
 _AT_T = re.compile(r"\bt\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
 #: Options the runner sets from simulate's own arguments: not accepted in ``options``.
 _MANAGED = {"reltol": "rtol", "abstol": "atol", "max_step_size": "max_step"}
+#: SUNDIALS' switch for its own messages; the error path sets it only where the plugin accepts it (not collocation).
+_QUIET = "disable_internal_warnings"
 
 
 @cache
@@ -154,7 +156,8 @@ def _check_options(req: RunRequest, plugin: str) -> None:
 
 def _options(req: RunRequest) -> dict:
     spec = req.spec
-    _check_options(req, spec.settings["plugin"])
+    plugin = spec.settings["plugin"]
+    _check_options(req, plugin)
     # Non-finite states are reported as a SimulationError; CasADi's per-step warnings are noise.
     opts: dict[str, Any] = {"show_eval_warnings": False, **spec.settings["options"]}
     if spec.fixed_step:
@@ -166,7 +169,8 @@ def _options(req: RunRequest) -> dict:
         per_interval = req.budget.max_steps if req.budget.explicit_steps else min(_MAX_NUM_STEPS, req.budget.max_steps)
         # SUNDIALS prints its own warnings (e.g. "mxstep steps taken") to stderr: the SimulationError says it all.
         opts.update({"reltol": req.rtol, "abstol": req.atol, "max_num_steps": per_interval})
-        opts["disable_internal_warnings"] = True
+        if _probe(plugin).has_option(_QUIET):
+            opts[_QUIET] = True
         if req.max_step is not None:
             opts["max_step_size"] = req.max_step
     opts.update(req.options)
@@ -267,8 +271,11 @@ def _run_intervals(req: RunRequest, plugin: str, opts: dict, n_sub: int, stats: 
         except RuntimeError as exc:
             if _interrupted(req, exc):
                 raise KeyboardInterrupt from None
-            loud, x_k = _loud(model.kind, plugin, grid, opts), X[k].copy()
-            t_reached = _time_reached(lambda: loud(x0=x_k, u=u_k, p=model.p))  # noqa: B023 - called at once
+            t_reached = None
+            if _probe(plugin).has_option(_QUIET):
+                # Only SUNDIALS names the time it reached; collocation does not accept the option (and says nothing).
+                loud, x_k = _loud(model.kind, plugin, grid, opts), X[k].copy()
+                t_reached = _time_reached(lambda: loud(x0=x_k, u=u_k, p=model.p))  # noqa: B023 - called at once
             t_abs = float(t[k]) if t_reached is None else float(t[k]) + t_reached
             raise req.fail(t_abs, *_reason(exc, opts, req.model.kind)) from None
         if not np.all(np.isfinite(X[k + 1])):
@@ -280,8 +287,8 @@ def _run_intervals(req: RunRequest, plugin: str, opts: dict, n_sub: int, stats: 
 
 
 def _loud(kind: str, plugin: str, grid: tuple[float, ...], opts: dict) -> ca.Function:
-    """The same integrator with SUNDIALS' own messages on (they name the time reached)."""
-    loud = {**opts, "disable_internal_warnings": False}
+    """The same integrator with SUNDIALS' own messages on (they name the time reached); SUNDIALS plugins only."""
+    loud = {**opts, _QUIET: False}
     return _integrator(kind, plugin, grid, freeze_options(loud))
 
 
@@ -332,6 +339,9 @@ def _reason(exc: BaseException, opts: dict, kind: str) -> tuple[str, str]:
             "set by options={'max_steps': ...})"
         )
         return reason, f"{hint}; or raise options={{'max_steps': ...}} or take a smaller output step dt"
+    if "rootfinder" in reason:
+        # Collocation: the Newton solve of one fixed step did not converge (the step is too long for the dynamics).
+        return reason, "take a smaller collocation step (max_step=...) or an error-controlled implicit method such as 'cvodes'"
     return reason, hint
 
 
