@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import check_model, check_spring_lengths, positive_float, relative_tolerance
+from .._checks import check_model, positive_float, relative_tolerance
 from ..model.model import Model
 from .auto import choose_method
 from .methods import METHODS
@@ -195,7 +195,7 @@ def simulate(
     check_model(model)
     auto = isinstance(method, str) and method.lower() == "auto"
     spec = None if auto else METHODS.resolve(method)
-    x0 = model.check_state(x0, "x0")
+    x0 = model.check_start(x0, "x0")
     if x0.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got {x0.shape}")
     t_final = positive_float("t_final", t_final)
@@ -204,7 +204,6 @@ def simulate(
     atol = positive_float("atol", atol)
     if max_step is not None:
         max_step = positive_float("max_step", max_step)
-    check_spring_lengths(model.kind, x0, "x0")
     t = time_grid(t_final, dt)
     schedule = input_schedule(model, u, t)
     choice = None

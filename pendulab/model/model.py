@@ -17,6 +17,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._checks import check_spring_lengths
 from .builders import SymbolicModel, build_elastic, build_rigid
 from .functions import _vectorized, model_functions
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
@@ -184,6 +185,47 @@ class Model:
             ``x`` is not numeric, has the wrong shape or a non-finite entry.
         """
         return _check_array(x, self.nx, name, self.state_names)
+
+    def check_start(self, x: Any, name: str = "x0") -> np.ndarray:
+        """Validate a start state (or a batch of them) as :func:`pendulab.simulate` does before any run.
+
+        The one start-state check of every entry point that integrates (simulate, ensembles,
+        Lyapunov exponents, the Gymnasium env): shape and finiteness (:meth:`check_state`), spring
+        lengths > 0 for the elastic model, and a finite right-hand side at the state (a spring length
+        or stiffness so close to zero that the dynamics overflow is refused here, naming the state,
+        instead of failing deep inside a solver).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,) or (N, nx)
+            State(s) in ``state_names`` order [rad, m, rad/s, m/s].
+        name : str, default "x0"
+            Argument name used in error messages.
+
+        Returns
+        -------
+        ndarray of float, shape (nx,) or (N, nx)
+            ``x`` as a float array.
+
+        Raises
+        ------
+        ValueError
+            Bad shape, a non-finite entry, a spring length <= 0, or a non-finite right-hand side.
+        """
+        X = self.check_state(x, name)
+        check_spring_lengths(self.kind, X, name)
+        with np.errstate(all="ignore"):
+            f = self.rhs(X)
+        bad = ~np.isfinite(f).all(axis=-1)
+        if np.any(bad):
+            row = X if X.ndim == 1 else X[int(np.argmax(bad))]
+            where = "" if X.ndim == 1 else f"[{int(np.argmax(bad))}]"
+            state = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.state_names, row, strict=True))
+            raise ValueError(
+                f"{name}{where}: the equations of motion are not finite at this state ({state}) with the model's "
+                "parameters; expected spring lengths and stiffnesses well away from zero"
+            )
+        return X
 
     def check_input(self, u: Any, name: str = "u") -> np.ndarray:
         """Validate an input or a batch of inputs.
