@@ -143,3 +143,24 @@ class ProgressBar:
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
+
+    def iterate(self, n: int = 1, unit: str = "it") -> None:
+        """Count ``n`` more steps of work whose total is unknown (IPOPT iterations, controller samples).
+
+        The first call opens an open-ended bar (count and rate, no percentage) in ``unit``;
+        a no-op when disabled. Close it with :meth:`close` before a counted phase starts.
+
+        Parameters
+        ----------
+        n : int
+            Steps done since the last call.
+        unit : str
+            Unit shown by the bar (used when the bar is created).
+        """
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=None, desc=self.desc, unit=unit, smoothing=0.1, file=sys.stderr)
+        self.bar.update(n)
