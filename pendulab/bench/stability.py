@@ -37,11 +37,13 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .._checks import is_interrupt
 from .._io import atomic_open
 from ..integrate import simulate
 from ..integrate.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_state
+from .journal import Journal
 from .workprecision import watch_interrupt
 
 __all__ = [
@@ -55,10 +57,12 @@ __all__ = [
     "UNSTABLE",
     "INACCURATE",
     "ACCURATE",
+    "FAILED",
 ]
 
 POSITION_TOL = 1e-3  # [m] bob-position error that counts as accurate
 UNSTABLE, INACCURATE, ACCURATE = 0, 1, 2
+FAILED = -1  # a map cell whose run raised (recorded with its reason in StabilityResult.failures)
 _HORIZON = 1.0
 _THETA = (0.3, 0.3)
 Progress = Callable[[int, int, str], None]
@@ -195,6 +199,8 @@ class StabilityResult:
         ``k``, ``start``, ``method`` and accepted ``steps`` over 1 s.
     energy : dict of str to (ndarray, ndarray)
         Label -> (t [s], E(t) - E(0) [J]) of the energy study.
+    failures : list of dict
+        Units that raised: ``unit`` (journal key) and ``reason``.
     """
 
     ks: np.ndarray
@@ -205,6 +211,7 @@ class StabilityResult:
     blowup: list[tuple[float, float, float]] = field(default_factory=list)  # (k, h_measured, h_predicted)
     step_counts: list[dict[str, Any]] = field(default_factory=list)
     energy: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)  # label -> (t, E - E0)
+    failures: list[dict[str, str]] = field(default_factory=list)  # {"unit": key, "reason": ...}
 
     @property
     def hs(self) -> np.ndarray:
@@ -218,7 +225,7 @@ class StabilityResult:
         dict
             ``rk4_blowup`` (k, measured and predicted step [s], relative
             difference), ``step_counts``, and ``energy_change_J``: the final
-            energy change [J] per run.
+            energy change [J] per run, and ``failures`` (units that raised, with the reason).
         """
         return {
             "rk4_blowup": [
@@ -226,6 +233,7 @@ class StabilityResult:
             ],
             "step_counts": self.step_counts,
             "energy_change_J": {lab: float(dE[-1]) for lab, (_, dE) in self.energy.items()},
+            "failures": self.failures,
         }
 
 
@@ -246,20 +254,38 @@ def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
     return len(sol.t) - 1
 
 
-def run_stability(*, quick: bool = False, progress: Progress | None = None) -> StabilityResult:
+def run_stability(
+    *, quick: bool = False, progress: Progress | None = None, journal: str | Path | None = None, resume: bool = False
+) -> StabilityResult:
     """Run the four stability studies (3-9 min on 2 cores; ``quick``: a few seconds).
+
+    Each finished unit (a map cell, a blow-up bisection, a step count, an
+    energy run) is recorded in ``journal`` (rewritten atomically), so an
+    interrupted or crashed run keeps it and ``resume=True`` continues. A unit
+    that raises (any ``Exception``) is recorded as failed with its reason
+    (``StabilityResult.failures``; a failed map cell has class ``FAILED``)
+    and the study goes on.
 
     Parameters
     ----------
     quick : bool
         Fewer stiffnesses, steps and methods, and a 2 s energy run.
     progress : callable(int, int, str), optional
-        Called as ``progress(done, total, label)`` after each unit of work.
+        Called as ``progress(done, total, label)`` after each unit of work (resumed units count as done).
+    journal : str or Path, optional
+        JSON file recording every finished unit (see :class:`~pendulab.bench.journal.Journal`).
+    resume : bool
+        Skip the units already recorded in ``journal`` (written with the same ``quick``).
 
     Returns
     -------
     StabilityResult
         The map, the RK4 blow-up steps, the step counts and the energy study.
+
+    Raises
+    ------
+    ValueError
+        A journal to resume that was written with another ``quick``.
     """
     ks = np.array([1e2, 1e6]) if quick else np.logspace(2, 6, 9)
     n_steps = np.array([20, 200, 2000]) if quick else np.array([10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
@@ -267,21 +293,38 @@ def run_stability(*, quick: bool = False, progress: Progress | None = None) -> S
     blow_ks = [1e6] if quick else [1e4, 1e5, 1e6]
     sc_ks = [1e2, 1e4] if quick else [1e2, 1e3, 1e4, 1e5, 1e6]
     sc_methods = ["RK45", "Radau"] if quick else ["RK45", "DOP853", "Radau", "cvodes-bdf"]
-    total = len(ks) * (1 + len(methods) * len(n_steps)) + len(blow_ks) + len(sc_ks) * len(sc_methods) * 2 + 1
+    total = len(ks) * len(methods) * len(n_steps) + len(blow_ks) + len(sc_ks) * len(sc_methods) * 2 + len(_ENERGY_RUNS)
+    log = Journal(journal, "stability", {"quick": quick}, resume=resume)
     done = 0
 
     with watch_interrupt() as interrupted:
 
-        def tick(label: str) -> None:
+        def unit(key: str, compute: Callable[[], Any]) -> Any:
+            """The recorded value of ``key``, else ``compute()`` recorded (or ``{"failed": reason}``)."""
             nonlocal done
-            # A native solver (CVODES) may have swallowed a Ctrl-C and carried on: stop anyway.
-            if interrupted():
-                raise KeyboardInterrupt
+            if key in log:
+                value = log.get(key)
+            else:
+                try:
+                    value = compute()
+                except Exception as exc:
+                    if is_interrupt(exc):
+                        raise KeyboardInterrupt from exc
+                    value = {"failed": f"{type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0][:300]}"}
+                # A native solver (CVODES) may have swallowed a Ctrl-C and carried on: stop anyway (unrecorded).
+                if interrupted():
+                    raise KeyboardInterrupt
+                log.record(key, value)
             done += 1
             if progress is not None:
-                progress(done, total, label)
+                progress(done, total, key)
+            return value
 
-        return _run_studies(ks, n_steps, methods, blow_ks, sc_ks, sc_methods, quick, tick)
+        return _run_studies(ks, n_steps, methods, blow_ks, sc_ks, sc_methods, quick, unit)
+
+
+def _failed(value: Any) -> str | None:
+    return value.get("failed") if isinstance(value, dict) else None
 
 
 def _run_studies(
@@ -292,7 +335,7 @@ def _run_studies(
     sc_ks: list[float],
     sc_methods: list[str],
     quick: bool,
-    tick: Callable[[str], None],
+    unit: Callable[[str, Callable[[], Any]], Any],
 ) -> StabilityResult:
     res = StabilityResult(ks=ks, n_steps=n_steps, omega_max=np.array([omega_max(elastic(k1=k, k2=k)) for k in ks]))
     for m in methods:
@@ -300,46 +343,67 @@ def _run_studies(
         res.errors[m] = np.zeros((len(ks), len(n_steps)))
     for i, k in enumerate(ks):
         model = elastic(k1=k, k2=k)
-        ref = simulate(model, _start(model, "rest-length"), _HORIZON, 0.1, "cvodes-adams", 1e-10, 1e-10)
-        ref_pos = model.positions(ref.x)
-        tick(f"reference k={k:.0e}")
+        ref_pos: list[np.ndarray] = []  # computed on the first cell of this k that is not recorded
+
+        def cell(m: str, n: int, model: Model = model, ref_pos: list = ref_pos) -> list[float]:
+            if not ref_pos:
+                ref = simulate(model, _start(model, "rest-length"), _HORIZON, 0.1, "cvodes-adams", 1e-10, 1e-10)
+                ref_pos.append(model.positions(ref.x))
+            cls, err = classify(model, m, n, ref_pos[0])
+            return [cls, err]
+
         for m in methods:
             for j, n in enumerate(n_steps):
-                res.maps[m][i, j], res.errors[m][i, j] = classify(model, m, int(n), ref_pos)
-                tick(f"map {m} k={k:.0e} h={1 / n:.0e}")
+                key = f"map|{m}|k={float(k)!r}|n={int(n)}"
+                value = unit(key, lambda m=m, n=int(n): cell(m, n))
+                if _failed(value):
+                    res.failures.append({"unit": key, "reason": _failed(value)})
+                    value = [FAILED, math.nan]
+                res.maps[m][i, j], res.errors[m][i, j] = int(value[0]), float(value[1])
     for k in blow_ks:
-        hm, hp = rk4_blowup_step(k)
-        res.blowup.append((k, hm, hp))
-        tick(f"rk4 blow-up k={k:.0e}")
+        key = f"rk4-blowup|k={k!r}"
+        value = unit(key, lambda k=k: list(rk4_blowup_step(k)))
+        if _failed(value):
+            res.failures.append({"unit": key, "reason": _failed(value)})
+        else:
+            res.blowup.append((k, float(value[0]), float(value[1])))
     for k in sc_ks:
         model = elastic(k1=k, k2=k)
         for start in ("quasi-static", "rest-length"):
-            x0 = _start(model, start)
             for m in sc_methods:
-                res.step_counts.append({"k": k, "start": start, "method": m, "steps": _step_count(model, m, x0, 1e-6)})
-                tick(f"steps {m} k={k:.0e} {start}")
-    res.energy = _energy_study(quick)
-    tick("energy study")
+                key = f"steps|{m}|k={k!r}|{start}"
+                value = unit(key, lambda model=model, start=start, m=m: _step_count(model, m, _start(model, start), 1e-6))
+                if _failed(value):
+                    res.failures.append({"unit": key, "reason": _failed(value)})
+                else:
+                    res.step_counts.append({"k": k, "start": start, "method": m, "steps": int(value)})
+    for label in _ENERGY_RUNS:
+        key = f"energy|{label}"
+        value = unit(key, lambda label=label: _energy_run(label, quick))
+        if _failed(value):
+            res.failures.append({"unit": key, "reason": _failed(value)})
+        else:
+            res.energy[label] = (np.asarray(value[0], dtype=float), np.asarray(value[1], dtype=float))
     return res
 
 
-def _energy_study(quick: bool) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+_ENERGY_H = 0.02  # h * omega_max = 3.2 at k = 1e4: the spring mode is not resolved
+#: The energy study's runs: label -> simulate keywords.
+_ENERGY_RUNS: dict[str, dict[str, Any]] = {
+    "Gauss-Legendre collocation (h = 0.02 s)": dict(method="collocation-legendre", max_step=_ENERGY_H),
+    "implicit midpoint (h = 0.02 s)": dict(method="implicit-midpoint", max_step=_ENERGY_H),
+    "Radau IIA collocation (h = 0.02 s)": dict(method="collocation-radau", max_step=_ENERGY_H),
+    "CVODES BDF (rtol = 1e-4)": dict(method="cvodes-bdf", rtol=1e-4, atol=1e-6),
+}
+
+
+def _energy_run(label: str, quick: bool) -> list[list[float]]:
+    """One run of the energy study: [t [s], E(t) - E(0) [J]] (undamped springs, k = 1e4, rest-length start)."""
     model = elastic(k1=1e4, k2=1e4)
     x0 = _start(model, "rest-length")
-    T = 2.0 if quick else 10.0
-    h = 0.02  # h * omega_max = 3.2: the spring mode is not resolved
-    runs = {
-        "Gauss-Legendre collocation (h = 0.02 s)": dict(method="collocation-legendre", max_step=h),
-        "implicit midpoint (h = 0.02 s)": dict(method="implicit-midpoint", max_step=h),
-        "Radau IIA collocation (h = 0.02 s)": dict(method="collocation-radau", max_step=h),
-        "CVODES BDF (rtol = 1e-4)": dict(method="cvodes-bdf", rtol=1e-4, atol=1e-6),
-    }
-    out = {}
-    for label, kw in runs.items():
-        tr = simulate(model, x0, T, 0.02, **kw)
-        E = model.energy(tr.x)
-        out[label] = (tr.t, E - E[0])
-    return out
+    tr = simulate(model, x0, 2.0 if quick else 10.0, _ENERGY_H, **_ENERGY_RUNS[label])
+    E = model.energy(tr.x)
+    return [tr.t.tolist(), (E - E[0]).tolist()]
 
 
 def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
@@ -362,7 +426,7 @@ def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "stability_map.csv", out / "rk4_limit.csv", out / "step_counts.csv"]
-    names = {UNSTABLE: "unstable", INACCURATE: "stable-inaccurate", ACCURATE: "stable-accurate"}
+    names = {UNSTABLE: "unstable", INACCURATE: "stable-inaccurate", ACCURATE: "stable-accurate", FAILED: "failed"}
     # Atomic writes: an interrupted run never leaves a truncated CSV.
     with atomic_open(paths[0], "w", newline="") as fh:
         w = csv.writer(fh)
@@ -423,7 +487,9 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
     kk = np.logspace(lk[0], lk[-1], 100)
     wmax = np.interp(np.log10(kk), lk, np.log10(res.omega_max))
     for ax, m in zip(axes.flat, methods, strict=False):
-        ax.pcolormesh(10 ** edges(lk), 10 ** edges(lh), res.maps[m].T, cmap=cmap, vmin=0, vmax=2, shading="flat")
+        # Failed cells (FAILED < 0) stay blank.
+        cells = np.ma.masked_less(res.maps[m].T, 0)
+        ax.pcolormesh(10 ** edges(lk), 10 ** edges(lh), cells, cmap=cmap, vmin=0, vmax=2, shading="flat")
         ax.set_xscale("log")
         ax.set_yscale("log")
         lim = IMAG_AXIS_LIMIT.get(m)

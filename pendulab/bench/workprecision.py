@@ -30,6 +30,7 @@ import csv
 import math
 import signal
 import statistics
+import textwrap
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -39,13 +40,14 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import is_interrupt
+from .._checks import is_interrupt, positive_float
 from .._io import atomic_open
 from ..integrate import SimulationError
 from ..model.model import Model
 from ..scene import Scene
 from .cases import get_cases
 from .fmu_methods import fmu_bench_methods
+from .journal import Journal
 from .methods import TOLS, TOLS_QUICK, BenchMethod, native_bench_methods
 from .reference import Reference, load_reference
 
@@ -187,8 +189,15 @@ def run_work_precision(
     repeats: int = 3,
     slow_run_s: float = 5.0,
     progress: Progress | None = None,
+    journal: str | Path | None = None,
+    resume: bool = False,
 ) -> list[Row]:
     """Run the work-precision sweep.
+
+    Each finished point is recorded in ``journal`` (rewritten atomically), so an
+    interrupted or crashed run keeps its finished points and ``resume=True``
+    continues it. A point that raises (any ``Exception``) is recorded with
+    status ``"failed"`` and its reason, and the sweep goes on.
 
     Parameters
     ----------
@@ -204,7 +213,12 @@ def run_work_precision(
         A point whose median wall time exceeds this [s] (or whose warm-up run
         exceeds four times this) ends the method's sweep on that case.
     progress : callable, optional
-        ``progress(done, total, label)`` after each point.
+        ``progress(done, total, label)`` after each point (resumed points count as done).
+    journal : str or Path, optional
+        JSON file recording every finished point (see :class:`~pendulab.bench.journal.Journal`).
+    resume : bool
+        Skip the points already recorded in ``journal`` (written with the same
+        ``quick``, ``repeats`` and ``slow_run_s``).
 
     Returns
     -------
@@ -214,43 +228,67 @@ def run_work_precision(
     Raises
     ------
     ValueError
-        ``repeats`` < 1, or an unknown method or case name.
+        ``repeats`` < 1, an unknown method or case name, or a journal to
+        resume that was written with other settings.
     ReferenceMissingError
         A case has no stored (or only a stale) reference.
     """
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    slow_run_s = positive_float("slow_run_s", slow_run_s, "[s]")
     selected = list(BENCH_METHODS) if methods is None else list(methods)
     unknown = [m for m in selected if m not in BENCH_METHODS]
     if unknown:
         raise ValueError(f"unknown method(s) {unknown}; expected some of {list(BENCH_METHODS)}")
     case_list = get_cases(cases)
     refs = {c.name: load_reference(c) for c in case_list}
+    log = Journal(journal, "work-precision", {"quick": quick, "repeats": repeats, "slow_run_s": slow_run_s}, resume=resume)
     plan = [(c, BENCH_METHODS[m]) for c in case_list for m in selected]
     total = sum(len(bm.quick if quick else bm.settings) for _, bm in plan)
     rows: list[Row] = []
     done = 0
     with watch_interrupt() as interrupted:
         for case, bm in plan:
-            model, x0 = case.model, case.x0
             settings = bm.quick if quick else bm.settings
             stop = False
             for s in settings:
-                if stop:
-                    rows.append(
-                        Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s")
-                    )
+                key = f"{case.name}|{bm.name}|{s!r}"
+                if key in log:
+                    row = Row(**log.get(key))
+                elif stop:
+                    row = Row(case.name, bm.name, bm.sweep, s, "skipped", message=f"a looser setting took > {slow_run_s:g} s")
                 else:
-                    row = _measure(bm, case, model, x0, refs[case.name], s, repeats)
-                    # A native solver may have swallowed a Ctrl-C (and retried): stop anyway.
+                    row = _measure_or_fail(bm, case, refs[case.name], s, repeats)
+                    # A native solver may have swallowed a Ctrl-C (and retried): stop anyway (unrecorded).
                     if interrupted():
                         raise KeyboardInterrupt
-                    rows.append(row)
-                    stop = row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s)
+                if key not in log:
+                    log.record(key, asdict(row))
+                rows.append(row)
+                stop = stop or (row.status == "ok" and (row.wall_median > slow_run_s or row.first_run > 4 * slow_run_s))
                 done += 1
                 if progress is not None:
                     progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
     return rows
+
+
+def _measure_or_fail(bm: BenchMethod, case: Scene, ref: Reference, setting: float, repeats: int) -> Row:
+    """:func:`_measure`, or a ``"failed"`` row naming the error: one broken point never ends the study."""
+    try:
+        return _measure(bm, case, case.model, case.x0, ref, setting, repeats)
+    except Exception as exc:
+        if is_interrupt(exc):
+            raise KeyboardInterrupt from exc
+        reason = (str(exc).strip().splitlines() or [""])[0][:300]
+        return Row(
+            case.name,
+            bm.name,
+            bm.sweep,
+            setting,
+            "failed",
+            reference_accuracy=ref.accuracy,
+            message=f"{type(exc).__name__}: {reason}",
+        )
 
 
 @contextlib.contextmanager
@@ -427,7 +465,8 @@ def plot_work_precision(
     methods = list(dict.fromkeys(r.method for r in rows))
     ncol = min(2, len(cases))
     nrow = math.ceil(len(cases) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow), squeeze=False)
+    # Constrained layout keeps the title, labels and the legend below the panels inside the figure.
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow + 0.8), squeeze=False, layout="constrained")
     cmap = plt.get_cmap("tab20")
     markers = "osD^v<>ph*Xd8PH+"
     for ax, case in zip(axes.flat, cases, strict=False):
@@ -458,10 +497,12 @@ def plot_work_precision(
         h, lab = ax.get_legend_handles_labels()
         if len(lab) > len(labels):
             handles, labels = h, lab
-    fig.legend(handles, labels, loc="lower center", ncol=min(7, len(labels)), fontsize=8, frameon=False)
+    fig.legend(
+        handles, labels, loc="outside lower center", ncol=min(7 if ncol > 1 else 4, len(labels)), fontsize=8, frameon=False
+    )
     default_title = "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep, dash-dot = FMU via fmpy"
-    fig.suptitle(title or default_title, fontsize=11)
-    fig.tight_layout(rect=(0, 0.06 if nrow > 1 else 0.1, 1, 0.97))
+    # One panel is 6.4 in wide: wrap the title to fit it (about 11 characters per inch at 11 pt).
+    fig.suptitle(textwrap.fill(title or default_title, width=int(6.4 * ncol * 11)), fontsize=11)
     from ..viz.save import save_figure
 
     return save_figure(fig, path, dpi=110)

@@ -5,16 +5,23 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import sys
+import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
+from ._common import ProgressBar
 
 __all__ = ["register"]
 
-_DEFAULT_OUT = "docs/benchmarks"
+_DEFAULT_OUT = "docs/benchmarks"  # bench hierarchy only (its module's owner decides); the studies below use pendulab-out
+_OUT_WP = "pendulab-out/bench-work-precision"
+_OUT_STABILITY = "pendulab-out/bench-stability"
+_DOCS_NOTE = "; --out docs/benchmarks regenerates the shipped docs (see docs/benchmarks.md)"
 
 
 class _Bar:
@@ -38,26 +45,105 @@ class _Bar:
             self.bar = None
 
 
+def _progress(desc: str, args: argparse.Namespace) -> tuple[ProgressBar, Any]:
+    """The project's progress bar and a ``progress(done, total, label)`` callback feeding it."""
+    bar = ProgressBar(desc, not args.no_progress)
+    return bar, lambda done, total, label: bar(done, total)
+
+
+def _json(obj: Any) -> str:
+    """Strict JSON (NaN and inf become null; paths and NumPy numbers become str / numbers)."""
+
+    def clean(v: Any) -> Any:
+        if isinstance(v, dict):
+            return {str(k): clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if hasattr(v, "item") and callable(v.item):  # NumPy scalar
+            v = v.item()
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        return v if isinstance(v, (str, int, float, bool, type(None))) else str(v)
+
+    return json.dumps(clean(obj), indent=1, allow_nan=False)
+
+
+def _resumable(journal: Path, args: argparse.Namespace) -> int:
+    """Entries a ``--resume`` run will reuse (a note on stderr when there is nothing to resume)."""
+    if not args.resume:
+        return 0
+    if not journal.exists():
+        print(f"pendulab bench: nothing to resume in {journal.parent} (no {journal.name}); starting", file=sys.stderr)
+        return 0
+    try:
+        return len(json.loads(journal.read_text(encoding="utf-8")).get("entries", {}))
+    except (OSError, ValueError, AttributeError):
+        return 0  # the study itself reports an unreadable journal
+
+
 def _work_precision(args: argparse.Namespace) -> int:
     from ..bench import workprecision as wp
 
+    if args.merge and args.resume:
+        raise CLIError("--merge and --resume: use one (--resume continues this run's journal, --merge combines CSVs)")
     out = Path(args.out)
-    rows = wp.run_work_precision(args.cases, args.methods, quick=args.quick, repeats=args.repeats, progress=_Bar())
+    journal = out / "work_precision_journal.json"
+    resumed = _resumable(journal, args)
+    start = time.perf_counter()
+    bar, progress = _progress("bench work-precision", args)
+    try:
+        rows = wp.run_work_precision(
+            args.cases,
+            args.methods,
+            quick=args.quick,
+            repeats=args.repeats,
+            progress=progress,
+            journal=journal,
+            resume=args.resume,
+        )
+    finally:
+        bar.close()
+    elapsed = time.perf_counter() - start
     csv_path = out / "work_precision.csv"
     if args.merge and csv_path.exists():
         # Charts and tables below are regenerated from the complete, merged CSV.
         rows = wp.merge_rows(wp.read_csv(csv_path), rows)
     wp.write_csv(rows, csv_path)
-    figs = [
+    files = [csv_path]
+    files += [
         wp.plot_work_precision(rows, out / f"work_precision_{metric}.png", metric)
         for metric in ("grid_error", "final_error", "energy_drift")
     ]
-    figs.append(wp.plot_work_precision(rows, out / "work_precision_grid_error_cpu.png", "grid_error", time_metric="cpu_median"))
-    md = out / "work_precision_fastest.md"
-    atomic_write_text(md, _fastest_markdown(rows))
-    figs.append(md)
-    n_ok = sum(r.status == "ok" for r in rows)
-    print(f"{n_ok}/{len(rows)} runs ok; wrote {csv_path} and {', '.join(str(f) for f in figs)}")
+    files.append(wp.plot_work_precision(rows, out / "work_precision_grid_error_cpu.png", "grid_error", time_metric="cpu_median"))
+    files.append(atomic_write_text(out / "work_precision_fastest.md", _fastest_markdown(rows)))
+    status = Counter(r.status for r in rows)
+    failed = [
+        {"case": r.case, "method": r.method, "setting": r.setting, "status": r.status, "message": r.message}
+        for r in rows
+        if r.status in ("failed", "unstable")
+    ]
+    if args.json:
+        summary = {
+            "command": "bench work-precision",
+            "out": str(out),
+            "quick": args.quick,
+            "cases": list(dict.fromkeys(r.case for r in rows)),
+            "methods": list(dict.fromkeys(r.method for r in rows)),
+            "points": len(rows),
+            "status": dict(status),
+            "resumed_points": resumed,
+            "wall_time_s": elapsed,
+            "failed": failed,
+            "journal": str(journal),
+            "files": [str(f) for f in files],
+        }
+        print(_json(summary))
+        return 0
+    counts = ", ".join(f"{n} {k}" for k, n in sorted(status.items()))
+    print(f"{status.get('ok', 0)}/{len(rows)} points ok ({counts}); {resumed} resumed from the journal; {elapsed:.0f} s")
+    for f in failed:
+        print(f"  {f['status']}: {f['case']} {f['method']} {f['setting']:g}: {f['message']}")
+    print("wrote " + ", ".join(str(f) for f in files))
     return 0
 
 
@@ -89,11 +175,43 @@ def _stability(args: argparse.Namespace) -> int:
     from ..bench import stability as st
 
     out = Path(args.out)
-    result = st.run_stability(quick=args.quick, progress=_Bar())
+    journal = out / "stability_journal.json"
+    resumed = _resumable(journal, args)
+    start = time.perf_counter()
+    bar, progress = _progress("bench stability", args)
+    try:
+        result = st.run_stability(quick=args.quick, progress=progress, journal=journal, resume=args.resume)
+    finally:
+        bar.close()
+    elapsed = time.perf_counter() - start
     paths = st.write_stability(result, out)
-    print(json.dumps(result.summary(), indent=1))
+    if args.json:
+        summary = {
+            "command": "bench stability",
+            "out": str(out),
+            "quick": args.quick,
+            "resumed_units": resumed,
+            "wall_time_s": elapsed,
+            **result.summary(),
+            "journal": str(journal),
+            "files": [str(p) for p in paths],
+        }
+        print(_json(summary))
+        return 0
+    for k, hm, hp in result.blowup:
+        print(f"RK4 blow-up step at k = {k:.0e} N/m: measured {hm:.4g} s, predicted {hp:.4g} s ({hm / hp - 1:+.2%})")
+    for label, (_, dE) in result.energy.items():
+        print(f"energy change after {_horizon(result):g} s, {label}: {float(dE[-1]):+.3e} J")
+    for f in result.failures:
+        print(f"  failed: {f['unit']}: {f['reason']}")
+    print(f"{len(result.failures)} units failed; {resumed} resumed from the journal; {elapsed:.0f} s")
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
+
+
+def _horizon(result: Any) -> float:
+    """Horizon [s] of the energy study (its last time point)."""
+    return max((float(t[-1]) for t, _ in result.energy.values()), default=0.0)
 
 
 def _hierarchy(args: argparse.Namespace) -> int:
@@ -162,10 +280,15 @@ def _references(args: argparse.Namespace) -> int:
     from ..bench.reference import REFERENCE_DIR, compute_reference
 
     directory = Path(args.out) if args.out else REFERENCE_DIR
+    written = []
     for case in get_cases(args.cases):
         ref = compute_reference(case, progress=lambda msg: print(msg, file=sys.stderr, flush=True))
         path = ref.save(directory)
-        print(f"{case.name}: accuracy {ref.accuracy:.3e} ({ref.notes}) -> {path}")
+        written.append({"case": case.name, "accuracy": ref.accuracy, "notes": ref.notes, "file": str(path)})
+        if not args.json:
+            print(f"{case.name}: accuracy {ref.accuracy:.3e} ({ref.notes}) -> {path}")
+    if args.json:
+        print(json.dumps({"command": "bench references", "out": str(directory), "references": written}, indent=1))
     return 0
 
 
@@ -211,6 +334,17 @@ def _ensemble(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_study_options(p: argparse.ArgumentParser, journal: str, unit: str) -> None:
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help=f"continue an interrupted or crashed run in the same --out: every finished {unit} is recorded in "
+        f"OUT/{journal} and is not recomputed (same --quick/--repeats required)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON summary on stdout instead of text")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("bench", help="work-precision and stability benchmarks", description=__doc__)
     sub = p.add_subparsers(dest="bench_command", metavar="BENCH")
@@ -219,7 +353,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     wp = sub.add_parser("work-precision", help="median wall time against achieved error, per case")
     wp.add_argument("--cases", nargs="+", metavar="CASE", help="case names (default: all)")
     wp.add_argument("--methods", nargs="+", metavar="METHOD", help="method names (default: all)")
-    wp.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory for CSV and charts (default {_DEFAULT_OUT})")
+    wp.add_argument(
+        "--out", default=_OUT_WP, help=f"output directory for CSV, charts and journal (default ./{_OUT_WP}{_DOCS_NOTE})"
+    )
     wp.add_argument("--quick", action="store_true", help="short sweeps (CI smoke run)")
     wp.add_argument("--repeats", type=int, default=3, help="timed runs per point; the median is reported (default 3)")
     wp.add_argument(
@@ -228,11 +364,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="replace only the re-measured (case, method) rows of an existing OUT/work_precision.csv; charts and tables "
         "are redrawn from the merged CSV",
     )
+    _add_study_options(wp, "work_precision_journal.json", "point")
     wp.set_defaults(func=_work_precision)
 
     st = sub.add_parser("stability", help="stable/inaccurate/unstable map over stiffness and step, step counts, energy")
-    st.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory (default {_DEFAULT_OUT})")
+    st.add_argument("--out", default=_OUT_STABILITY, help=f"output directory (default ./{_OUT_STABILITY}{_DOCS_NOTE})")
     st.add_argument("--quick", action="store_true", help="coarse map (CI smoke run)")
+    _add_study_options(st, "stability_journal.json", "unit (map cell, bisection, step count, energy run)")
     st.set_defaults(func=_stability)
 
     hi = sub.add_parser("hierarchy", help="model-hierarchy choice over spring stiffness x release angle")
@@ -244,6 +382,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rf = sub.add_parser("references", help="recompute the stored reference solutions of the cases")
     rf.add_argument("--cases", nargs="+", metavar="CASE", help="case names (default: all)")
     rf.add_argument("--out", default=None, help="directory (default: the package's bench/references)")
+    rf.add_argument("--json", action="store_true", help="print one JSON summary on stdout instead of text")
     rf.set_defaults(func=_references)
 
     en = sub.add_parser(
