@@ -22,8 +22,9 @@ SKIPPED: dict[tuple[str, str], str] = {
     ("nmpc", task): "not scored here (elastic NMPC: ~50 ms per solve, a card takes hours; see docs/nmpc.md)"
     for task in ("pendubot_elastic_soft", "acrobot_elastic_soft")
 }
-#: Where the leaderboard is written by default.
-DEFAULT_PATH = Path("docs") / "leaderboard.md"
+#: Where the leaderboard is written by default (relative to the current directory; never into docs/:
+#: regenerate the shipped page explicitly with ``--out docs/leaderboard.md`` from the repository root).
+DEFAULT_PATH = Path("pendulab-out") / "leaderboard" / "leaderboard.md"
 
 
 def _one_line(exc: BaseException) -> str:
@@ -39,7 +40,7 @@ def write_leaderboard(
     Parameters
     ----------
     path : str or Path, optional
-        Output file; default ``docs/leaderboard.md``.
+        Output file; default :data:`DEFAULT_PATH` (``./pendulab-out/leaderboard/leaderboard.md``).
     runs : int
         Runs per level of the stochastic categories of every scorecard.
     workers : int, optional

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
 
+from .._checks import bounded_int
+from .._io import atomic_write_text
+from .._version import __version__
 from . import CLIError
-from ._common import ProgressBar
+from ._common import ProgressBar, parse_number
 
 __all__ = ["register", "run_score"]
 
@@ -37,27 +41,53 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--task", default=None, metavar="TASK", help="swing-up task name (pendulab swingup --list); --realai: pendubot | acrobot"
     )
-    p.add_argument("--runs", default="20", metavar="N", help="runs per level of the stochastic categories (default 20)")
+    p.add_argument("--runs", default=None, metavar="N", help="runs per level of the stochastic categories (default 20)")
     p.add_argument("--categories", default=None, metavar="A,B", help="comma-separated categories (default: all that apply)")
-    p.add_argument("--seed", default="0", metavar="S", help="base seed (default 0)")
+    p.add_argument("--seed", default=None, metavar="S", help="base seed (default 0)")
     p.add_argument("--workers", default=None, metavar="N", help="worker processes (default: all cores)")
-    p.add_argument("--out", default=None, metavar="DIR", help="output directory (--leaderboard: the markdown file)")
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="output directory (default ./pendulab-out/score/CONTROLLER-TASK, "
+        "--realai: ./pendulab-out/score/realai-CONTROLLER-TASK); "
+        "--leaderboard: the markdown file (default ./pendulab-out/leaderboard/leaderboard.md; "
+        "--out docs/leaderboard.md regenerates the shipped page)",
+    )
+    p.add_argument(
+        "--resume", action="store_true", help="continue an interrupted scorecard from DIR/records.json (same settings)"
+    )
+    p.add_argument("--max-wall-time", default=None, metavar="S", help="wall-time budget [s] of the scorecard's runs")
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--realai", action="store_true", help="RealAIGym simulation leaderboard score (pendubot | acrobot)")
-    mode.add_argument("--leaderboard", action="store_true", help="regenerate docs/leaderboard.md (all controllers x tasks)")
+    mode.add_argument("--leaderboard", action="store_true", help="regenerate the leaderboard (all controllers x tasks)")
     p.set_defaults(func=run_score)
 
 
-def _int(option: str, text: str, lo: int) -> int:
+#: Options of the scorecard that the other modes do not take (an error there, not ignored).
+_SCORECARD_ONLY = (
+    ("categories", "--categories"),
+    ("seed", "--seed"),
+    ("resume", "--resume"),
+    ("max_wall_time", "--max-wall-time"),
+)
+
+
+def _reject(args: argparse.Namespace, mode: str, names: tuple[tuple[str, str], ...]) -> None:
+    given = [flag for attr, flag in names if getattr(args, attr) not in (None, False)]
+    if given:
+        raise CLIError(f"{', '.join(given)} {'does' if len(given) == 1 else 'do'} not apply to {mode}")
+
+
+def _int(option: str, text: str | None, lo: int, hi: int, why: str, default: int | None = None) -> int | None:
+    if text is None:
+        return default
     try:
-        value = int(text)
-    except (TypeError, ValueError):
-        raise CLIError(f"{option} {text!r}: expected an integer") from None
-    if value < lo:
-        raise CLIError(f"{option} {text!r}: expected an integer >= {lo}")
-    return value
+        return bounded_int(option, text, low=lo, high=hi, why=why)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
 
 
 def run_score(args: argparse.Namespace) -> int:
@@ -76,11 +106,16 @@ def run_score(args: argparse.Namespace) -> int:
     Raises
     ------
     CLIError
-        Missing or bad options, unknown task, controller or category.
+        Missing, bad or inapplicable options, unknown task, controller or category.
     """
-    workers = None if args.workers is None else _int("--workers", args.workers, 1)
-    runs = _int("--runs", args.runs, 1)
+    from ..control.scorecard import MAX_RUNS
+
+    workers = _int("--workers", args.workers, 1, 1024, "worker processes")
+    runs = _int("--runs", args.runs, 1, MAX_RUNS, "runs per level of each stochastic category", 20)
     if args.leaderboard:
+        _reject(args, "--leaderboard (it scores every controller on every task)", _SCORECARD_ONLY)
+        if args.controller is not None or args.task is not None:
+            raise CLIError("--controller and --task do not apply to --leaderboard (it scores every controller on every task)")
         from .leaderboard import write_leaderboard
 
         path = write_leaderboard(args.out, runs=runs, workers=workers, progress=not args.no_progress)
@@ -89,9 +124,13 @@ def run_score(args: argparse.Namespace) -> int:
     if args.controller is None or args.task is None:
         raise CLIError("--controller and --task are required (or --leaderboard)")
     if args.realai:
+        _reject(
+            args, "--realai (one deterministic leaderboard run)", (*_SCORECARD_ONLY, ("workers", "--workers"), ("runs", "--runs"))
+        )
         return _run_realai(args)
     from ..control.controllers import TASK_CONTROLLERS
     from ..control.scorecard import CATEGORIES, score
+    from ..control.swingup.iterations import iteration_hook
     from ..control.swingup.tasks import load_task, task_names
 
     if args.controller not in TASK_CONTROLLERS:
@@ -106,50 +145,107 @@ def run_score(args: argparse.Namespace) -> int:
         bad = [c for c in cats if c not in CATEGORIES]
         if bad:
             raise CLIError(f"--categories: unknown {bad}; expected some of {list(CATEGORIES)}")
-    bar = ProgressBar(f"score {args.controller} on {task.name}", not args.no_progress)
-    try:
-        card = score(
-            args.controller, task, runs=runs, categories=cats, seed=_int("--seed", args.seed, 0), workers=workers, progress=bar
-        )
-    finally:
-        bar.close()
-    if args.out:
-        from ..viz.scorecard import plot_scorecard
+    seed = _int("--seed", args.seed, 0, 2**63 - 1, "a seed of numpy's SeedSequence", 0)
+    budget = parse_number("--max-wall-time", args.max_wall_time, positive=True)
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"{args.controller}-{task.name}"
+    settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats}
+    completed = _resume(out / _RECORDS, settings) if args.resume else ()
+    out.mkdir(parents=True, exist_ok=True)
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "scorecard.json").write_text(card.to_json() + "\n")
-        (out / "scorecard.md").write_text(card.table() + "\n")
-        plot_scorecard(card, out / "scorecard.png")
-        print(f"wrote {out / 'scorecard.json'}, scorecard.md, scorecard.png", file=sys.stderr)
+    def save(records: tuple, complete: bool = False) -> None:
+        from dataclasses import asdict
+
+        data = {**settings, "pendulab": __version__, "complete": complete, "records": [_finite(asdict(r)) for r in records]}
+        atomic_write_text(out / _RECORDS, json.dumps(data) + "\n")
+
+    planning = ProgressBar(f"planning {args.controller} on {task.name} (IPOPT)", not args.no_progress)
+    bar = ProgressBar(f"score {args.controller} on {task.name}", not args.no_progress)
+
+    def progress(done: int, total: int) -> None:
+        planning.close()
+        bar(done, total)
+
+    try:
+        with iteration_hook(lambda: planning.iterate(1, "iter")):
+            card = score(
+                args.controller, task, runs=runs, categories=cats, seed=seed, workers=workers, progress=progress,
+                completed=completed, on_records=save, max_wall_time=budget,
+            )  # fmt: skip
+    finally:
+        planning.close()
+        bar.close()
+    save(card.records, complete=True)
+    from ..viz.scorecard import plot_scorecard
+
+    atomic_write_text(out / "scorecard.md", card.table() + "\n")
+    plot_scorecard(card, out / "scorecard.png")
+    # Last: a scorecard.json means every other output of the run is complete.
+    atomic_write_text(out / "scorecard.json", card.to_json() + "\n")
+    print(f"wrote {out / 'scorecard.json'}, scorecard.md, scorecard.png, {_RECORDS}", file=sys.stderr)
     if args.json:
         print(card.to_json())
     else:
         print(card.table())
-        print(f"\n{len(card.records)} runs, {len(card.failures)} failed, {card.wall_time:.1f} s")
+        resumed = f", {len(completed)} resumed" if completed else ""
+        print(f"\n{len(card.records)} runs{resumed}, {len(card.failures)} failed, {card.wall_time:.1f} s")
     return 0
 
 
-def _run_realai(args: argparse.Namespace) -> int:
-    if args.task not in ("pendubot", "acrobot"):
-        raise CLIError(f"--task {args.task!r}: --realai expects pendubot or acrobot")
+#: Every finished run of a scorecard, rewritten atomically after each batch (``--resume`` reads it).
+_RECORDS = "records.json"
+
+
+def _finite(d: dict[str, Any]) -> dict[str, Any]:
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+
+
+def _resume(path: Path, settings: dict[str, Any]) -> tuple:
+    """Records of an earlier run with the same settings (none when there is no file yet)."""
+    from ..control.scorecard import record_from_dict
+
+    if not path.is_file():
+        print(f"--resume: no {path}; starting a new scorecard", file=sys.stderr)
+        return ()
     try:
-        from ..control.realai import realai_score
-    except ImportError:
-        raise CLIError("--realai: pendulab.control.realai.realai_score is not available in this installation") from None
-    csv_path = None
-    if args.out:
-        Path(args.out).mkdir(parents=True, exist_ok=True)
-        csv_path = Path(args.out) / "realai.csv"
-    result = realai_score(args.task, args.controller, csv_path=csv_path)
+        data = json.loads(path.read_text())
+        records = tuple(record_from_dict(r) for r in data["records"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CLIError(f"--resume: {path} is not a scorecard records file ({exc})") from None
+    differ = {k: (data.get(k), v) for k, v in settings.items() if data.get(k) != v}
+    if differ:
+        what = ", ".join(f"{k} {old!r} there, {new!r} now" for k, (old, new) in differ.items())
+        raise CLIError(f"--resume: {path} was written with other settings ({what}); use another --out or drop --resume")
+    print(f"--resume: {len(records)} runs already recorded in {path}", file=sys.stderr)
+    return records
+
+
+def _run_realai(args: argparse.Namespace) -> int:
+    from ..control.swingup.iterations import iteration_hook
+    from ..control.swingup.tasks import short_name
+
+    task = short_name(args.task)
+    if task not in ("pendubot", "acrobot"):
+        raise CLIError(f"--task {args.task!r}: --realai expects pendubot or acrobot (or swingup_pendubot, swingup_acrobot)")
+    from ..control.realai import CONTROLLER_NAMES, realai_score
+
+    if args.controller not in CONTROLLER_NAMES:
+        raise CLIError(f"--controller {args.controller!r}: --realai expects one of {list(CONTROLLER_NAMES)}")
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}"
+    out.mkdir(parents=True, exist_ok=True)
+    planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
+    try:
+        with iteration_hook(lambda: planning.iterate(1, "iter")):
+            result = realai_score(task, args.controller, csv_path=out / "realai.csv")
+    finally:
+        planning.close()
     summary = result.to_dict()
-    if args.out:
-        (Path(args.out) / "realai.json").write_text(json.dumps(summary, indent=2) + "\n")
+    atomic_write_text(out / "realai.json", json.dumps(summary, indent=2) + "\n")
+    print(f"wrote {out / 'realai.json'}, realai.csv", file=sys.stderr)
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         crit = ", ".join(f"{k} {v:.4g}" for k, v in summary.get("criteria", {}).items())
-        print(f"RealAIGym {args.task} / {args.controller}: success {summary.get('success')}, score {summary.get('score'):.3f}")
+        print(f"RealAIGym {task} / {args.controller}: success {summary.get('success')}, score {summary.get('score'):.3f}")
         if crit:
             print(f"criteria: {crit}")
     return 0

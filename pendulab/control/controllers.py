@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._checks import positive_float
+from .._checks import check_model, positive_float
 from ..model.model import INPUT_NAMES, Model
 from .feedback import SampledController, actuated_inputs, balance_controller, energy_swingup, upright_state
 from .tracking import swingup_reference, tvlqr, tvlqr_tracker
@@ -79,7 +79,12 @@ def make_controller(
         Unknown ``name``, non-positive ``sample_time`` (or ``t_ref``), or
         ``swingup`` with an actuation other than ``"full"``; an ``nmpc`` plan
         that did not solve.
+    TypeError
+        ``model`` is not a Model, ``name`` not a string.
     """
+    check_model(model)
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a controller name (one of {list(CONTROLLERS)}), got {type(name).__name__}")
     h = positive_float("sample_time", sample_time)
     if name == "lqr":
         x0 = upright_state(model)
@@ -106,7 +111,7 @@ TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
 
 
 def controller_for_task(
-    name: str, task: Task, *, sample_time: float | None = None, nmpc_solver: str = "sqp"
+    name: str, task: Task | str, *, sample_time: float | None = None, nmpc_solver: str = "sqp"
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller designed for a swing-up task, and the task's start state.
 
@@ -123,8 +128,9 @@ def controller_for_task(
         task's driven torques, then LQR balance; ``nmpc``: tracking NMPC of the
         task's optimized swing-up, then regulation upright
         (:func:`pendulab.control.nmpc.nmpc_for_task`).
-    task : Task
-        Swing-up task (model, actuation, torque limit, start).
+    task : Task or str
+        Swing-up task (model, actuation, torque limit, start), or its name (``pendubot``;
+        ``swingup_pendubot`` is an alias).
     sample_time : float, optional
         Controller sample time [s]; default the task's ``dt`` (``nmpc``: 0.02 s).
     nmpc_solver : {"sqp", "ipopt", "fatrop"}
@@ -142,9 +148,19 @@ def controller_for_task(
     ValueError
         Unknown ``name``, a non-positive ``sample_time``, or a swing-up the
         trajectory optimizer could not solve (``tvlqr``).
+    TypeError
+        ``name`` is not a string, ``task`` neither a Task nor a name.
+    FileNotFoundError
+        Unknown task name.
     """
     from .swingup.solve import swing_up
+    from .swingup.tasks import resolve_task
 
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a controller name (one of {list(TASK_CONTROLLERS)}), got {type(name).__name__}")
+    if name not in TASK_CONTROLLERS:
+        raise ValueError(f"controller must be one of {list(TASK_CONTROLLERS)}, got {name!r}")
+    task = resolve_task(task)
     if name == "nmpc":
         from .nmpc import nmpc_for_task
 

@@ -19,13 +19,14 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..ensemble.pool import map_runs
+from .._checks import bounded_int, positive_float
+from ..ensemble.pool import default_workers, map_runs
 from .controllers import controller_for_task
 from .feedback import SampledController
 from .perturb import Perturbation, run_episode, substeps
@@ -33,7 +34,10 @@ from .perturb import Perturbation, run_episode, substeps
 if TYPE_CHECKING:
     from .swingup.tasks import Task
 
-__all__ = ["Category", "CATEGORIES", "RunRecord", "CategoryScore", "Scorecard", "score", "rerun", "categories_for"]
+__all__ = [
+    "Category", "CATEGORIES", "RunRecord", "CategoryScore", "Scorecard", "score", "rerun", "categories_for",
+    "MAX_RUNS", "run_key", "record_from_dict",
+]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -344,9 +348,9 @@ ControllerSpec = str | Callable[["Task"], tuple[SampledController, np.ndarray]]
 
 
 def _resolve(controller: ControllerSpec, task: Task | str) -> tuple[Task, str, SampledController, np.ndarray]:
-    from .swingup.tasks import load_task
+    from .swingup.tasks import resolve_task
 
-    tk = load_task(task) if isinstance(task, str) else task
+    tk = resolve_task(task)
     if isinstance(controller, str):
         ctrl, x0 = controller_for_task(controller, tk)
         return tk, controller, ctrl, np.asarray(x0, dtype=float)
@@ -377,6 +381,58 @@ def _check_selection(task: Task, categories: Sequence[str] | None, levels: Mappi
     return names
 
 
+#: Largest number of runs per level of a stochastic category (a scorecard of 11 categories x 5 levels stays below
+#: ~3e5 episodes, hours on 2 cores; more runs do not make a success rate of a few significant digits more useful).
+MAX_RUNS = 5000
+#: Identity of a run within a scorecard (category, level index, run, seed): what ``completed`` records are matched by.
+RunKey = tuple[str, int, int, tuple[int, ...]]
+
+
+def record_from_dict(data: Mapping[str, Any]) -> RunRecord:
+    """A :class:`RunRecord` from its JSON form (``dataclasses.asdict`` of a record, ``t_up`` null for nan).
+
+    Parameters
+    ----------
+    data : mapping
+        Fields of :class:`RunRecord`.
+
+    Returns
+    -------
+    RunRecord
+        The record.
+
+    Raises
+    ------
+    ValueError
+        Missing or malformed fields.
+    """
+    try:
+        t_up = data["t_up"]
+        return RunRecord(
+            str(data["category"]), int(data["level_index"]), float(data["level"]), int(data["run"]),
+            tuple(int(v) for v in data["seed"]), bool(data["success"]), str(data["reason"]),
+            float("nan") if t_up is None else float(t_up),
+        )  # fmt: skip
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"not a scorecard run record: {dict(data)!r} ({exc})") from None
+
+
+def run_key(record: RunRecord) -> RunKey:
+    """The identity of a run (category, level index, run number, seed) used to skip completed runs.
+
+    Parameters
+    ----------
+    record : RunRecord
+        A run.
+
+    Returns
+    -------
+    tuple
+        ``(category, level_index, run, seed)``.
+    """
+    return (record.category, int(record.level_index), int(record.run), tuple(int(v) for v in record.seed))
+
+
 def score(
     controller: ControllerSpec,
     task: Task | str,
@@ -387,6 +443,9 @@ def score(
     seed: int = 0,
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    completed: Iterable[RunRecord] = (),
+    on_records: Callable[[tuple[RunRecord, ...]], None] | None = None,
+    max_wall_time: float | None = None,
 ) -> Scorecard:
     """Robustness scorecard of a controller on a swing-up task.
 
@@ -397,19 +456,30 @@ def score(
         (``lqr``, ``tvlqr``, ``swingup``, ...) or a factory ``task -> (controller, x0)``.
         The controller is designed once on the nominal model; every run resets it.
     task : Task or str
-        Swing-up task (or its name).
+        Swing-up task, or its name (``pendubot``; ``swingup_pendubot`` is an alias).
     runs : int
-        Seeded runs per level of the stochastic categories (>= 1).
+        Seeded runs per level of the stochastic categories, in [1, :data:`MAX_RUNS`].
     categories : sequence of str, optional
         Default: every category of :data:`CATEGORIES` that applies to the task's model.
     levels : mapping of str to sequence of float, optional
         Levels overriding a category's defaults.
     seed : int
-        Base seed; run ``(category c, level l, run r)`` uses ``(seed, c, l, r)``.
+        Base seed (>= 0); run ``(category c, level l, run r)`` uses ``(seed, c, l, r)``.
     workers : int, optional
         Worker processes (:func:`pendulab.ensemble.pool.map_runs`).
     progress : callable, optional
-        ``progress(done, total)`` in runs.
+        ``progress(done, total)`` in runs (completed runs count as done).
+    completed : iterable of RunRecord
+        Runs of an earlier, interrupted scorecard with the same settings (e.g. read
+        back from the partial-results file): they are not run again.
+    on_records : callable, optional
+        ``on_records(records)`` with every record so far, after each finished batch
+        (whole levels): the CLI writes them to a partial-results file, so an
+        interrupted scorecard can resume.
+    max_wall_time : float, optional
+        Wall-time budget [s]: once spent, the scorecard stops after the running
+        batch and raises ``TimeoutError`` (the finished batches were passed to
+        ``on_records``). None: no budget.
 
     Returns
     -------
@@ -420,12 +490,22 @@ def score(
     ------
     ValueError
         Unknown task, controller or category, a category that does not apply
-        to the model, bad levels or ``runs < 1``.
+        to the model, bad levels, ``runs`` or ``seed`` out of range, or completed
+        records that are not runs of this scorecard.
     TypeError
-        A controller that is neither a name nor a factory.
+        A controller that is neither a name nor a factory, a task that is neither
+        a Task nor a name.
+    TimeoutError
+        The wall-time budget ran out.
+    KeyboardInterrupt
+        Ctrl-C; the batches finished before it were passed to ``on_records``.
     """
-    if isinstance(runs, bool) or not isinstance(runs, int | np.integer) or runs < 1:
-        raise ValueError(f"runs must be an integer >= 1, got {runs!r}")
+    runs = bounded_int("runs", runs, low=1, high=MAX_RUNS, why="runs per level of each stochastic category")
+    seed = bounded_int("seed", seed, low=0, high=2**63 - 1, why="a seed of numpy's SeedSequence")
+    if max_wall_time is not None:
+        max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
+    if categories is not None and (isinstance(categories, str) or not isinstance(categories, Sequence)):
+        raise TypeError(f"categories must be a sequence of category names, got {type(categories).__name__}")
     t0 = time.perf_counter()
     tk, cname, ctrl, x0 = _resolve(controller, task)
     names = _check_selection(tk, categories, levels)
@@ -437,6 +517,15 @@ def score(
         for li, level in enumerate(lv):
             for r in range(runs if cat.stochastic else 1):
                 plan.append((name, li, level, r, (int(seed), ci, li, r)))
+    done: dict[RunKey, RunRecord] = {}
+    by_key = {(n, li, r, sd): (n, li, lv, r, sd) for n, li, lv, r, sd in plan}
+    for rec in completed:
+        if not isinstance(rec, RunRecord):
+            raise TypeError(f"completed must hold RunRecord objects, got {type(rec).__name__}")
+        key = run_key(rec)
+        if key not in by_key or by_key[key][2] != rec.level:
+            raise ValueError(f"completed record {key} (level {rec.level}) is not a run of this scorecard (other settings?)")
+        done[key] = rec
     # One substep count for every run, fine enough for the stiffest/lightest plant of the plan, and its sample
     # map compiled here before the workers fork (so it is built once, not once per worker).
     n_sub = _plan_substeps(tk, ctrl, x0, plan)
@@ -447,7 +536,27 @@ def score(
         res = run_episode(ctrl, tk, x0, CATEGORIES[name].perturbation(tk, level, sd), n_sub=n_sub)
         return RunRecord(name, li, level, r, sd, res.success, res.reason, res.t_up)
 
-    records = map_runs(one, plan, workers=workers, progress=progress)
+    todo = [item for item in plan if (item[0], item[1], item[3], item[4]) not in done]
+    total = len(plan)
+    if progress is not None:
+        progress(len(done), total)
+    for batch in _batches(todo, workers):
+        if max_wall_time is not None and time.perf_counter() - t0 > max_wall_time:
+            raise TimeoutError(
+                f"scorecard stopped by its wall-time budget max_wall_time={max_wall_time:g} s: "
+                f"{len(done)} of {total} runs recorded"
+            )
+        base = len(done)
+
+        def report(k: int, n: int, base: int = base) -> None:
+            if progress is not None:
+                progress(base + k, total)
+
+        for rec in map_runs(one, batch, workers=workers, progress=report):
+            done[run_key(rec)] = rec
+        if on_records is not None:
+            on_records(tuple(done.values()))
+    records = [done[(n, li, r, sd)] for n, li, _, r, sd in plan]
     cats: list[CategoryScore] = []
     for name in names:
         mine = [r for r in records if r.category == name]
@@ -461,6 +570,25 @@ def score(
         cats.append(CategoryScore(name, CATEGORIES[name].unit, tuple(lv), tuple(counts), tuple(rates), float(np.mean(rates))))
     overall = float(np.mean([c.score for c in cats]))
     return Scorecard(cname, tk.name, tuple(cats), overall, tuple(records), int(seed), runs, time.perf_counter() - t0, n_sub)
+
+
+def _batches(
+    todo: list[tuple[str, int, float, int, tuple[int, ...]]], workers: int | None
+) -> list[list[tuple[str, int, float, int, tuple[int, ...]]]]:
+    """Whole levels of the plan, consecutive levels merged until a batch keeps every worker busy (>= 4 runs each)."""
+    per = 4 * (default_workers() if workers is None else max(1, int(workers)))
+    out: list[list[tuple[str, int, float, int, tuple[int, ...]]]] = []
+    cur: list[tuple[str, int, float, int, tuple[int, ...]]] = []
+    for k, item in enumerate(todo):
+        cur.append(item)
+        end_of_level = k + 1 == len(todo) or todo[k + 1][:2] != item[:2]
+        end_of_category = k + 1 == len(todo) or todo[k + 1][0] != item[0]
+        if end_of_level and (len(cur) >= per or end_of_category):
+            out.append(cur)
+            cur = []
+    if cur:
+        out.append(cur)
+    return out
 
 
 def _plan_substeps(

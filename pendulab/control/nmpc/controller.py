@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import positive_float
+from ..._checks import bounded_int, positive_float
 from ...model.counterpart import rigid_counterpart, rigid_state
 from ...model.model import INPUT_NAMES, Model
 from ..feedback import actuated_inputs, upright_state
@@ -47,7 +47,10 @@ from ..lqr import lqr_balance, wrap_state_error
 from ..tracking import resample_reference
 from .ocp import SOLVERS, ShootingOCP, build_ocp
 
-__all__ = ["NMPCOptions", "NMPCController", "nmpc_controller"]
+__all__ = ["NMPCOptions", "NMPCController", "nmpc_controller", "MAX_HORIZON"]
+
+#: Largest prediction horizon (shooting intervals): 10 s at 50 Hz; the NLP grows linearly with it.
+MAX_HORIZON = 500
 
 # Return statuses, besides success, whose iterate is used: a real-time iteration stops after its iteration
 # cap by design; an interior-point iterate cut short is not feasible and is not used.
@@ -100,23 +103,27 @@ class NMPCOptions:
     slack_tol: float = 1e-3
 
     def __post_init__(self) -> None:
-        for name in ("horizon", "substeps", "max_iter"):
+        # Every numeric field is checked and stored as the number it stands for (a string "1" is not a weight).
+        for name, high, why in (
+            ("horizon", MAX_HORIZON, "each interval adds a block of the NLP, built symbolically and solved every sample"),
+            ("substeps", 1000, "RK4 steps per interval are unrolled into the NLP's expression graph"),
+            ("max_iter", 10_000, "iterations per sample of a real-time controller"),
+        ):
             v = getattr(self, name)
             if v is None and name != "horizon":
                 continue
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+            object.__setattr__(self, name, bounded_int(name, v, low=1, high=high, why=why))
         if self.planning not in ("rigid", "model"):
             raise ValueError(f"planning must be 'rigid' or 'model', got {self.planning!r}")
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {list(SOLVERS)}, got {self.solver!r}")
-        positive_float("sample_time", self.sample_time, "[s]")
+        object.__setattr__(self, "sample_time", positive_float("sample_time", self.sample_time, "[s]"))
         for name in ("q_angle", "q_rate", "slack_weight", "slack_tol"):
-            positive_float(name, getattr(self, name))
+            object.__setattr__(self, name, positive_float(name, getattr(self, name)))
         if self.r is not None:
-            positive_float("r", self.r)
+            object.__setattr__(self, "r", positive_float("r", self.r))
         if self.velocity_limit is not None:
-            positive_float("velocity_limit", self.velocity_limit, "[rad/s]")
+            object.__setattr__(self, "velocity_limit", positive_float("velocity_limit", self.velocity_limit, "[rad/s]"))
 
     @property
     def iterations_cap(self) -> int:
@@ -238,13 +245,19 @@ class NMPCController:
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).
 
-        Raises ValueError for a non-finite ``t`` or ``x``, or ``x`` of the wrong shape (a bad measurement,
-        not a solver failure: those are counted in :meth:`stats` and never raise).
+        Raises ValueError for a negative or non-finite ``t``, a non-finite ``x``, or ``x`` of the wrong
+        shape (a bad measurement, not a solver failure: those are counted in :meth:`stats` and never raise).
         """
         start = time.perf_counter()
         x = np.asarray(x, dtype=float)
-        if x.shape != (self.model.nx,) or not np.all(np.isfinite(x)) or not np.isfinite(t):
-            raise ValueError(f"x must be a finite state of shape ({self.model.nx},) at a finite t, got {x!r} at t={t!r}")
+        if x.shape != (self.model.nx,) or not np.all(np.isfinite(x)):
+            raise ValueError(f"x must be a finite state of shape ({self.model.nx},), got {x!r} at t={t!r}")
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise ValueError(f"t must be a time >= 0 [s], got {t!r}") from None
+        if not (np.isfinite(t) and t >= 0.0):
+            raise ValueError(f"t must be a finite time >= 0 [s] (the controller's clock starts at 0), got {t!r}")
         ocp, m = self.ocp, self.ocp.m
         k = int(np.floor(t / self.sample_time + 1e-6))
         xr, ur = self.window(k)

@@ -18,13 +18,39 @@ import numpy as np
 from ...model.counterpart import rigid_counterpart
 from ...model.model import Model
 from ..lqr import actuation_name
-from .controller import NMPCController, nmpc_controller
+from .controller import NMPCController, NMPCOptions, nmpc_controller
 
 if TYPE_CHECKING:
     from ..swingup.problem import SwingUpProblem
     from ..swingup.tasks import Task
 
-__all__ = ["nmpc_for_task", "nmpc_swingup", "plan_swingup"]
+__all__ = ["nmpc_for_task", "nmpc_swingup", "plan_swingup", "check_options"]
+
+
+def check_options(**options: Any) -> NMPCOptions:
+    """Check NMPC option values (names, types, bounds) without building anything.
+
+    Parameters
+    ----------
+    **options
+        :class:`NMPCOptions` fields.
+
+    Returns
+    -------
+    NMPCOptions
+        The checked options.
+
+    Raises
+    ------
+    TypeError
+        Unknown option names.
+    ValueError
+        Bad values (the message names the option).
+    """
+    unknown = sorted(set(options) - set(NMPCOptions.__dataclass_fields__))
+    if unknown:
+        raise TypeError(f"unknown NMPC option(s) {unknown}; expected some of {sorted(NMPCOptions.__dataclass_fields__)}")
+    return NMPCOptions(**options)
 
 
 def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int = 100, degree: int = 3) -> Any:
@@ -70,8 +96,9 @@ def nmpc_for_task(
 
     Parameters
     ----------
-    task : Task
-        Swing-up task (model, actuation, torque and velocity limits, start, horizon).
+    task : Task or str
+        Swing-up task (model, actuation, torque and velocity limits, start, horizon), or its name
+        (``pendubot``; ``swingup_pendubot`` is an alias).
     sample_time : float
         Controller sample time [s] (interval of the NMPC problem).
     solver : {"sqp", "ipopt", "fatrop"}
@@ -89,10 +116,16 @@ def nmpc_for_task(
     Raises
     ------
     ValueError
-        The swing-up plan failed, or bad options.
+        The swing-up plan failed, or bad options (checked before planning).
     TypeError
-        Unknown option names.
+        ``task`` is neither a Task nor a name; unknown option names.
+    FileNotFoundError
+        Unknown task name.
     """
+    from ..swingup.tasks import resolve_task
+
+    task = resolve_task(task)
+    check_options(sample_time=sample_time, solver=solver, **options)  # before the (costly) plan
     pb = task.problem
     res = plan_swingup(pb, method=task.method, N=task.N, degree=task.degree)
     options.setdefault("velocity_limit", pb.velocity_limit)
@@ -149,6 +182,7 @@ def nmpc_swingup(
     """
     from ..swingup.problem import SwingUpProblem
 
+    check_options(sample_time=sample_time, solver=solver, **options)  # before the (costly) plan
     if reference is None:
         pb = SwingUpProblem(model=model, actuation=actuation_name(actuation), torque_limit=u_max, horizon=horizon, name="nmpc")
         res = plan_swingup(pb, N=max(20, round(horizon / 0.03)))

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..controllers import TASK_CONTROLLERS, controller_for_task
 from ..feedback import SampledController
+from ..swingup.tasks import short_name
 from .criteria import CRITERIA, NORMS, PUBLISHED, to_relative
 from .design import Plan, best_controller, design_plan, load_plan, save_plan, tracker_for_plan
 from .simulate import DT, N_STEPS, T_FINAL, TASKS, TORQUE_LIMIT, RealAIResult, leaderboard_model, leaderboard_task, run
@@ -52,7 +53,7 @@ def realai_score(task: str, controller: str | SampledController = "best", *, csv
     Parameters
     ----------
     task : {"pendubot", "acrobot"}
-        Leaderboard task.
+        Leaderboard task (``swingup_pendubot``, ``swingup_acrobot`` are aliases).
     controller : str or SampledController
         ``"best"`` (the project's best swing-up: TVLQR at 2 ms along the shipped
         score-designed plan), a name of
@@ -73,10 +74,13 @@ def realai_score(task: str, controller: str | SampledController = "best", *, csv
     ValueError
         Unknown task or controller name, or a controller that cannot be built or run.
     TypeError
-        ``controller`` is neither a name nor a sampled controller.
+        ``task`` is not a string, ``controller`` neither a name nor a sampled controller.
     """
+    if not isinstance(task, str):
+        raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")
+    task = short_name(task)
     if task not in TASKS:
-        raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
+        raise ValueError(f"task must be one of {list(TASKS)} (or swingup_pendubot, swingup_acrobot), got {task!r}")
     if isinstance(controller, str):
         name = controller
         if name == "best":

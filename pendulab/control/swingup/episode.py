@@ -14,15 +14,18 @@ from typing import Any
 
 import numpy as np
 
+from ..._checks import bounded_int, positive_float, relative_tolerance
 from ...integrate import simulate
 from ...integrate.trajectory import Trajectory
 from ..tracking import TVLQRTracker, tvlqr
 from .check import HeightCheck, ReplayReport, height_success, replay
 from .errors import ErrorEstimate
 from .guess import Guess
+from .iterations import wall_time_budget
 from .planning import Plan, _solved, plan
 from .solve import SwingUpResult
 from .tasks import Task
+from .transcription import INTERVALS_WHY, MAX_INTERVALS
 
 __all__ = ["Episode", "run_episode", "SuccessRate", "closed_loop_success_rate"]
 
@@ -173,6 +176,7 @@ def run_episode(
     tolerance: float | None = None,
     refine: bool = True,
     planning: str | None = None,
+    max_wall_time: float | None = None,
 ) -> Episode:
     """Plan the task, prove the plan, replay it, track it in closed loop and score the episode.
 
@@ -192,7 +196,11 @@ def run_episode(
     refine : bool
         Mesh refinement until the tolerance is met (False: one solve, estimate reported).
     planning : {"auto", "rigid", "quasi-static", "elastic"}, optional
-        Planning model of an elastic task (default the task's ``planning``).
+        Planning model of an elastic task (default the task's ``planning``). A
+        planning model other than the task's own on a rigid task is an error.
+    max_wall_time : float, optional
+        Wall-time budget of the planning [s]: IPOPT stops at its next iteration once it
+        is spent and the episode reports a failed plan saying so. None: no budget.
 
     Returns
     -------
@@ -207,18 +215,35 @@ def run_episode(
     Raises
     ------
     ValueError
-        Bad overrides (unknown planning name, non-positive tolerance, bad N).
+        Bad overrides (unknown planning name, a planning model on a rigid task,
+        a tolerance outside (0, 1), N outside [2, MAX_INTERVALS]).
     """
-    pl_ = plan(
-        task.problem,
-        planning=task.planning if planning is None else planning,
-        tolerance=task.tolerance if tolerance is None else tolerance,
-        method=method or task.method,
-        N=N or task.N,
-        degree=task.degree,
-        guess=guess,
-        refine=refine,
-    )
+    if N is not None:
+        N = bounded_int("N", N, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
+    if tolerance is not None:
+        tolerance = relative_tolerance("tolerance", tolerance)
+    if planning is not None and planning != "auto" and task.model.kind != "elastic" and planning != "rigid":
+        raise ValueError(
+            f"planning={planning!r} applies to elastic tasks only; task {task.name!r} is rigid (planned on its own model)"
+        )
+    if max_wall_time is not None:
+        max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
+    with wall_time_budget(max_wall_time) as budget:
+        pl_ = plan(
+            task.problem,
+            planning=task.planning if planning is None else planning,
+            tolerance=task.tolerance if tolerance is None else tolerance,
+            method=method or task.method,
+            N=N or task.N,
+            degree=task.degree,
+            guess=guess,
+            refine=refine,
+        )
+    if budget.exceeded:
+        stopped = replace(
+            pl_.result, success=False, message=pl_.result.message + f"; stopped by the wall-time budget {max_wall_time:g} s"
+        )
+        pl_ = replace(pl_, result=stopped)
     res = pl_.result
     start = task.problem.start if x0 is None else task.model.check_state(x0, "x0")
     # Without refinement a converged plan that misses the tolerance is still tracked (and reported as failed).

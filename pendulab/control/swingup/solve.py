@@ -36,12 +36,14 @@ from typing import Any
 
 import numpy as np
 
+from ..._checks import bounded_int, positive_float
 from .errors import SCALES, ErrorEstimate, estimate_error
 from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart
+from .iterations import wall_time_budget
 from .mesh import collocation_states, parent_intervals, refine_mesh
 from .problem import SwingUpProblem
 from .result import SwingUpResult
-from .transcription import COLLOCATION, Transcription, _build, get_transcription
+from .transcription import COLLOCATION, INTERVALS_WHY, MAX_INTERVALS, Transcription, _build, get_transcription
 
 __all__ = ["SwingUpResult", "swing_up", "GUESSES"]
 
@@ -71,6 +73,7 @@ def swing_up(
     mesh: Any = None,
     error_method: str = "auto",
     error_scale: str = "state",
+    max_wall_time: float | None = None,
 ) -> SwingUpResult:
     """Solve a swing-up problem by direct collocation or multiple shooting with IPOPT, check and refine it.
 
@@ -115,14 +118,19 @@ def swing_up(
         Normalisation of the error estimate (see
         :func:`~pendulab.control.swingup.errors.estimate_error`; default: each
         state's largest magnitude).
+    max_wall_time : float, optional
+        Wall-time budget [s] of the whole call (solves and refinements): IPOPT is
+        stopped at its next iteration once it is spent, and the result is a failure
+        saying so. None: no budget.
 
     Returns
     -------
     SwingUpResult
         ``success`` False (with IPOPT's status and a message) when IPOPT
-        fails, its answer violates dynamics or bounds, or the error estimate
+        fails, its answer violates dynamics or bounds, the error estimate
         exceeds ``tolerance`` when the refinement stops (the message gives
-        the estimate, the tolerance and the cap that was hit).
+        the estimate, the tolerance and the cap that was hit), or the
+        wall-time budget ran out.
 
     Raises
     ------
@@ -140,24 +148,40 @@ def swing_up(
         raise ValueError(f"max_intervals must be an integer >= 2, got {max_intervals!r}")
     if error_scale not in SCALES:
         raise ValueError(f"error_scale must be one of {list(SCALES)}, got {error_scale!r}")
+    if max_wall_time is not None:
+        max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
+    bounded_int("max_intervals", max_intervals, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
     settings = _Settings(method, N, degree, integrator, ipopt_options)
-    with _watch_interrupt() as interrupt:
-        t_start = time.perf_counter()
-        res = _solve_mesh(problem, settings, guess, mesh, interrupt)
-        if tolerance is None:
-            return res
-        return _check_and_refine(
-            problem,
-            settings,
-            res,
-            float(tolerance),
-            refine,
-            max_refinements,
-            max_intervals,
-            (error_method, error_scale),
-            interrupt,
-            t_start,
+    with _watch_interrupt() as interrupt, wall_time_budget(max_wall_time) as budget:
+        res = _swing_up(problem, settings, guess, mesh, interrupt, tolerance, refine, max_refinements, max_intervals,
+                        (error_method, error_scale))  # fmt: skip
+    if budget.exceeded:
+        res = replace(
+            res, success=False, message=res.message + f"; stopped by the wall-time budget max_wall_time={max_wall_time:g} s"
         )
+    return res
+
+
+def _swing_up(
+    problem: SwingUpProblem,
+    settings: _Settings,
+    guess: Any,
+    mesh: Any,
+    interrupt: _Interrupt,
+    tolerance: float | None,
+    refine: bool,
+    max_refinements: int,
+    max_intervals: int,
+    error: tuple[str, str],
+) -> SwingUpResult:
+    """One solve on the first mesh, then the a posteriori check and the refinements."""
+    t_start = time.perf_counter()
+    res = _solve_mesh(problem, settings, guess, mesh, interrupt)
+    if tolerance is None:
+        return res
+    return _check_and_refine(
+        problem, settings, res, float(tolerance), refine, max_refinements, max_intervals, error, interrupt, t_start
+    )
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ...model.model import Model
 from ...scene import SCENE_DIR, Scene, load_scene
@@ -38,7 +39,7 @@ from ..feedback import upright_state
 from .planning import PLANNING
 from .problem import SwingUpProblem
 
-__all__ = ["Task", "load_task", "task_names"]
+__all__ = ["Task", "load_task", "task_names", "resolve_task", "short_name"]
 
 _PREFIX = "swingup_"
 _TASK_KEYS = {
@@ -84,8 +85,8 @@ class Task:
 
     @property
     def name(self) -> str:
-        """Task name (the scene's)."""
-        return self.scene.name
+        """Task name: the short form (``pendubot``) of a shipped task's scene ``swingup_pendubot``; else the scene's name."""
+        return short_name(self.scene.name)
 
     @property
     def description(self) -> str:
@@ -116,6 +117,54 @@ class Task:
     def rest_lengths(self) -> tuple[float, float]:
         """Link lengths L1, L2 [m] (spring rest lengths) that the success height refers to."""
         return (self.model.params.L1, self.model.params.L2)
+
+
+def short_name(name: str) -> str:
+    """The one task-name scheme: ``swingup_pendubot`` -> ``pendubot`` (names without the prefix pass unchanged).
+
+    Parameters
+    ----------
+    name : str
+        A task name, short or long (the shipped scene's name).
+
+    Returns
+    -------
+    str
+        The short name when ``swingup_<short>`` is a shipped task, else ``name``.
+    """
+    if name.startswith(_PREFIX) and (SCENE_DIR / f"{name}.toml").is_file():
+        return name[len(_PREFIX) :]
+    return name
+
+
+def resolve_task(task: Any, name: str = "task") -> Task:
+    """A :class:`Task` from a task or a task name: the one rule of every public function that takes a task.
+
+    Parameters
+    ----------
+    task : Task, str or Path
+        A task, a shipped task name (``pendubot``; the long form ``swingup_pendubot``
+        is an alias) or the path of a scene file with a ``[task]`` section.
+    name : str
+        Argument name used in the message.
+
+    Returns
+    -------
+    Task
+        ``task`` itself, or the loaded task.
+
+    Raises
+    ------
+    TypeError
+        ``task`` is neither a Task nor a name/path.
+    FileNotFoundError
+        Unknown task name.
+    """
+    if isinstance(task, Task):
+        return task
+    if isinstance(task, (str, Path)):
+        return load_task(task)
+    raise TypeError(f"{name} must be a swing-up Task or a task name (one of {list(task_names())}), got {type(task).__name__}")
 
 
 def task_names() -> tuple[str, ...]:
@@ -156,6 +205,8 @@ def load_task(name_or_path: str | Path) -> Task:
     ValueError
         Missing or malformed sections/keys.
     """
+    if not isinstance(name_or_path, (str, Path)):
+        raise TypeError(f"task must be a task name or a scene path, got {type(name_or_path).__name__}")
     text = str(name_or_path)
     if not Path(text).is_file() and (SCENE_DIR / f"{_PREFIX}{text}.toml").is_file():
         name_or_path = SCENE_DIR / f"{_PREFIX}{text}.toml"

@@ -35,10 +35,16 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..._checks import bounded_int
 from ...model.model import model_functions
+from .iterations import IterationCallback
 from .problem import SwingUpProblem
 
-__all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING"]
+__all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING", "MAX_INTERVALS"]
+
+#: Largest number of intervals of one NLP (elastic NLPs of 600 degree-3 intervals took minutes and ~6 GB to build).
+MAX_INTERVALS = 1000
+INTERVALS_WHY = "each interval adds a block of the NLP; an elastic NLP of 600 intervals needs ~6 GB to build"
 
 COLLOCATION: tuple[str, ...] = ("radau", "legendre")
 SHOOTING: tuple[str, ...] = ("shooting",)
@@ -78,6 +84,7 @@ class Transcription:
     nx: int
     nw: int
     build_time: float
+    callback: Any = None
 
     @property
     def n_coll(self) -> int:
@@ -283,8 +290,9 @@ class Transcription:
 def _check_structure(method: str, N: int, degree: int, integrator: str) -> None:
     if method not in TRANSCRIPTIONS:
         raise ValueError(f"method must be one of {list(TRANSCRIPTIONS)}, got {method!r}")
-    if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 2:
+    if isinstance(N, float) or not isinstance(N, (int, np.integer)):
         raise ValueError(f"N (number of intervals) must be an integer >= 2, got {N!r}")
+    bounded_int("N", N, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
     if method in COLLOCATION and not (isinstance(degree, (int, np.integer)) and 1 <= degree <= 9):
         raise ValueError(f"degree must be an integer in 1..9 for collocation, got {degree!r}")
     if method in SHOOTING and integrator not in _INTEGRATORS:
@@ -383,9 +391,14 @@ def _build(
     elif integrator == "cvodes":
         # CVODES cannot give exact second derivatives cheaply: quasi-Newton Hessian.
         ipopt.setdefault("hessian_approximation", "limited-memory")
-    solver = ca.nlpsol(f"swingup_{method}_{kind}_{N}", "ipopt", nlp, opts)
     nw = nlp["x"].numel()
-    return Transcription(method, N, degree, integrator, free, objective, kind, solver, nx, nw, time.perf_counter() - t_start)
+    # Progress, budgets and prompt interrupts (.iterations); kept alive by the Transcription.
+    callback = IterationCallback(f"swingup_iter_{method}_{kind}_{N}", nw, g.numel(), P.numel())
+    opts["iteration_callback"] = callback
+    solver = ca.nlpsol(f"swingup_{method}_{kind}_{N}", "ipopt", nlp, opts)
+    return Transcription(
+        method, N, degree, integrator, free, objective, kind, solver, nx, nw, time.perf_counter() - t_start, callback
+    )
 
 
 def _collocation_maps(kind: str, scheme: str, d: int, N: int) -> ca.Function:

@@ -1,0 +1,122 @@
+"""IPOPT iteration hooks: progress reports, wall-time budgets and prompt interrupts of every swing-up NLP.
+
+Each compiled NLP (:mod:`.transcription`) carries one CasADi ``iteration_callback``
+(:class:`IterationCallback`), called by IPOPT after every iteration. It runs the
+hooks installed with :func:`iteration_hook` (innermost last); a hook returning
+True asks IPOPT to stop (status ``User_Requested_Stop``, a failed solve).
+
+The NLPs are cached across calls, so the callback is part of the cached solver
+and the hooks are module state, installed and removed by the context manager.
+The callback is also a point where Python runs during a long IPOPT solve, so a
+Ctrl-C there raises at once (CasADi reports it as a failed solve naming
+``KeyboardInterrupt``, which :func:`pendulab.control.swingup.solve.swing_up` re-raises).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import casadi as ca
+
+__all__ = ["IterationCallback", "iteration_hook", "wall_time_budget"]
+
+#: Installed hooks, outermost first. Each is called with no argument after every IPOPT iteration.
+_HOOKS: list[Callable[[], bool | None]] = []
+
+
+class IterationCallback(ca.Callback):
+    """The ``iteration_callback`` of one NLP: runs the installed hooks, returns 1 (stop) if one asks for it.
+
+    Parameters
+    ----------
+    name : str
+        Function name.
+    nx, ng, np_ : int
+        Sizes of the NLP's decision vector, constraints and parameters.
+    """
+
+    def __init__(self, name: str, nx: int, ng: int, np_: int) -> None:
+        ca.Callback.__init__(self)
+        self._sizes = {"x": nx, "lam_x": nx, "g": ng, "lam_g": ng, "lam_p": np_, "f": 1}
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:  # noqa: D102 - CasADi Callback protocol
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self) -> int:  # noqa: D102
+        return 1
+
+    def get_name_in(self, i: int) -> str:  # noqa: D102
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i: int) -> str:  # noqa: D102
+        return "ret"
+
+    def get_sparsity_in(self, i: int) -> Any:  # noqa: D102
+        n = self._sizes.get(ca.nlpsol_out(i))
+        return ca.Sparsity(0, 0) if n is None else ca.Sparsity.dense(n)
+
+    def eval(self, arg: Any) -> list[int]:  # noqa: D102
+        stop = False
+        for hook in tuple(_HOOKS):
+            stop = bool(hook()) or stop
+        return [1 if stop else 0]
+
+
+@contextlib.contextmanager
+def iteration_hook(hook: Callable[[], bool | None]) -> Iterator[None]:
+    """Run ``hook()`` after every IPOPT iteration of the swing-up NLPs solved inside the block.
+
+    Parameters
+    ----------
+    hook : callable
+        ``hook() -> bool | None``; True stops the running solve (a failed solve,
+        status ``User_Requested_Stop``). Used for progress bars and budgets.
+
+    Yields
+    ------
+    None
+    """
+    if not callable(hook):
+        raise TypeError(f"hook must be callable, got {type(hook).__name__}")
+    _HOOKS.append(hook)
+    try:
+        yield
+    finally:
+        _HOOKS.remove(hook)
+
+
+class _Budget:
+    def __init__(self, seconds: float) -> None:
+        self.deadline = time.perf_counter() + seconds
+        self.exceeded = False
+
+    def __call__(self) -> bool:
+        if time.perf_counter() > self.deadline:
+            self.exceeded = True
+        return self.exceeded
+
+
+@contextlib.contextmanager
+def wall_time_budget(seconds: float | None) -> Iterator[Any]:
+    """Stop every IPOPT solve inside the block once ``seconds`` of wall time have passed (None: no budget).
+
+    Parameters
+    ----------
+    seconds : float or None
+        Budget [s] from entering the block.
+
+    Yields
+    ------
+    object
+        Has ``exceeded`` (bool): whether the budget stopped a solve.
+    """
+    if seconds is None:
+        yield _Budget(float("inf"))
+        return
+    budget = _Budget(seconds)
+    with iteration_hook(budget):
+        yield budget
