@@ -8,7 +8,8 @@ Importing this package registers ``"pendulab/DoublePendulum-v0"``::
     env = gym.make("pendulab/DoublePendulum-v0", model="rigid", actuation="pendubot", backend="native")
 
 Keyword arguments are those of :class:`~pendulab.gym.env.DoublePendulumEnv`; truncation happens
-inside the environment after ``episode_length`` seconds, so no ``TimeLimit`` wrapper is added.
+inside the environment after ``episode_length`` seconds (``max_episode_steps`` steps), so no
+``TimeLimit`` wrapper is added and ``env.spec.max_episode_steps`` reports that horizon.
 ``gym.make_vec(ENV_ID, num_envs=N, ...)`` builds :class:`~pendulab.gym.vector.DoublePendulumVectorEnv`
 (N pendulums in one heyoka batch integrator); ``vectorization_mode="sync"`` gives Gymnasium's
 ``SyncVectorEnv`` of single environments instead (needed for ``backend="fmu"``).
@@ -16,17 +17,12 @@ inside the environment after ``episode_length`` seconds, so no ``TimeLimit`` wra
 
 from __future__ import annotations
 
-import importlib
+from .._checks import require_extra
 
 #: How to install gymnasium with pendulab (the optional dependency group "gym").
 EXTRA_HINT = 'pip install "pendulab[gym]"'
 
-try:
-    importlib.import_module("gymnasium")
-except ImportError as _exc:  # pragma: no cover - exercised by a test that hides gymnasium
-    raise ImportError(
-        f"pendulab.gym needs the gymnasium package, which is not importable ({_exc}); install it with: {EXTRA_HINT}"
-    ) from _exc
+require_extra("gymnasium", "gym", "pendulab.gym (the Gymnasium environment)")  # MissingExtraError naming pendulab[gym]
 
 import gymnasium  # noqa: E402 - after the check that names the extra
 

@@ -15,22 +15,26 @@
 from __future__ import annotations
 
 import math
+from array import array
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._checks import relative_tolerance
 from ..integrate.taylor import compiled_integrator, structure_key
 from ..integrate.taylor.availability import heyoka_module, unavailable_reason
 from ..model.model import ACTUATIONS, Model, make_model
-from ..native.build import cache_dir, compiler_unavailable_reason, source_digest
+from ..native.build import cache_dir, cached_artifact, compiler_unavailable_reason, source_digest
 from ..native.library import native_library
 
-__all__ = ["INTEGRATORS", "NativePlant", "FmuBackend", "resolve_integrator", "cached_fmu"]
+__all__ = ["INTEGRATORS", "NativePlant", "FmuBackend", "resolve_integrator", "cached_fmu", "MAX_REPLAY_STEPS"]
 
 #: Integrators of the native backend.
 INTEGRATORS: tuple[str, ...] = ("auto", "taylor", "compiled-dopri5", "compiled-rodas4")
 _MAX_STEPS = 1_000_000
+#: Steps since a reset up to which the FMU backend can be pickled (a copy replays them: ~30 us each).
+MAX_REPLAY_STEPS = 100_000
 
 
 def resolve_integrator(integrator: str) -> str:
@@ -91,13 +95,23 @@ class NativePlant:
     Raises
     ------
     ValueError
-        Unknown integrator or actuation.
+        Unknown integrator or actuation, or ``tol`` not in (0, 1).
+
+    Notes
+    -----
+    Pickling and ``copy.deepcopy`` save the settings and the integrator's full state (state,
+    time, step-size guess) and rebuild the integrator from them, so a copy steps bit for bit
+    like the original (the compiled code is never pickled: its buffers would no longer be the
+    ones the plant writes).
     """
 
     def __init__(self, model: Model, actuation: str, *, integrator: str = "auto", tol: float = 1e-10) -> None:
         if actuation not in ACTUATIONS:
             raise ValueError(f"actuation must be one of {list(ACTUATIONS)}, got {actuation!r}")
+        tol = relative_tolerance("tol", tol)
         self.model = model
+        self.actuation = actuation
+        self.tol = tol
         self.integrator = resolve_integrator(integrator)
         self.t = 0.0
         self._actuated = ACTUATIONS[actuation]
@@ -172,26 +186,61 @@ class NativePlant:
     def close(self) -> None:
         """Nothing to free (the compiled integrator is shared through a cache)."""
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Settings and the integrator's state (the compiled integrator itself is rebuilt on unpickling)."""
+        state: dict[str, Any] = {
+            "model": self.model,
+            "actuation": self.actuation,
+            "integrator": self.integrator,
+            "tol": self.tol,
+            "t": self.t,
+        }
+        if self.integrator == "taylor":
+            state.update(x=np.array(self._state), dtime=tuple(self._ta.dtime), last=self._last.copy())
+        else:
+            state.update(x=self._x.copy(), h=self._stepper.h, totals=dict(self._stepper.totals))
+        return state
 
-def cached_fmu(kind: str) -> Path:
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Rebuild the integrator from the settings, then restore its state exactly."""
+        self.__init__(state["model"], state["actuation"], integrator=state["integrator"], tol=state["tol"])
+        self.t = state["t"]
+        if self.integrator == "taylor":
+            self._state[:] = state["x"]
+            self._ta.dtime = state["dtime"]  # double-length time: the last step of propagate_for depends on it
+            self._last = np.array(state["last"], dtype=float)
+        else:
+            self._x = np.array(state["x"], dtype=float)
+            self._stepper.h = state["h"]
+            self._stepper.totals.update(state["totals"])
+
+
+def cached_fmu(kind: str, *, rebuild: str | None = None) -> Path:
     """The co-simulation FMU (FMI 2) of a model kind, exported on first use into the cache folder.
 
     The file name carries a digest of the generated sources, so a changed pendulab exports again.
+    The FMU's SHA-256 is written beside it (``<fmu>.sha256``) and checked on every call, before
+    fmpy reads the archive: a damaged file (truncated, flipped bytes, emptied, replaced) is
+    exported again once, with a :class:`~pendulab.native.build.CacheRebuildWarning` naming it.
 
     Parameters
     ----------
     kind : {"rigid", "elastic"}
         Model kind (parameters are set per instance, not compiled in).
+    rebuild : str, optional
+        Export again even when the digest matches, for this reason (e.g. the FMU failed to load).
 
     Returns
     -------
     Path
-        The FMU.
+        The FMU, intact.
 
     Raises
     ------
     CompilerNotFoundError (RuntimeError)
         Not cached and no C compiler found.
+    RuntimeError
+        The cache folder cannot be written or the export failed; the message names the cache path.
     """
     # Imported here: the FMU packages (and python-control through pendulab.cosim) load only for the FMU backend.
     from ..fmu.codegen import compiled_sources, generate_sources
@@ -200,10 +249,8 @@ def cached_fmu(kind: str) -> Path:
     model = make_model(kind)
     digest = source_digest(generate_sources(model, 2), compiled_sources(2))[:16]
     path = cache_dir().parent / "gym" / f"pendulab_{kind}_{digest}.fmu"
-    if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        export(model, path, 2, timestamp=False)
-    return path
+    what = f"the gym FMU backend needs its {kind} FMU; it"
+    return cached_artifact(path, lambda tmp: export(model, tmp, 2, timestamp=False), what=what, rebuild=rebuild)
 
 
 class FmuBackend:
@@ -233,7 +280,17 @@ class FmuBackend:
     Raises
     ------
     ValueError
-        ``fmu_path`` is an FMU of another model kind, or an unknown solver.
+        ``fmu_path`` is an FMU of another model kind, an unknown solver, or ``tol`` not in (0, 1)
+        (checked before anything is exported or loaded).
+    RuntimeError
+        The cached FMU cannot be built, or fails to load after one rebuild (the message names its path).
+
+    Notes
+    -----
+    Pickling and ``copy.deepcopy`` save the settings, the start state of the episode and the
+    torques held since (at most :data:`MAX_REPLAY_STEPS` steps); unpickling instantiates the FMU
+    afresh and replays them, so the copy is in the very state of the original (the FMU's solver
+    keeps its step-size guess from one step to the next, which a copy of the state alone would lose).
     """
 
     def __init__(self, model: Model, *, solver: str = "dopri5", tol: float = 1e-10, fmu_path: Any = None) -> None:
@@ -241,8 +298,24 @@ class FmuBackend:
 
         if solver not in ("dopri5", "rodas4"):
             raise ValueError(f"solver must be 'dopri5' or 'rodas4', got {solver!r}")
+        tol = relative_tolerance("tol", tol)
         self.model = model
-        self.info = inspect_fmu(cached_fmu(model.kind) if fmu_path is None else fmu_path)
+        self._fmu_path = fmu_path
+        self._cached = fmu_path is None
+        if self._cached:
+            path = cached_fmu(model.kind)  # verified by its digest before fmpy reads it
+            try:
+                self.info = inspect_fmu(path)
+            except (OSError, ValueError) as exc:
+                path = cached_fmu(model.kind, rebuild=f"cannot be read as an FMU ({exc})")
+                try:
+                    self.info = inspect_fmu(path)
+                except (OSError, ValueError) as exc2:
+                    raise RuntimeError(
+                        f"the cached FMU {path} cannot be read even after a rebuild ({exc2}); delete {path.parent} and retry"
+                    ) from exc2
+        else:
+            self.info = inspect_fmu(fmu_path)
         if self.info.kind != model.kind:
             raise ValueError(f"fmu_path is a {self.info.kind} FMU, but the environment's model is {model.kind}")
         values = model.params.resolved()
@@ -254,6 +327,8 @@ class FmuBackend:
         self._plant: Any = None
         self._rejected = StepRejectedError
         self._x = model.rest_state()
+        self._x0: np.ndarray | None = None
+        self._history: array | None = array("d")  # tau1, tau2, dt of every step since the reset (None: too many)
 
     def reset(self, x0: np.ndarray) -> None:
         """Instantiate the FMU afresh at state ``x0``.
@@ -262,12 +337,34 @@ class FmuBackend:
         ----------
         x0 : ndarray, shape (nx,)
             Initial state.
+
+        Raises
+        ------
+        RuntimeError
+            The FMU's binary fails to load even after the cached FMU was rebuilt once.
         """
         from ..cosim.plant import FmuPlant
 
         self.close()
-        self._plant = FmuPlant(self.info, params=self._params, x0=x0, solver=self._solver, tolerance=self._tol)
+        kwargs = {"params": self._params, "x0": x0, "solver": self._solver, "tolerance": self._tol}
+        try:
+            self._plant = FmuPlant(self.info, **kwargs)
+        except OSError as exc:  # the binary inside the archive cannot be loaded
+            if not self._cached:
+                raise
+            from ..cosim.plant import inspect_fmu
+
+            path = cached_fmu(self.model.kind, rebuild=f"has a binary that fails to load ({exc})")
+            self.info = inspect_fmu(path)
+            try:
+                self._plant = FmuPlant(self.info, **kwargs)
+            except OSError as exc2:
+                raise RuntimeError(
+                    f"the cached FMU {path} fails to load even after a rebuild ({exc2}); delete {path.parent} and retry"
+                ) from exc2
         self._x = np.array(x0, dtype=float)
+        self._x0 = self._x.copy()
+        self._history = array("d")
         self.t = 0.0
 
     def step(self, tau: np.ndarray, dt: float) -> tuple[np.ndarray, str | None]:
@@ -295,6 +392,12 @@ class FmuBackend:
         plant = self._plant
         if plant is None:
             raise RuntimeError("FmuBackend.step called before reset")
+        history = self._history
+        if history is not None:
+            if len(history) < 3 * MAX_REPLAY_STEPS:
+                history.extend((float(tau[0]), float(tau[1]), float(dt)))
+            else:
+                self._history = None
         plant.set_inputs(tau)
         try:
             plant.do_step(dt)
@@ -312,3 +415,41 @@ class FmuBackend:
         plant, self._plant = self._plant, None
         if plant is not None:
             plant.close()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Settings, the episode's start state and the torques held since (replayed on unpickling).
+
+        Raises
+        ------
+        ValueError
+            More than :data:`MAX_REPLAY_STEPS` steps since the last reset.
+        """
+        if self._history is None:
+            raise ValueError(
+                f"cannot pickle or copy the FMU backend after more than {MAX_REPLAY_STEPS} steps since the last reset "
+                "(a copy replays the steps of the episode); call reset() first"
+            )
+        return {
+            "model": self.model,
+            "solver": self._solver,
+            "tol": self._tol,
+            "fmu_path": self._fmu_path,
+            "x0": self._x0 if self._plant is not None else None,
+            "history": array("d", self._history),
+            "x": self._x.copy(),
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Instantiate the FMU afresh at the episode's start and replay the held torques."""
+        self.__init__(state["model"], solver=state["solver"], tol=state["tol"], fmu_path=state["fmu_path"])
+        if state["x0"] is None:
+            return
+        self.reset(state["x0"])
+        h = state["history"]
+        for k in range(0, len(h), 3):
+            self.step(np.array(h[k : k + 2]), h[k + 2])
+        if not np.array_equal(self._x, state["x"]):
+            raise RuntimeError(
+                f"replaying {len(h) // 3} steps of the FMU {self.info.path} did not reproduce the pickled state "
+                f"({self._x.tolist()} != {np.asarray(state['x']).tolist()})"
+            )

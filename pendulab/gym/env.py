@@ -10,13 +10,19 @@ elastic model appends ``(r1 - L1) / L1, (r2 - L2) / L2, v1 / (ws L1), v2 / (ws L
 full-precision model state is ``env.unwrapped.state``.
 
 Episode: reset near hanging at rest (uniform noise of ``reset_noise`` on angles [rad] and
-angular rates [rad/s]) or at ``options={"state": x0}``; truncated after
-``round(episode_length / dt)`` steps; terminated when the integrator fails (non-finite state;
+angular rates [rad/s]) or at ``options={"state": x0}``; truncated after ``max_episode_steps``
+steps (``round(episode_length / dt)``, or the ``max_episode_steps`` argument), the value
+``env.spec.max_episode_steps`` reports; terminated when the integrator fails (non-finite state;
 the state then stays at the last good one) or a spring length reaches 0.
+
+Copies: ``pickle``, ``copy.deepcopy`` and cloudpickle (Dask, joblib, Ray) copy an environment
+with its plant's full state; the copy steps bit for bit like the original (see
+:class:`~pendulab.gym.backends.NativePlant` and :class:`~pendulab.gym.backends.FmuBackend`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -24,14 +30,24 @@ from typing import Any
 import gymnasium
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 
-from .._checks import positive_float
+from .._checks import bounded_int, check_spring_lengths, positive_float, relative_tolerance
 from ..model.model import ACTUATIONS, Model, make_model
 from .backends import INTEGRATORS, FmuBackend, NativePlant
 from .render import FrameRenderer
 from .rewards import RewardFn, make_reward
 
-__all__ = ["DoublePendulumEnv", "BACKENDS", "ENV_ID", "OBS_LIMIT"]
+__all__ = [
+    "DoublePendulumEnv",
+    "BACKENDS",
+    "ENV_ID",
+    "OBS_LIMIT",
+    "DEFAULT_EPISODE_LENGTH",
+    "DEFAULT_RENDER_FPS",
+    "MAX_EPISODE_STEPS",
+    "horizon",
+]
 
 #: The id registered by ``import pendulab.gym``.
 ENV_ID = "pendulab/DoublePendulum-v0"
@@ -40,6 +56,54 @@ ENV_ID = "pendulab/DoublePendulum-v0"
 OBS_LIMIT = 1000.0
 #: Plant backends.
 BACKENDS: tuple[str, ...] = ("native", "fmu")
+#: Episode duration [s] when neither ``episode_length`` nor ``max_episode_steps`` is given.
+DEFAULT_EPISODE_LENGTH = 10.0
+#: Largest ``max_episode_steps``: 10^9 steps of 10 ms is 115 days of simulated time per episode.
+MAX_EPISODE_STEPS = 10**9
+#: ``metadata["render_fps"]`` of the class: one frame per sample at the default ``dt = 0.01`` s;
+#: an instance reports ``round(1 / dt)`` (Gymnasium's convention: frames advance by the env's own time step).
+DEFAULT_RENDER_FPS = 100
+
+
+def horizon(dt: float, episode_length: Any = None, max_episode_steps: Any = None) -> int:
+    """Steps of an episode: ``max_episode_steps``, else ``round(episode_length / dt)`` (default 10 s).
+
+    Parameters
+    ----------
+    dt : float
+        Sample time [s] (already checked).
+    episode_length : float, optional
+        Episode duration [s].
+    max_episode_steps : int, optional
+        Steps of an episode (what ``gym.make_vec(..., max_episode_steps=N)`` passes).
+
+    Returns
+    -------
+    int
+        Steps before truncation (>= 1).
+
+    Raises
+    ------
+    ValueError
+        A bad value, an ``episode_length`` shorter than ``dt``, or both given and in disagreement.
+    """
+    steps = None
+    if max_episode_steps is not None:
+        steps = bounded_int("max_episode_steps", max_episode_steps, low=1, high=MAX_EPISODE_STEPS, why="steps of one episode")
+    if episode_length is None:
+        if steps is not None:
+            return steps
+        episode_length = DEFAULT_EPISODE_LENGTH
+    length = positive_float("episode_length", episode_length, "s")
+    if length < dt * (1 - 1e-9):
+        raise ValueError(f"episode_length must be at least one sample dt = {dt} s, got {episode_length!r}")
+    from_length = max(int(round(length / dt)), 1)
+    if steps is not None and steps != from_length:
+        raise ValueError(
+            f"max_episode_steps={max_episode_steps!r} and episode_length={episode_length!r} s disagree at dt = {dt} s "
+            f"({from_length} steps); give one of them"
+        )
+    return from_length
 
 
 class DoublePendulumEnv(gymnasium.Env):
@@ -58,8 +122,12 @@ class DoublePendulumEnv(gymnasium.Env):
         Sample time [s].
     torque_limit : float
         ``action_scale``: torque [N.m] of an action of 1.
-    episode_length : float
-        Episode duration [s] before truncation.
+    episode_length : float, optional
+        Episode duration [s] before truncation (default 10 s, or ``max_episode_steps * dt``).
+    max_episode_steps : int, optional
+        Steps before truncation instead of ``episode_length`` (both given: they must agree).
+        ``gym.make_vec(..., max_episode_steps=N)`` passes it; ``gym.make(..., max_episode_steps=N)``
+        adds Gymnasium's ``TimeLimit`` instead, which can only end episodes earlier (see ``docs/gym.md``).
     reward : {"realai", "quadratic", "height"} or callable
         See :func:`~pendulab.gym.rewards.make_reward`; a callable is ``reward(x, tau) -> float``.
     params : mapping, optional
@@ -67,7 +135,7 @@ class DoublePendulumEnv(gymnasium.Env):
     integrator : {"auto", "taylor", "compiled-dopri5", "compiled-rodas4"}
         Native backend's integrator (``"auto"``: Taylor when heyoka is installed).
     tol : float
-        Integrator tolerance (heyoka ``tol``; ``rtol = atol`` of the C solvers and of the FMU).
+        Integrator tolerance in (0, 1) (heyoka ``tol``; ``rtol = atol`` of the C solvers and of the FMU).
     fmu_solver : {"dopri5", "rodas4"}
         Embedded solver of the FMU backend.
     velocity_scale : float
@@ -88,7 +156,7 @@ class DoublePendulumEnv(gymnasium.Env):
     action_scale : float
         Torque limit [N.m].
     max_episode_steps : int
-        Steps before truncation.
+        Steps before truncation (also ``spec.max_episode_steps`` once ``gym.make`` has set the spec).
     state : ndarray, shape (nx,)
         Current model state (a copy).
     t : float
@@ -102,7 +170,7 @@ class DoublePendulumEnv(gymnasium.Env):
         ``model`` or ``reward`` of the wrong type.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}
 
     def __init__(
         self,
@@ -112,7 +180,8 @@ class DoublePendulumEnv(gymnasium.Env):
         *,
         dt: float = 0.01,
         torque_limit: float = 10.0,
-        episode_length: float = 10.0,
+        episode_length: float | None = None,
+        max_episode_steps: int | None = None,
         reward: str | RewardFn = "realai",
         params: Mapping[str, float] | None = None,
         integrator: str = "auto",
@@ -136,15 +205,13 @@ class DoublePendulumEnv(gymnasium.Env):
         self.backend = backend
         self.dt = positive_float("dt", dt, "s")
         self.action_scale = positive_float("torque_limit", torque_limit, "N.m")
-        length = positive_float("episode_length", episode_length, "s")
-        if length < self.dt * (1 - 1e-9):
-            raise ValueError(f"episode_length must be at least one sample dt = {self.dt} s, got {episode_length!r}")
-        self.max_episode_steps = max(int(round(length / self.dt)), 1)
+        self.max_episode_steps = horizon(self.dt, episode_length, max_episode_steps)
         self.velocity_scale = positive_float("velocity_scale", velocity_scale, "rad/s")
         if not (isinstance(reset_noise, (int, float)) and math.isfinite(reset_noise) and reset_noise >= 0):
             raise ValueError(f"reset_noise must be a finite number >= 0 [rad, rad/s], got {reset_noise!r}")
         self.reset_noise = float(reset_noise)
-        tol = positive_float("tol", tol)
+        tol = relative_tolerance("tol", tol)
+        self.tol = tol
         self.reward_fn = make_reward(reward, self.model)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": max(int(round(1.0 / self.dt)), 1)}
@@ -171,6 +238,19 @@ class DoublePendulumEnv(gymnasium.Env):
         self._needs_reset = True
 
     # -- properties ---------------------------------------------------------------------------
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The spec ``gym.make`` sets, with ``max_episode_steps`` = this environment's own horizon."""
+        return self.__dict__.get("_spec")
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        # gym.make sets a spec with max_episode_steps=None (the id registers none: the horizon depends on dt and
+        # episode_length); report the steps after which this environment truncates itself instead.
+        if value is not None and value.max_episode_steps != self.max_episode_steps:
+            value = dataclasses.replace(value, max_episode_steps=self.max_episode_steps)
+        self.__dict__["_spec"] = value
+
     @property
     def state(self) -> np.ndarray:
         """The model state, shape (nx,), in ``model.state_names`` order (a copy)."""
@@ -206,7 +286,7 @@ class DoublePendulumEnv(gymnasium.Env):
         Raises
         ------
         ValueError
-            ``options`` has unknown keys or a bad state.
+            ``options`` has unknown keys or a bad state (wrong shape, not finite, a spring length <= 0).
         """
         super().reset(seed=seed)
         options = dict(options or {})
@@ -217,6 +297,7 @@ class DoublePendulumEnv(gymnasium.Env):
             x0 = self.model.check_state(options["state"], "options['state']")
             if x0.ndim != 1:
                 raise ValueError(f"options['state'] must have shape ({self.model.nx},), got {x0.shape}")
+            check_spring_lengths(self.model.kind, x0, "options['state']")
             x0 = x0.copy()
         else:
             x0 = self.model.rest_state()

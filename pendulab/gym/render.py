@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -77,6 +78,10 @@ class FrameRenderer:
             if 0 <= row < n:
                 self._background[row, ::4] = COLORS["line"]  # dotted: every fourth pixel
         self._scale = n / (2.0 * self.extent)
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # The translated kinematics is generated code: rebuild it from the settings instead of pickling it.
+        return (FrameRenderer, (self.model, self.size, self.extent, self.goal_fraction))
 
     def to_pixel(self, point: np.ndarray) -> tuple[int, int]:
         """The (column, row) of the pixel containing a world point.

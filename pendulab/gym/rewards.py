@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -20,7 +21,7 @@ import numpy as np
 from ..model.model import Model
 from ..model.pycode import to_python
 
-__all__ = ["REWARDS", "RewardFn", "QuadraticReward", "HeightReward", "make_reward", "tip_height_function"]
+__all__ = ["REWARDS", "RewardFn", "QuadraticReward", "HeightReward", "TipHeight", "make_reward", "tip_height_function"]
 
 #: ``reward(x, tau) -> float``: state after the step (shape (nx,)) and held torques (tau1, tau2) [N.m].
 RewardFn = Callable[[np.ndarray, np.ndarray], float]
@@ -41,20 +42,39 @@ def tip_height_function(model: Model) -> Callable[[np.ndarray], float]:
 
     Returns
     -------
-    callable
+    TipHeight
         ``h(x)`` with ``x`` of shape (nx,) (or a list), returning ``y2`` [m] (up positive), from the model's
-        ``positions`` CasADi function translated to plain Python.
+        ``positions`` CasADi function translated to plain Python; picklable (rebuilt from the model).
     """
-    f = model.functions["positions"]
-    xs, ps = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("p", f.size1_in(1))
-    # Only y2 of the model's positions (the same graph, its other outputs dropped): ~1 us faster per call.
-    tip = to_python(ca.Function("tip_height", [xs, ps], [f(xs, ps)[3]]))
-    p = [float(v) for v in model.p]
+    return TipHeight(model)
 
-    def height(x: np.ndarray) -> float:
-        return float(tip(x, p)[0])
 
-    return height
+class TipHeight:
+    """``h(x) -> y2`` [m] of one model (see :func:`tip_height_function`); pickles as its model.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid or elastic model; its parameters are bound in.
+    """
+
+    __slots__ = ("model", "_tip", "_p")
+
+    def __init__(self, model: Model) -> None:
+        f = model.functions["positions"]
+        xs, ps = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("p", f.size1_in(1))
+        # Only y2 of the model's positions (the same graph, its other outputs dropped): ~1 us faster per call.
+        self.model = model
+        self._tip = to_python(ca.Function("tip_height", [xs, ps], [f(xs, ps)[3]]))
+        self._p = [float(v) for v in model.p]
+
+    def __call__(self, x: np.ndarray) -> float:
+        """Height of bob 2 above the pivot [m] at state ``x`` (shape (nx,) or a list)."""
+        return float(self._tip(x, self._p)[0])
+
+    def __reduce__(self) -> tuple[Any, tuple[Model]]:
+        # The translated function is generated code: rebuild it from the model instead of pickling it.
+        return (TipHeight, (self.model,))
 
 
 @dataclass(frozen=True)

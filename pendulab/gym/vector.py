@@ -13,19 +13,22 @@ episode ended resets that lane (its action is ignored, reward 0, both flags Fals
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import threading
 from typing import Any
 
 import casadi as ca
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from .._checks import check_spring_lengths
 from ..integrate.taylor import structure_key, translate
 from ..integrate.taylor.availability import heyoka_module
 from ..model.pycode import to_python
-from .env import OBS_LIMIT, DoublePendulumEnv
+from .env import DEFAULT_RENDER_FPS, OBS_LIMIT, DoublePendulumEnv
 from .rewards import HeightReward, QuadraticReward
 
 __all__ = ["DoublePendulumVectorEnv"]
@@ -59,7 +62,7 @@ class DoublePendulumVectorEnv(VectorEnv):
         ``num_envs`` < 1, an FMU backend or a C integrator, or any bad keyword of the single environment.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 50}
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}
 
     def __init__(self, num_envs: int = 8, **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -71,7 +74,7 @@ class DoublePendulumVectorEnv(VectorEnv):
             )
         if kwargs.get("integrator", "auto") not in ("auto", "taylor"):
             raise ValueError(f"the vector environment uses integrator 'taylor', got integrator={kwargs['integrator']!r}")
-        kwargs.pop("max_episode_steps", None)  # make_vec forwards a spec's limit; episodes end inside the env
+        # make_vec forwards max_episode_steps: it sets the horizon of every lane (checked against episode_length).
         env = DoublePendulumEnv(**{**kwargs, "integrator": "taylor"})
         self.single_env = env
         self.num_envs = int(num_envs)
@@ -85,12 +88,28 @@ class DoublePendulumVectorEnv(VectorEnv):
         self._model = model
         self._actuated = list(env._actuated)
         self._dt = env.dt
-        self._lanes = _Lanes(model, tuple(self._actuated), float(kwargs.get("tol", 1e-10)), self.num_envs)
+        self._lanes = _Lanes(model, tuple(self._actuated), env.tol, self.num_envs)
         self._reward = _batch_reward(env.reward_fn, model)
         self._X = np.tile(model.rest_state(), (self.num_envs, 1))
         self._steps = np.zeros(self.num_envs, dtype=int)
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._needs_reset = True
+
+    @property
+    def max_episode_steps(self) -> int:
+        """Steps of every lane's episode (``spec.max_episode_steps``)."""
+        return self.single_env.max_episode_steps
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The spec ``gym.make_vec`` sets, with ``max_episode_steps`` = the lanes' own horizon."""
+        return self.__dict__.get("_spec")
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        if value is not None and value.max_episode_steps != self.max_episode_steps:
+            value = dataclasses.replace(value, max_episode_steps=self.max_episode_steps)
+        self.__dict__["_spec"] = value
 
     @property
     def states(self) -> np.ndarray:
@@ -116,7 +135,7 @@ class DoublePendulumVectorEnv(VectorEnv):
         Raises
         ------
         ValueError
-            Unknown option keys or bad states.
+            Unknown option keys or bad states (wrong shape, not finite, a spring length <= 0).
         """
         super().reset(seed=seed)
         options = dict(options or {})
@@ -125,6 +144,7 @@ class DoublePendulumVectorEnv(VectorEnv):
             raise ValueError(f"options: unknown key(s) {unknown}; expected 'state'")
         if "state" in options:
             X0 = self._model.check_state(options["state"], "options['state']")
+            check_spring_lengths(self._model.kind, X0, "options['state']")
             X0 = np.array(np.broadcast_to(X0, (self.num_envs, self._model.nx)))
         else:
             X0 = np.array([self._initial_state() for _ in range(self.num_envs)])

@@ -10,7 +10,8 @@ One C implementation, two front ends:
 * :mod:`~pendulab.native.codegen`: the CasADi-generated model functions of a
   model kind (parameters are a runtime input), the same ``model_casadi.c`` the FMU ships.
 * :mod:`~pendulab.native.build`: compiler lookup and compilation, with an on-disk
-  cache keyed by a digest of the sources and flags.
+  cache keyed by a digest of the sources and flags; every cached file is verified
+  by its SHA-256 before it is loaded and rebuilt once when damaged.
 * :mod:`~pendulab.native.library`: the library of a kind loaded through ctypes
   (:func:`native_library`), used by ``simulate(method="compiled-dopri5" | "compiled-rodas4")``.
 
@@ -19,13 +20,22 @@ Nothing is compiled at import: the first use of a kind builds its library.
 
 from __future__ import annotations
 
-from .build import CFLAGS, CompilerNotFoundError, build_cached, cache_dir, compiler_unavailable_reason, find_compiler
+from .build import (
+    CFLAGS,
+    CacheRebuildWarning,
+    CompilerNotFoundError,
+    build_cached,
+    cache_dir,
+    compiler_unavailable_reason,
+    find_compiler,
+)
 from .codegen import C_DIR, model_c_source, native_sources
 from .library import SOLVERS, GridResult, IntervalStepper, NativeLibrary, native_library
 
 __all__ = [
     "CFLAGS",
     "C_DIR",
+    "CacheRebuildWarning",
     "CompilerNotFoundError",
     "GridResult",
     "IntervalStepper",

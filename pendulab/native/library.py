@@ -459,6 +459,9 @@ _LOCK = threading.Lock()
 def native_library(kind: str, *, purpose: str = "", hint: str = "") -> NativeLibrary:
     """The native library of a model kind: built on first use (cached on disk), loaded once per process.
 
+    The cached file is checked against its SHA-256 before ``dlopen`` (a damaged shared library
+    can crash the process when loaded); a damaged file, or one that fails to load, is rebuilt once.
+
     Parameters
     ----------
     kind : {"rigid", "elastic"}
@@ -479,7 +482,13 @@ def native_library(kind: str, *, purpose: str = "", hint: str = "") -> NativeLib
     CompilerNotFoundError (RuntimeError)
         Not cached and no C compiler found; names ``purpose`` and a hint.
     RuntimeError
-        Compilation failed, or the cache folder is not writable.
+        Compilation failed, the cache folder is not writable, or the library fails to load after one
+        rebuild; the message names the cache path.
+
+    Warns
+    -----
+    CacheRebuildWarning
+        The cached library was damaged (digest mismatch) or failed to load, and was rebuilt.
     """
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {list(KINDS)}, got {kind!r}")
@@ -488,10 +497,22 @@ def native_library(kind: str, *, purpose: str = "", hint: str = "") -> NativeLib
     if lib is not None:
         return lib
     with _LOCK:
-        path = build_cached(f"pendulab_native_{kind}", native_sources(kind), native_units(), purpose=purpose, hint=hint)
+        args = (f"pendulab_native_{kind}", native_sources(kind), native_units())
+        path = build_cached(*args, purpose=purpose, hint=hint)  # verified by its digest before it is loaded
         lib = _LOADED.get(path)
         if lib is None:
-            lib = _LOADED[path] = NativeLibrary(kind, path)
+            try:
+                lib = NativeLibrary(kind, path)
+            except (OSError, RuntimeError, AttributeError) as exc:  # dlopen failed, a symbol is missing, wrong ABI
+                path = build_cached(*args, purpose=purpose, hint=hint, rebuild=f"failed to load ({exc})")
+                try:
+                    lib = NativeLibrary(kind, path)
+                except (OSError, RuntimeError, AttributeError) as exc2:
+                    raise RuntimeError(
+                        f"the native library {path} fails to load even after a rebuild ({exc2}); "
+                        f"delete the cache folder {path.parent} and retry"
+                    ) from exc2
+            _LOADED[path] = lib
         _BY_KEY[key] = lib
         return lib
 
