@@ -1,4 +1,7 @@
-"""Balance the double pendulum upright with LQR: rigid and elastic, full / pendubot / acrobot.
+"""Balance upright with LQR
+========================
+
+Balance the double pendulum upright with LQR: rigid and elastic, full / pendubot / acrobot.
 
 For each model and actuation: design the LQR gain at up-up on the exact
 linearization, simulate the nonlinear model from a perturbed upright state

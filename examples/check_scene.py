@@ -1,4 +1,7 @@
-"""Which model does a scene need? Run the model hierarchy on a shipped scene.
+"""Which model does a scene need?
+==============================
+
+Which model does a scene need? Run the model hierarchy on a shipped scene.
 
 Linearized, rigid, rigid with quasi-static spring stretch and the full elastic
 model are run on the scene's outputs and horizon; the cheapest one within the

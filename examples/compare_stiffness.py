@@ -1,4 +1,7 @@
-"""Compare elastic pendulums of increasing stiffness with the rigid one (the rigid limit).
+"""Elastic pendulums approach the rigid one
+========================================
+
+Compare elastic pendulums of increasing stiffness with the rigid one (the rigid limit).
 
 From the same release (theta1 = theta2 = 0.3 rad, at rest), the elastic
 trajectory approaches the rigid one as the spring stiffness k grows. The

@@ -1,6 +1,10 @@
-"""Co-simulate exported pendulab FMUs under sampled controllers.
+"""Co-simulate exported FMUs
+=========================
+
+Co-simulate exported pendulab FMUs under sampled controllers.
 
 Exports a rigid and an elastic FMU, then
+
 1. balances the rigid FMU with LQR through the co-simulation master and checks it
    against the native sampled loop (same controller, zero-order hold);
 2. steps the rigid and a stiff elastic FMU side by side in one master with the same torques;

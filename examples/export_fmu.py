@@ -1,4 +1,7 @@
-"""Export the elastic double pendulum as an FMI 3.0 FMU and check it against the native integrator.
+"""Export and validate an FMU
+==========================
+
+Export the elastic double pendulum as an FMI 3.0 FMU and check it against the native integrator.
 
 Writes ``elastic.fmu`` and the overlay plot ``elastic_validation.png`` to ``out_dir``.
 """

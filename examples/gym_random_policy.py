@@ -1,4 +1,7 @@
-"""Drive the Gymnasium environment with a random policy and a tiny energy-pumping policy; print their returns.
+"""Gymnasium environment: random and energy-pumping policies
+=========================================================
+
+Drive the Gymnasium environment with a random policy and a tiny energy-pumping policy; print their returns.
 
 The energy-pumping policy (pendubot: only the shoulder torque tau1) pushes the shoulder with
 its own angular velocity while the total energy is below that of the upright rest state,

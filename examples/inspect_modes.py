@@ -1,4 +1,7 @@
-"""Inspect the equilibria and modes of the rigid and elastic double pendulum.
+"""Equilibria and modes
+====================
+
+Inspect the equilibria and modes of the rigid and elastic double pendulum.
 
 Prints a mode table per equilibrium (natural frequency in rad/s and Hz,
 damping ratio, time constant of unstable modes, normalized shape labelled by

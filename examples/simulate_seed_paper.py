@@ -1,4 +1,7 @@
-"""Simulate the seed paper's experiment: rigid vs elastic double pendulum from identical initial conditions.
+"""The seed paper's experiment
+===========================
+
+Simulate the seed paper's experiment: rigid vs elastic double pendulum from identical initial conditions.
 
 Loads the shipped ``seed_paper`` scene (elastic, k = 500 N/m, theta1 = theta2 =
 1.2 rad, springs at rest length), builds the rigid counterpart (same masses,

@@ -1,4 +1,7 @@
-"""Swing up the RealAIGym pendubot (or any shipped task), check it against CVODES, hold it with TVLQR + LQR.
+"""Swing-up trajectory optimization
+================================
+
+Swing up the RealAIGym pendubot (or any shipped task), check it against CVODES, hold it with TVLQR + LQR.
 
 Run:  PYTHONPATH=$PWD python examples/solve_swingup.py
 """

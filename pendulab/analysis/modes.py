@@ -36,15 +36,15 @@ class Mode:
         lambda [1/s] (the one with positive imaginary part for an oscillation).
     kind : {"oscillatory", "unstable", "decaying", "neutral"}
     omega_n : float
-        Natural frequency |lambda| [rad/s].
+        Natural frequency abs(lambda) [rad/s].
     freq_hz : float
         omega_n / (2 pi) [Hz].
     omega_d : float
-        Damped frequency |Im lambda| [rad/s] (0 for real eigenvalues).
+        Damped frequency abs(Im lambda) [rad/s] (0 for real eigenvalues).
     damping_ratio : float
-        -Re(lambda) / |lambda| (as ``control.damp``; -1 for a real unstable mode).
+        -Re(lambda) / abs(lambda) (as ``control.damp``; -1 for a real unstable mode).
     time_constant : float
-        1 / |Re lambda| [s]: e-folding time of growth (unstable) or decay;
+        1 / abs(Re lambda) [s]: e-folding time of growth (unstable) or decay;
         ``inf`` when undamped.
     shape : ndarray, shape (nq,)
         Normalized position part of the eigenvector (largest entry +1).
