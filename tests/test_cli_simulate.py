@@ -120,9 +120,11 @@ def test_model_auto_stiff_scene_runs_the_rigid_model(tmp_path, capsys):
     assert summary["model_level"] == "rigid"
     assert "chosen: rigid" in err and "linearized" in err  # the hierarchy report went to stderr
     assert cols["t"][-1] == 1.0  # --t-final reached the scene before the choice
-    # The CSV is the rigid trajectory in the elastic model's columns: springs held at rest length, no spring motion.
-    np.testing.assert_array_equal(cols["r1"], 1.0)
-    np.testing.assert_array_equal(cols["v2"], 0.0)
+    # The chosen model is reported truthfully: the rigid model with its own states, no spring rows or columns.
+    assert summary["model"] == "rigid" and summary["scene_model"] == "elastic"
+    assert "r1" not in cols and "v2" not in cols and "r1" not in summary["final_state"]
+    assert summary["max_stretch_m"] is None and summary["method"] != "rigid"
+    assert summary["n_steps"] is not None or summary["method"] == "taylor"  # the rigid run's own solver statistics
     scene = load_scene("elastic_stiff")
     rigid = pl.simulate(pl.rigid(), [0.3, 0.3, 0.0, 0.0], 1.0, scene.dt, scene.method, scene.rtol, scene.atol)
     # Same rigid model, method and tolerances as the hierarchy's rigid level: equal to round-off.
@@ -145,11 +147,22 @@ def test_model_auto_soft_scene_runs_the_elastic_model(tmp_path, capsys):
 def test_model_auto_applies_set_before_choosing(tmp_path, capsys):
     # The soft scene made stiff with --set: the hierarchy sees k = 1e6 N/m and the rigid model suffices.
     summary, _, cols = _auto(tmp_path, capsys, "elastic_soft", "--t-final", "1", "--set", "k1=1e6", "--set", "k2=1e6")
-    assert summary["model_level"] == "rigid" and summary["params"]["k1"] == 1e6
-    np.testing.assert_array_equal(cols["r2"], 1.0)
+    assert summary["model_level"] == "rigid" and summary["scene_params"]["k1"] == 1e6
+    assert summary["model"] == "rigid" and "r2" not in cols
 
 
 def test_model_auto_without_scene_is_a_one_line_error(capsys):
     assert main(["simulate", "--model", "auto", "--t-final", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--model auto needs --scene" in err and "\n" not in err
+
+
+def test_model_auto_table_names_the_chosen_model_and_its_states(tmp_path, capsys):
+    # Issue 20: the table said "model elastic", "method rigid (auto)", "final r1 1.000000" for a rigid run.
+    assert main(["simulate", "--scene", "elastic_stiff", "--model", "auto", "--t-final", "0.5"]) == 0
+    table = capsys.readouterr().out
+    rows = {line.split("  ")[0].strip(): line.split()[-1] for line in table.splitlines()[2:]}
+    assert rows["model"] == "rigid" and rows["model level"] == "rigid"
+    assert "final r1" not in rows and "final v1" not in rows
+    method_line = next(line for line in table.splitlines() if line.startswith("method"))
+    assert "rigid" not in method_line  # the rigid model's own method, not the level's name

@@ -238,8 +238,16 @@ def _zoh(A: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
     return Ad, Bd[:, 0]
 
 
+def _scene_input(scene: Scene) -> Any:
+    """The scene's torques for :func:`simulate`: defined in time when the scene has a sine (``Scene.input_spec``)."""
+    spec = getattr(scene, "input_spec", None)
+    return spec() if callable(spec) else scene.u
+
+
 def _run_linearized(scene: Scene) -> np.ndarray:
     model = scene.model
+    if getattr(scene, "u_amplitude", None) is not None:
+        raise RuntimeError("the linearized level takes constant torques only; this scene has a sine input")
     x_eq = _nearest_equilibrium(model, np.asarray(scene.x0))
     u0 = np.zeros(model.nu)
     A, B = (np.asarray(m) for m in model.functions["jac_rhs"](x_eq, u0, model.p))
@@ -261,7 +269,9 @@ def _run_rigid_states(scene: Scene) -> np.ndarray:
     """The rigid counterpart's states (theta1, theta2, omega1, omega2) on the scene grid."""
     th, om = _angles_rates(scene.model, np.asarray(scene.x0))
     rm = rigid_counterpart(scene.model)
-    return simulate(rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
+    return simulate(
+        rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, _scene_input(scene)
+    ).x
 
 
 def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -> np.ndarray:
@@ -285,7 +295,7 @@ def _run_rigid_qs(scene: Scene) -> np.ndarray:
 
 
 def _run_full(scene: Scene) -> np.ndarray:
-    return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.u).x
+    return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, _scene_input(scene)).x
 
 
 def levels_for(model: Model) -> tuple[ModelLevel, ...]:

@@ -62,9 +62,28 @@ def write_trajectory(traj: Trajectory, path: str | Path) -> Path:
 
 
 def summarize(label: str, model: Model, traj: Trajectory) -> dict[str, Any]:
-    """Key figures of one run (JSON-serializable): solver work, energy drift, spring stretch, final state."""
+    """Key figures of one run (JSON-serializable): solver work, energy balance, spring stretch, final state.
+
+    A conservative run (no torque, no damper) reports the energy drift ``max |E(t) - E(0)|``. A forced or
+    damped run also reports the input work ``W`` and the dissipated energy ``D`` (accumulated along the
+    trajectory by :func:`pendulab.integrate.simulate.energy_flows`, or taken from the run's own finer input
+    grid) and the **energy balance error** ``max |E(t) - E(0) - W(t) + D(t)|``: the part of the energy change
+    that the torques and dampers do not explain, i.e. the integration (and quadrature) error.
+    """
+    from ..integrate.simulate import energy_flows
+
     energy = traj["energy"]
-    drift = float(np.max(np.abs(energy - energy[0])))
+    change = energy - energy[0]
+    drift = float(np.max(np.abs(change)))
+    if "input_work" in traj.stats and "dissipated" in traj.stats:
+        work, dissipated = np.asarray(traj.stats["input_work"]), np.asarray(traj.stats["dissipated"])
+    else:
+        work, dissipated = energy_flows(model, traj.t, traj.x, traj.u)
+    forced = bool(np.any(traj.u != 0.0))
+    damped = bool(np.any(dissipated != 0.0))
+    balance = float(np.max(np.abs(change - work + dissipated)))
+    # Relative to the largest energy in play: the initial energy or what the torques and dampers moved.
+    scale = max(abs(float(energy[0])), float(np.max(np.abs(work))), float(np.max(dissipated)), drift)
     summary: dict[str, Any] = {
         "label": label,
         "model": model.kind,
@@ -79,6 +98,13 @@ def summarize(label: str, model: Model, traj: Trajectory) -> dict[str, Any]:
         "energy_initial_J": float(energy[0]),
         "energy_drift_J": drift,
         "energy_drift_rel": drift / abs(float(energy[0])) if energy[0] != 0 else None,
+        "forced": forced,
+        "damped": damped,
+        "energy_change_J": float(change[-1]),
+        "input_work_J": float(work[-1]),
+        "dissipated_J": float(dissipated[-1]),
+        "energy_balance_error_J": balance,
+        "energy_balance_error_rel": balance / scale if scale > 0 else None,
         "max_stretch_m": None,
         "final_state": {n: float(v) for n, v in zip(traj.state_names, traj.x[-1], strict=True)},
     }
@@ -97,18 +123,47 @@ def _fmt(value: Any, spec: str = ".4g") -> str:
 
 
 def format_summary(summaries: Sequence[dict[str, Any]]) -> str:
-    """A plain-text table, one column per run."""
-    rows: list[tuple[str, list[str]]] = [
-        ("model", [s["model"] for s in summaries]),
+    """A plain-text table, one column per run.
+
+    Conservative runs show the energy drift; forced or damped runs show the energy change, the input
+    work, the dissipated energy and the energy balance error instead (a drift there is physics, not error).
+    A run of a model level (``model_level``, ``pendulab simulate --model auto``) names it.
+    """
+
+    def balanced(s: dict[str, Any]) -> bool:
+        return bool(s.get("forced") or s.get("damped"))
+
+    def col(key: str, spec: str, when: Any = None) -> list[str]:
+        return [_fmt(s.get(key), spec) if when is None or when(s) else "-" for s in summaries]
+
+    rows: list[tuple[str, list[str]]] = [("model", [s["model"] for s in summaries])]
+    if any("model_level" in s for s in summaries):
+        rows.append(("model level", [str(s.get("model_level", "-")) for s in summaries]))
+    rows += [
         ("method", [s["method"] + (" (auto)" if s.get("method_choice", "given") != "given" else "") for s in summaries]),
         ("horizon [s]", [_fmt(s["t_final_s"]) for s in summaries]),
         ("wall time [s]", [_fmt(s["wall_time_s"], ".3f") for s in summaries]),
         ("RHS evaluations", [_fmt(s["n_rhs"]) for s in summaries]),
         ("initial energy [J]", [_fmt(s["energy_initial_J"], ".6g") for s in summaries]),
-        ("energy drift [J]", [_fmt(s["energy_drift_J"], ".2e") for s in summaries]),
-        ("energy drift (rel.)", [_fmt(s["energy_drift_rel"], ".2e") for s in summaries]),
-        ("max |spring stretch| [m]", [_fmt(s["max_stretch_m"], ".4f") for s in summaries]),
     ]
+    if not all(balanced(s) for s in summaries):
+        conservative = lambda s: not balanced(s)  # noqa: E731 - a one-line predicate
+        rows += [
+            ("energy drift [J]", col("energy_drift_J", ".2e", conservative)),
+            ("energy drift (rel.)", col("energy_drift_rel", ".2e", conservative)),
+        ]
+    if any(balanced(s) for s in summaries):
+        rows += [
+            ("energy change [J]", col("energy_change_J", ".4g", balanced)),
+            ("input work [J]", col("input_work_J", ".4g", balanced)),
+            ("dissipated [J]", col("dissipated_J", ".4g", balanced)),
+            ("energy balance error [J]", col("energy_balance_error_J", ".2e", balanced)),
+            ("energy balance error (rel.)", col("energy_balance_error_rel", ".2e", balanced)),
+        ]
+    stretch_label = "max |spring stretch| [m]"
+    if any(s.get("stretch_source") for s in summaries):
+        stretch_label += " (" + ", ".join(sorted({s["stretch_source"] for s in summaries if s.get("stretch_source")})) + ")"
+    rows.append((stretch_label, [_fmt(s["max_stretch_m"], ".4f") for s in summaries]))
     names: list[str] = []
     for s in summaries:
         names += [n for n in s["final_state"] if n not in names]

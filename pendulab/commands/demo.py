@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     settings = {"t_final": horizon, "dt": scene.dt, "method": scene.method, "rtol": scene.rtol, "atol": scene.atol}
     _progress(f"scene {scene.name!r}: {scene.description}")
     _progress(f"simulating rigid model ({scene.method}, {horizon:g} s) ...")
-    runs["rigid"] = (rigid, simulate(rigid, rigid_state(scene.model, scene.x0), u=scene.u, **settings))
+    runs["rigid"] = (rigid, simulate(rigid, rigid_state(scene.model, scene.x0), u=scene.input_spec(), **settings))
     if scene.model.kind == "elastic":
         _progress(f"simulating elastic model ({scene.method}, {horizon:g} s) ...")
         runs["elastic"] = (scene.model, scene.simulate(**settings))

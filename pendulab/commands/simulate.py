@@ -9,6 +9,8 @@ import sys
 import time
 from typing import Any
 
+import numpy as np
+
 from ._common import CLIError, format_summary, parse_number, parse_settings, summarize, trajectory_format, write_trajectory
 
 __all__ = ["register", "run"]
@@ -85,13 +87,13 @@ def run(args: argparse.Namespace) -> int:
     given = {k: v for k, v in overrides.items() if v is not None}
     print(f"pendulab simulate: {scene.name} ({scene.model.kind}) ...", file=sys.stderr)
     if auto:
-        traj, level = _simulate_auto(dataclasses.replace(scene, **given))
+        model, traj, extra = _simulate_auto(dataclasses.replace(scene, **given))
     else:
-        traj, level = scene.simulate(**given), None
-    summary = summarize(scene.name, scene.model, traj)
+        model, traj, extra = scene.model, scene.simulate(**given), {}
+    summary = summarize(scene.name, model, traj)
     summary["scene"] = scene.name
-    if level is not None:
-        summary["model_level"] = level
+    summary["scene_model"] = scene.model.kind
+    summary.update(extra)
 
     if args.out is not None:
         summary["out"] = str(write_trajectory(traj, args.out))
@@ -99,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         from ..viz.figures import save_figures
 
-        written = save_figures({scene.name: (scene.model, traj)}, args.plot)
+        written = save_figures({scene.name: (model, traj)}, args.plot)
         summary["figures"] = {k: str(v) for k, v in written.items()}
         print(f"pendulab simulate: wrote {len(written)} figures into {args.plot}", file=sys.stderr)
     if args.json:
@@ -109,15 +111,47 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _simulate_auto(scene: Any) -> tuple[Any, str]:
-    """Trajectory of ``scene`` with the cheapest model level within its tolerance, and that level's name."""
+def _simulate_auto(scene: Any) -> tuple[Any, Any, dict[str, Any]]:
+    """The cheapest model level within the scene's tolerance: the model run, its own trajectory, summary extras.
+
+    A rigid level runs the rigid counterpart itself (its own states, solver and statistics; no spring rows);
+    ``rigid+quasi-static`` adds the quasi-static spring stretch, labelled as such; ``linearized`` keeps the
+    scene model's states (exact zero-order-hold steps of the linearization).
+    """
     from ..bench.hierarchy import choose_model
+    from ..integrate import simulate
+    from ..model.counterpart import rigid_state
+    from ..model.quasistatic import quasi_static_lengths
 
     print("pendulab simulate: --model auto: running the model hierarchy ...", file=sys.stderr)
     level, report = choose_model(scene)
     print(report.table(), file=sys.stderr)
+    extra: dict[str, Any] = {
+        "model_level": level.name,
+        "scene_params": {k: float(v) for k, v in scene.model.params.resolved().items()},
+    }
+    if level.name in ("rigid", "rigid+quasi-static") and scene.model.kind == "elastic":
+        rigid = level.model
+        traj = simulate(
+            rigid,
+            rigid_state(scene.model, scene.x0),
+            scene.t_final,
+            dt=scene.dt,
+            method=scene.method,
+            rtol=scene.rtol,
+            atol=scene.atol,
+            u=scene.input_spec(),
+        )
+        if level.name == "rigid+quasi-static":
+            r = quasi_static_lengths(scene.model, traj.x[:, :2], traj.x[:, 2:], scene.u)  # as the hierarchy's level
+            stretch = r - [scene.model.params.L1, scene.model.params.L2]
+            extra["stretch_source"] = "quasi-static"
+            extra["max_stretch_m"] = float(np.max(np.abs(stretch)))
+        return rigid, traj, extra
+    if level.name == "linearized":
+        extra["method_note"] = "exact zero-order-hold steps of the linearization at the nearest equilibrium"
     start = time.perf_counter()
     traj = level.simulate(scene)
     # The summary reports the chosen model's own run time (the hierarchy's trajectories carry no solver stats).
     traj = dataclasses.replace(traj, stats={**traj.stats, "wall_time": time.perf_counter() - start})
-    return traj, level.name
+    return scene.model, traj, extra

@@ -12,6 +12,11 @@ to the method's runner.
 Inputs are zero-order held on the output grid: a sampled array gives the
 torque on each interval, a callable ``u(t, x)`` is a sampled-data feedback
 evaluated at each output time (the same semantics as a co-simulation master).
+A :class:`TimeInput` (a torque given as a function of time, e.g. a scene's
+``[input.sine]``) is instead held on a finer *input grid* whose step divides
+the output step and is at most ``TimeInput.max_hold``, sampled at the middle of
+each hold: the run does not depend on the output step, and a fast sine is not
+aliased away by a coarse output grid.
 Fixed-step methods take ``dt / ceil(dt / max_step)`` equal steps per output
 interval (default ``max_step`` 1e-3 s); ``rtol``/``atol`` do not apply to them.
 
@@ -29,25 +34,116 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .._checks import check_model, positive_float, relative_tolerance
+from .._checks import bounded_int, check_model, positive_float, relative_tolerance
 from ..model.model import Model
 from .auto import choose_method
 from .methods import METHODS
 from .registry import DEFAULT_FIXED_STEP, DEFAULT_MAX_STEPS, Budget, MethodSpec, RunRequest, SimulationError, failure_hint
 from .trajectory import Trajectory
 
-__all__ = ["simulate", "time_grid", "input_schedule", "InputSpec", "BUDGET_OPTIONS"]
+__all__ = [
+    "simulate",
+    "time_grid",
+    "input_schedule",
+    "InputSpec",
+    "BUDGET_OPTIONS",
+    "TimeInput",
+    "energy_flows",
+    "MAX_INPUT_INTERVALS",
+]
 
 #: Options of every method, handled by the front end (not passed to the solver).
 BUDGET_OPTIONS: tuple[str, ...] = ("max_steps", "max_wall_time")
 #: Families whose runner takes the step budget as its own ``options["max_steps"]``.
 _NATIVE_BUDGET_FAMILIES = ("taylor", "compiled")
 
-InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any]
+#: Largest number of hold intervals of a :class:`TimeInput` run (a typo in a frequency must not allocate gigabytes).
+MAX_INPUT_INTERVALS = 5_000_000
+
+
+@dataclass(frozen=True)
+class TimeInput:
+    """Torques given as a function of time only, held on an input grid fine enough for them.
+
+    :func:`simulate` splits each output interval into ``ceil(h / max_hold)``
+    equal holds (``h`` the output step) and holds ``func`` at the middle of each:
+    an input defined in time, so that the horizon, the output step and the
+    method can change freely without aliasing the input.
+
+    Attributes
+    ----------
+    func : callable
+        ``func(t) -> ndarray``: times ``t`` [s], shape (M,), to torques
+        (tau1, tau2) [N.m], shape (M, nu); vectorised.
+    max_hold : float
+        Largest hold [s] (e.g. 1 / (100 f) for a sine of frequency f: the held
+        sine's fundamental is then within 1.7e-4 of the true amplitude).
+    """
+
+    func: Callable[[np.ndarray], Any]
+    max_hold: float
+
+    def hold_grid(self, t: np.ndarray) -> np.ndarray:
+        """The input grid of an output grid ``t``: each output interval split into equal holds <= ``max_hold``.
+
+        Parameters
+        ----------
+        t : ndarray, shape (N,)
+            Uniform output grid [s].
+
+        Returns
+        -------
+        ndarray, shape ((N - 1) * s + 1,)
+            Uniform input grid [s] containing ``t`` (every ``s``-th point), ``s = ceil((t[1] - t[0]) / max_hold)``.
+
+        Raises
+        ------
+        ValueError
+            ``max_hold`` not a positive number, or more than :data:`MAX_INPUT_INTERVALS` holds.
+        """
+        max_hold = positive_float("u.max_hold", self.max_hold, "[s]")
+        h = float(t[1] - t[0])
+        sub = max(1, math.ceil(h / max_hold - 1e-9))
+        n = bounded_int(
+            "number of input holds (output intervals x holds per interval)",
+            (len(t) - 1) * sub,
+            high=MAX_INPUT_INTERVALS,
+            why=f"the input is held for at most {max_hold:.3g} s; shorten the horizon or lower the input frequency",
+        )
+        return np.linspace(0.0, float(t[-1]), n + 1)
+
+    def sample(self, model: Model, t: np.ndarray) -> np.ndarray:
+        """``func`` at times ``t``, checked.
+
+        Parameters
+        ----------
+        model : Model
+            The pendulum (input count and names).
+        t : ndarray, shape (M,)
+            Times [s].
+
+        Returns
+        -------
+        ndarray, shape (M, nu)
+            Torques [N.m].
+
+        Raises
+        ------
+        ValueError
+            ``func`` returned a wrong shape or non-finite torques.
+        """
+        value = np.asarray(self.func(np.asarray(t, dtype=float)), dtype=float)
+        if value.shape != (len(t), model.nu):
+            raise ValueError(f"u.func(t) must return shape ({len(t)}, {model.nu}) for {len(t)} times, got {value.shape}")
+        return model.check_input(value, "u.func(t)")
+
+
+InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any] | TimeInput
 
 
 def time_grid(t_final: float, dt: float) -> np.ndarray:
@@ -70,27 +166,31 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
 
 
 def input_schedule(model: Model, u: InputSpec, t: np.ndarray) -> np.ndarray | None:
-    """Piecewise-constant torques per output interval.
+    """Piecewise-constant torques per interval of the grid the input is held on.
 
     Parameters
     ----------
     model : Model
         The pendulum (input count and names).
-    u : None, array_like or callable
+    u : None, array_like, callable or TimeInput
         As in :func:`simulate`.
     t : ndarray, shape (N,)
-        Output grid [s].
+        The grid the input is held on [s]: the output grid, or for a
+        :class:`TimeInput` its input grid (:meth:`TimeInput.hold_grid`).
 
     Returns
     -------
     ndarray, shape (N-1, nu), or None
-        Held torques [N.m]; None for a callable (feedback).
+        Held torques [N.m] (a :class:`TimeInput` at the middle of each
+        interval); None for a callable (feedback).
 
     Raises
     ------
     ValueError
         Wrong shape, non-finite values or a scalar.
     """
+    if isinstance(u, TimeInput):
+        return u.sample(model, 0.5 * (t[1:] + t[:-1]))
     if callable(u):
         return None
     n_int = len(t) - 1
@@ -98,15 +198,72 @@ def input_schedule(model: Model, u: InputSpec, t: np.ndarray) -> np.ndarray | No
         return np.zeros((n_int, model.nu))
     arr = np.asarray(u, dtype=float) if not np.isscalar(u) else None
     if arr is None or arr.ndim == 0:
-        raise ValueError(f"u must be None, shape ({model.nu},), shape (N, {model.nu}) or a callable u(t, x); got {u!r}")
+        raise ValueError(
+            f"u must be None, shape ({model.nu},), shape (N, {model.nu}), a callable u(t, x) or a TimeInput; got {u!r}"
+        )
     arr = model.check_input(arr, "u")
     if arr.ndim == 1:
         return np.tile(arr, (n_int, 1))
     if arr.shape[0] in (n_int, n_int + 1):
         return arr[:n_int]
     raise ValueError(
-        f"sampled u must have one row per output time ({n_int + 1}) or per interval ({n_int}), got {arr.shape[0]} rows"
+        f"sampled u must have one row per output time ({n_int + 1}) or per interval ({n_int}), got {arr.shape[0]} rows; "
+        "an input defined in time (e.g. a sine) that should follow another horizon or output step is a "
+        "pendulab.integrate.simulate.TimeInput"
     )
+
+
+def energy_flows(model: Model, t: np.ndarray, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Work done by held torques and energy dissipated by the dampers, accumulated along a trajectory.
+
+    The energy balance of a run is ``E(t) - E(0) = W(t) - D(t)``; its defect
+    measures the integration error of a forced or damped run.
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+    t : ndarray, shape (N,)
+        Uniform grid [s] the torques are held on.
+    x : ndarray, shape (N, nx)
+        States on ``t``.
+    u : ndarray, shape (N-1, nu) or (N, nu)
+        Torques [N.m] held over each interval (a last row is ignored).
+
+    Returns
+    -------
+    work : ndarray, shape (N,)
+        Work [J] delivered by the torques from 0 to ``t[k]``: exact for held
+        torques (``tau1 dtheta1 + tau2 (dtheta2 - dtheta1)`` per interval, by
+        :meth:`Model.power_in` at the mean rates).
+    dissipated : ndarray, shape (N,)
+        Energy [J] dissipated by the dampers (:meth:`Model.dissipation`) from 0
+        to ``t[k]``: trapezoid rule with the Euler-Maclaurin end correction
+        (``- h^2/12 (P'(t_k) - P'(0))``, ``P'`` by finite differences), error
+        O(h^4) while the dissipated power is smooth.
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    n = len(t)
+    zero = np.zeros(n)
+    if n < 2:
+        return zero, zero.copy()
+    h = float(t[1] - t[0])
+    names = model.state_names
+    th = [names.index("theta1"), names.index("theta2")]
+    om = [names.index("omega1"), names.index("omega2")]
+    mean_rates = x[:-1].copy()
+    mean_rates[:, om] = (x[1:, th] - x[:-1, th]) / h
+    U = np.asarray(u, dtype=float)[: n - 1]
+    work = np.concatenate([[0.0], np.cumsum(np.atleast_1d(model.power_in(mean_rates, U)) * h)])
+    p = np.atleast_1d(model.dissipation(x))
+    if not np.any(p):
+        return work, zero.copy()
+    dissipated = np.concatenate([[0.0], np.cumsum(0.5 * h * (p[1:] + p[:-1]))])
+    if n >= 3:
+        dp = np.gradient(p, h, edge_order=2)
+        dissipated -= h * h / 12.0 * (dp - dp[0])
+    return work, dissipated
 
 
 def simulate(
@@ -140,10 +297,15 @@ def simulate(
         ``stats["auto"]``) or a key of :data:`pendulab.METHODS` (never overridden).
     rtol, atol : float
         Error tolerances of the adaptive methods.
-    u : None, array_like or callable
+    u : None, array_like, callable or TimeInput
         Torques (tau1, tau2) [N.m]: None (zero), shape (2,) constant, shape
-        (N, 2) or (N-1, 2) sampled on the output grid (held), or a callable
-        ``u(t, x) -> (2,)`` evaluated at each output time and held over the step.
+        (N, 2) or (N-1, 2) sampled on the output grid (held), a callable
+        ``u(t, x) -> (2,)`` evaluated at each output time and held over the step,
+        or a :class:`TimeInput` (a function of time held on a finer input grid;
+        ``stats["input_hold"]`` is its hold [s], and when it is finer than the
+        output step, ``Trajectory.u`` holds the input's value at the output times
+        and ``stats["input_work"]``, ``stats["dissipated"]`` the energy flows [J]
+        of :func:`energy_flows` on the input grid, shape (N,)).
     max_step : float, optional
         Largest internal step [s]; the step of the fixed-step methods
         (default 1e-3 s there).
@@ -205,20 +367,23 @@ def simulate(
     if max_step is not None:
         max_step = positive_float("max_step", max_step)
     t = time_grid(t_final, dt)
-    schedule = input_schedule(model, u, t)
+    # A TimeInput is held on its own input grid (the output grid refined); every other input on the output grid.
+    t_run = u.hold_grid(t) if isinstance(u, TimeInput) else t
+    sub = (len(t_run) - 1) // (len(t) - 1)
+    schedule = input_schedule(model, u, t_run)
     choice = None
     if auto:
         choice = choose_method(model, x0, schedule[0] if schedule is not None else np.zeros(model.nu), rtol, atol)
         spec = METHODS[choice.method]
     opts, budget = _budget(spec, options)
-    _check_fixed_step_budget(spec, t, max_step, budget)
+    _check_fixed_step_budget(spec, t_run, max_step, budget)
     request = RunRequest(
         model=model,
         spec=spec,
         x0=x0,
-        t=t,
+        t=t_run,
         schedule=schedule,
-        feedback=u if callable(u) else None,
+        feedback=u if callable(u) and not isinstance(u, TimeInput) else None,
         rtol=rtol,
         atol=atol,
         max_step=max_step,
@@ -234,10 +399,12 @@ def simulate(
                 raise KeyboardInterrupt from None
             raise
         wall = time.perf_counter() - start
-    X, U, stats = result.x, result.u, result.stats
+    X, U, stats = result.x, result.u, dict(result.stats)
     if not np.all(np.isfinite(X)):
         k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
-        raise SimulationError(spec.name, float(t[k - 1]), t_final, "the state became non-finite", failure_hint(model.kind))
+        raise SimulationError(
+            spec.name, float(t_run[max(k - 1, 0)]), t_final, "the state became non-finite", failure_hint(model.kind)
+        )
     if model.kind == "elastic":
         collapsed = X[:, 2:4] <= 0.0
         if collapsed.any():
@@ -245,12 +412,22 @@ def simulate(
             k, j = np.argwhere(collapsed)[0]
             raise SimulationError(
                 spec.name,
-                float(t[k - 1]),
+                float(t_run[max(k - 1, 0)]),
                 t_final,
                 f"spring length r{j + 1} reached {X[k, 2 + j]:.3g} m <= 0 (a bob passed through its joint)",
                 "stiffer springs (larger k) or a gentler start keep the springs extended",
             )
-    U_full = np.vstack([U, U[-1:]])
+    if isinstance(u, TimeInput):
+        stats["input_hold"] = float(t_run[1] - t_run[0])
+    if sub > 1:
+        # The input changes within an output interval: keep the energy flows of the input grid (the output
+        # grid would alias them) and report the input's value at each output time.
+        work, dissipated = energy_flows(model, t_run, X, U)
+        stats["input_work"], stats["dissipated"] = work[::sub], dissipated[::sub]
+        X = X[::sub]
+        U_full = u.sample(model, t)
+    else:
+        U_full = np.vstack([U, U[-1:]])
     Y = model.outputs(X, U_full)
     return Trajectory(
         t=t,

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..integrate import simulate, time_grid
+from ..integrate.simulate import InputSpec, TimeInput
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model, make_model
 from ..model.params import ElasticParams, RigidParams
@@ -28,6 +29,7 @@ __all__ = [
     "STARTS",
     "GROUPS",
     "FEATURE_SECTIONS",
+    "SINE_HOLDS_PER_PERIOD",
 ]
 
 #: Directory of the scenes shipped with the package.
@@ -49,6 +51,9 @@ FEATURE_SECTIONS: tuple[str, ...] = ("task", "validation")
 #: How unstated spring lengths are set at t = 0: static hanging length, rest length L (excites
 #: the spring mode), or quasi-static (zero radial acceleration at the initial angles and rates).
 STARTS: tuple[str, ...] = ("static", "rest-length", "quasi-static")
+#: A scene's ``[input.sine]`` is held at most 1 / (SINE_HOLDS_PER_PERIOD f) [s] when simulated: the held sine's
+#: fundamental is sinc(pi / 100) = 1 - 1.6e-4 of the true amplitude, whatever the output step.
+SINE_HOLDS_PER_PERIOD = 100
 #: Groups of shipped scenes in subdirectories of ``SCENE_DIR``.
 GROUPS: tuple[str, ...] = ("bench", "validation")
 
@@ -134,8 +139,9 @@ class Scene:
         """Torques (tau1, tau2) [N.m] at times ``t`` (default :meth:`grid`), shape (N, 2).
 
         Constant ``u`` (zero without ``[input]``) plus the ``[input.sine]`` term
-        ``u_amplitude * sin(2 pi u_frequency t)``; :meth:`simulate` holds row k
-        over ``[t_k, t_k+1)``.
+        ``u_amplitude * sin(2 pi u_frequency t)``: the values at ``t`` (a
+        co-simulation master, e.g. ``pendulab fmu validate``, holds row k over
+        ``[t_k, t_k+1)``; :meth:`simulate` uses :meth:`input_spec` instead).
 
         Parameters
         ----------
@@ -152,6 +158,22 @@ class Scene:
         if self.u_amplitude is not None:
             u = u + np.outer(np.sin(2 * np.pi * self.u_frequency * t), self.u_amplitude)
         return u
+
+    def input_spec(self) -> InputSpec:
+        """The scene's torques as :func:`pendulab.simulate` takes them: defined in time, not on a grid.
+
+        Returns
+        -------
+        None, ndarray of shape (nu,), or TimeInput
+            None without ``[input]``; the constant torques [N.m] without
+            ``[input.sine]``; with a sine, a
+            :class:`~pendulab.integrate.simulate.TimeInput` of :meth:`inputs`
+            held at most ``1 / (SINE_HOLDS_PER_PERIOD * u_frequency)`` s, so that
+            any horizon, output step or method runs the same input.
+        """
+        if self.u_amplitude is None:
+            return self.u
+        return TimeInput(self.inputs, 1.0 / (SINE_HOLDS_PER_PERIOD * self.u_frequency))
 
     def with_settings(self, **settings: float) -> Scene:
         """Return a copy with parameters and/or initial-state values changed by name.
@@ -205,7 +227,9 @@ class Scene:
         **overrides
             Any keyword of :func:`pendulab.simulate` (``x0``, ``t_final``,
             ``dt``, ``method``, ``rtol``, ``atol``, ``u``, ``max_step``,
-            ``options``); defaults come from the scene.
+            ``options``); defaults come from the scene. The scene's input is
+            defined in time (:meth:`input_spec`), so it follows a changed
+            ``t_final``, ``dt`` or ``method``.
 
         Returns
         -------
@@ -227,7 +251,7 @@ class Scene:
             "method": self.method,
             "rtol": self.rtol,
             "atol": self.atol,
-            "u": self.inputs() if self.u_amplitude is not None else self.u,
+            "u": self.input_spec(),
         }
         allowed = set(kwargs) | {"max_step", "options"}
         unknown = sorted(set(overrides) - allowed)
