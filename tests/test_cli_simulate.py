@@ -162,7 +162,8 @@ def test_model_auto_table_names_the_chosen_model_and_its_states(tmp_path, capsys
     assert main(["simulate", "--scene", "elastic_stiff", "--model", "auto", "--t-final", "0.5"]) == 0
     table = capsys.readouterr().out
     rows = {line.split("  ")[0].strip(): line.split()[-1] for line in table.splitlines()[2:]}
-    assert rows["model"] == "rigid" and rows["model level"] == "rigid"
+    # The level is chosen on measured cost (ties within 1.5x go to the simpler model): a rigid level either way.
+    assert rows["model"] == "rigid" and rows["model level"] in ("rigid", "rigid+quasi-static"), table
     assert "final r1" not in rows and "final v1" not in rows
     method_line = next(line for line in table.splitlines() if line.startswith("method"))
     assert "rigid" not in method_line  # the rigid model's own method, not the level's name
