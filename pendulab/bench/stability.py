@@ -476,7 +476,9 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
     methods = list(res.maps)
     ncol = 3
     nrow = math.ceil(len(methods) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow), squeeze=False, sharex=True, sharey=True)
+    fig, axes = plt.subplots(
+        nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow + 0.6), squeeze=False, sharex=True, sharey=True, layout="constrained"
+    )
     cmap = ListedColormap(["#d62728", "#ffbf40", "#2ca02c"])
     lk, lh = np.log10(res.ks), np.log10(res.hs)
 
@@ -503,16 +505,13 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
         ax.set_ylabel("step h [s]")
     for ax in list(axes.flat)[len(methods) :]:
         ax.axis("off")
-    fig.legend(
-        [Patch(color=c) for c in ("#2ca02c", "#ffbf40", "#d62728")],
-        ["stable and accurate (bob positions within 1 mm)", "stable but inaccurate", "unstable (energy x10 within 1 s)"],
-        loc="lower center",
-        ncol=3,
-        fontsize=9,
-        frameon=False,
-    )
+    patches = [Patch(color=c) for c in ("#2ca02c", "#ffbf40", "#d62728")]
+    names = ["stable and accurate (bob positions within 1 mm)", "stable but inaccurate", "unstable (energy x10 within 1 s)"]
+    if any(np.any(g == FAILED) for g in res.maps.values()):
+        patches.append(Patch(facecolor="white", edgecolor="0.5"))
+        names.append("failed (reason in the run's failures)")
+    fig.legend(patches, names, loc="outside lower center", ncol=len(names), fontsize=9, frameon=False)
     fig.suptitle("Fixed-step methods on the elastic pendulum (theta = 0.3 rad, springs at rest length, 1 s)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
     from ..viz.save import save_figure
 
     return save_figure(fig, path, dpi=110)
@@ -520,7 +519,7 @@ def _plot_map(res: StabilityResult, path: Path) -> Path:
 
 def _plot_steps(res: StabilityResult, path: Path) -> Path:
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, layout="constrained")
     ks = sorted({r["k"] for r in res.step_counts})
     for ax, start in zip(axes, ("quasi-static", "rest-length"), strict=False):
         for m, mk in zip(("RK45", "DOP853", "Radau", "cvodes-bdf"), "osD^", strict=False):
@@ -538,7 +537,6 @@ def _plot_steps(res: StabilityResult, path: Path) -> Path:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
     axes[0].set_ylabel("accepted steps over 1 s")
-    fig.tight_layout()
     from ..viz.save import save_figure
 
     return save_figure(fig, path, dpi=110)
@@ -546,7 +544,7 @@ def _plot_steps(res: StabilityResult, path: Path) -> Path:
 
 def _plot_energy(res: StabilityResult, path: Path) -> Path:
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 4.2))
+    fig, ax = plt.subplots(figsize=(8, 4.2), layout="constrained")
     for label, (t, dE) in res.energy.items():
         ax.plot(t, dE, label=label, lw=1.2)
     ax.set_xlabel("time t [s]")
@@ -554,7 +552,6 @@ def _plot_energy(res: StabilityResult, path: Path) -> Path:
     ax.set_title("Undamped springs, k = 1e4 N/m, rest-length start: symplectic vs dissipative methods", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
     from ..viz.save import save_figure
 
     return save_figure(fig, path, dpi=110)
