@@ -11,6 +11,9 @@ weakly excited; an implicit method (CVODES BDF) steps over it for stiff springs.
 Run: ``python examples/compare_stiffness.py``
 """
 
+# Gallery thumbnail (this example is shown as code; the figure is the one its command writes).
+# sphinx_gallery_thumbnail_path = "figures/modes_frequency_vs_stiffness.png"
+
 from __future__ import annotations
 
 from collections.abc import Sequence

@@ -14,6 +14,9 @@ Exports a rigid and an elastic FMU, then
 Run: ``python examples/cosimulate_fmu.py`` (writes nothing; prints a summary).
 """
 
+# Gallery thumbnail (this example is shown as code; the figure is the one its command writes).
+# sphinx_gallery_thumbnail_path = "figures/cosim_side_by_side.png"
+
 from __future__ import annotations
 
 import tempfile

@@ -12,6 +12,9 @@ paper's figures; pass ``out_dir`` to write them here too.
 Run: ``python examples/simulate_seed_paper.py``
 """
 
+# Gallery thumbnail (this example is shown as code; the figure is the one its command writes).
+# sphinx_gallery_thumbnail_path = "figures/demo_fig4_angles_compare.png"
+
 from __future__ import annotations
 
 from pathlib import Path

@@ -6,6 +6,9 @@ Swing up the RealAIGym pendubot (or any shipped task), check it against CVODES, 
 Run:  PYTHONPATH=$PWD python examples/solve_swingup.py
 """
 
+# Gallery thumbnail (this example is shown as code; the figure is the one its command writes).
+# sphinx_gallery_thumbnail_path = "figures/swingup_pendubot.png"
+
 from __future__ import annotations
 
 from pendulab.control.swingup.episode import run_episode
