@@ -85,3 +85,19 @@ def test_rigid_reference_self_consistent_to_stated_accuracy():
     X, _ = gbs_mp(case.model, case.x0, 0.2, case.dt, substeps=2)
     # Recomputing the 32-digit GBS over the first 0.2 s reproduces the stored solution to its stated accuracy.
     assert np.max(np.abs(X - ref.x[: X.shape[0]])) <= ref.accuracy
+
+
+def test_references_json_is_one_object_on_stdout(tmp_path, monkeypatch, capsys):
+    import json
+
+    from pendulab.bench import reference
+
+    stored = load_reference(CASES["rigid_chaotic_2s"])
+    # The 32-digit recomputation takes minutes: reuse the stored reference, the command's output is under test.
+    monkeypatch.setattr(reference, "compute_reference", lambda case, progress=None: stored)
+    args = ["bench", "references", "--cases", "rigid_chaotic_2s", "--out", str(tmp_path), "--json"]
+    assert main(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    [entry] = summary["references"]
+    assert entry["case"] == "rigid_chaotic_2s" and entry["accuracy"] == stored.accuracy
+    assert (tmp_path / entry["file"].split("/")[-1]).exists()
