@@ -51,6 +51,8 @@ class DoublePendulumVectorEnv(VectorEnv):
     Attributes
     ----------
     num_envs : int
+    max_episode_steps : int
+        Steps of every lane's episode (``gym.make_vec(..., max_episode_steps=N)`` sets it; also ``spec.max_episode_steps``).
     single_env : DoublePendulumEnv
         A single environment with the same settings (model, spaces, reward, renderer).
     states : ndarray, shape (num_envs, nx)
@@ -223,6 +225,18 @@ class DoublePendulumVectorEnv(VectorEnv):
             return None
         return tuple(renderer.render(x) for x in self._X)
 
+    # -- copies -------------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything but the vectorised reward (generated code, rebuilt from the single env's reward)."""
+        state = dict(self.__dict__)
+        state.pop("_reward", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Restore the attributes and rebuild the vectorised reward."""
+        self.__dict__.update(state)
+        self._reward = _batch_reward(self.single_env.reward_fn, self._model)
+
     # -- helpers ------------------------------------------------------------------------------
     def _initial_state(self) -> np.ndarray:
         model, noise = self._model, self.single_env.reset_noise
@@ -254,10 +268,35 @@ class _Lanes:
     def __init__(self, model: Any, actuated: tuple[int, ...], tol: float, n: int) -> None:
         b = min(n, 2 * int(heyoka_module().recommended_simd_size()))
         self.n, self.b = n, b
+        self.model, self.tol = model, tol
         self.actuated = list(actuated)
         self.chunks = [_batch_integrator(model, actuated, tol, b) for _ in range(-(-n // b))]
         self.X = np.tile(model.rest_state(), (len(self.chunks) * b, 1))  # last good states, padded
         self.tau = np.zeros((len(self.chunks) * b, 2))
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The batch integrators are compiled code: keep their settings, states and times, rebuild them on unpickling.
+        times = [tuple(np.array(a) for a in ta.dtime) for ta in self.chunks]
+        return {
+            "model": self.model,
+            "actuated": tuple(self.actuated),
+            "tol": self.tol,
+            "n": self.n,
+            "b": self.b,
+            "X": self.X.copy(),
+            "tau": self.tau.copy(),
+            "states": [np.array(ta.state) for ta in self.chunks],
+            "times": times,
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.model, self.tol, self.n, self.b = state["model"], state["tol"], state["n"], state["b"]
+        self.actuated = list(state["actuated"])
+        self.chunks = [_batch_integrator(self.model, state["actuated"], self.tol, self.b) for _ in state["states"]]
+        for ta, x, (hi, lo) in zip(self.chunks, state["states"], state["times"], strict=True):
+            ta.state[:] = x
+            ta.set_dtime(hi, lo)  # double-length time: the last step of propagate_for depends on it
+        self.X, self.tau = state["X"].copy(), state["tau"].copy()
 
     def set_states(self, X: np.ndarray, lanes: np.ndarray) -> None:
         self.X[lanes] = X
