@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -29,7 +30,20 @@ def _export(args: argparse.Namespace) -> int:
     model = make_model(args.model, **_parse_sets(args.set or []))
     x0 = model.state(**_parse_sets(args.initial or [])) if args.initial else None
     path = export(model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0)
-    print(f"wrote {path} (FMI {args.fmi_version}.0, {args.model}, Co-Simulation + Model Exchange)")
+    if args.json:
+        start = model.state() if x0 is None else x0
+        summary = {
+            "fmu": str(path),
+            "fmi_version": args.fmi_version,
+            "model": args.model,
+            "interfaces": ["CoSimulation", "ModelExchange"],
+            "params": {k: float(v) for k, v in zip(model.param_names, model.p, strict=True)},
+            "start": {k: float(v) for k, v in zip(model.state_names, start, strict=True)},
+            "bytes": path.stat().st_size,
+        }
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"wrote {path} (FMI {args.fmi_version}.0, {args.model}, Co-Simulation + Model Exchange)")
     return 0
 
 
@@ -44,9 +58,12 @@ def _validate(args: argparse.Namespace) -> int:
         out_dir=args.out,
         progress=lambda msg: print(f"[fmu validate] {msg}", file=sys.stderr, flush=True),
     )
-    print(report.table())
-    if report.plot is not None:
-        print(f"overlay plot: {report.plot}")
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        print(report.table())
+        if report.plot is not None:
+            print(f"overlay plot: {report.plot}")
     return 0 if report.passed else 1
 
 
@@ -62,16 +79,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     e.add_argument("--out", type=Path, required=True, help="output .fmu file")
     e.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")
+    e.add_argument("--json", action="store_true", help="print a JSON summary (path, parameters, start values) instead")
     e.set_defaults(func=_export)
 
     v = sub.add_parser(
         "validate",
         help="fmpy validate_fmu + agreement with the native integrator; exit 1 on FAIL, 2 on an unreadable file",
         description="Validate a pendulab FMU: fmpy's validate_fmu plus agreement with the native integrator on the "
-        "validation scenes. Exit status: 0 PASS, 1 FAIL, 2 bad input (not a readable FMU - not a zip, a truncated "
+        "validation scenes, by default at the FMU's own parameters and start values (its modelDescription start values; "
+        "the scenes lend horizon, step, input, tolerance and bound); --scene runs named scenes as they are. "
+        "Exit status: 0 PASS, 1 FAIL, 2 bad input (not a readable FMU - not a zip, a truncated "
         "archive, a schema-invalid modelDescription.xml -, not a pendulab FMU, unknown scene), one line on stderr.",
     )
     v.add_argument("fmu", type=Path)
-    v.add_argument("--scene", action="append", metavar="NAME", help="validation scene (repeatable; default: all)")
+    v.add_argument(
+        "--scene",
+        action="append",
+        metavar="NAME",
+        help="validation scene run with ITS parameters and initial state (repeatable; default: every scene of the kind "
+        "at the FMU's own parameters and start values)",
+    )
     v.add_argument("--out", type=Path, default=None, help="directory for the overlay plot")
+    v.add_argument("--json", action="store_true", help="print the report as JSON instead of the table")
     v.set_defaults(func=_validate)

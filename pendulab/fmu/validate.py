@@ -1,6 +1,13 @@
 """Validate an exported FMU with fmpy against the native CasADi integrator.
 
-For each validation scene of the FMU's model kind, the FMU is simulated with
+By default the FMU is checked **at its own parameters and start values** (the
+start values of its ``modelDescription.xml``, e.g. an FMU exported with
+``--set k1=1e5 --initial theta1=1.0`` runs with k1 = 1e5 and theta1 = 1.0): each
+validation scene of its model kind lends only its horizon, output step, sine
+torque, solver tolerance and bound. Named scenes (``scenes=[...]``, CLI
+``--scene``) run as they are, with the scene's parameters and initial state.
+
+For each validation case, the FMU is simulated with
 fmpy as Co-Simulation with each embedded solver and as Model Exchange (fmpy's
 CVode), with a sampled sine torque on ``tau1`` held constant over each
 communication step (the same zero-order hold as :func:`pendulab.simulate`). The
@@ -15,6 +22,7 @@ against the scene's stated bound.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import shutil
 import tempfile
@@ -39,6 +47,7 @@ __all__ = [
     "validate",
     "fmu_kind",
     "UnreadableFMUError",
+    "fmu_start_values",
 ]
 
 
@@ -151,6 +160,11 @@ class ValidationReport:
         Wall time [s] of each FMU run by (scene, run).
     plot : Path or None
         The overlay plot, when written.
+    settings : str
+        ``"fmu"``: run at the FMU's own parameters and start values (the default);
+        ``"scenes"``: run at the named scenes' parameters and initial states.
+    params, start : dict of str to float
+        The parameters and initial state the runs used when ``settings == "fmu"`` (else empty).
     """
 
     fmu: Path
@@ -159,6 +173,42 @@ class ValidationReport:
     rows: list[ValidationRow] = field(default_factory=list)
     wall_times: dict[tuple[str, str], float] = field(default_factory=dict)
     plot: Path | None = None
+    settings: str = "fmu"
+    params: dict[str, float] = field(default_factory=dict)
+    start: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly summary (``pendulab fmu validate --json``).
+
+        Returns
+        -------
+        dict
+            FMU path, kind, settings, parameters and start values used, problems,
+            one entry per row (scene, run, signal, normalised error, bound, passed),
+            wall times [s] per (scene, run), the plot path and ``passed``.
+        """
+        return {
+            "fmu": str(self.fmu),
+            "kind": self.kind,
+            "settings": self.settings,
+            "params": dict(self.params),
+            "start": dict(self.start),
+            "problems": list(self.problems),
+            "rows": [
+                {
+                    "scene": r.scene,
+                    "run": r.run,
+                    "signal": r.signal,
+                    "max_error": r.max_error if np.isfinite(r.max_error) else None,
+                    "bound": r.bound,
+                    "passed": r.passed,
+                }
+                for r in self.rows
+            ],
+            "wall_times_s": {f"{scene} {run}": t for (scene, run), t in self.wall_times.items()},
+            "plot": None if self.plot is None else str(self.plot),
+            "passed": self.passed,
+        }
 
     @property
     def passed(self) -> bool:
@@ -179,17 +229,27 @@ class ValidationReport:
             f"FMU {self.fmu.name} ({self.kind}): fmpy validate_fmu: "
             + ("no problem" if not self.problems else f"{len(self.problems)} problem(s)")
         ]
+        if self.settings == "fmu":
+            default = make_model(self.kind)
+            defaults = dict(zip(default.param_names, default.p, strict=True))
+            changed = {k: v for k, v in self.params.items() if v != defaults.get(k)}
+            shown = ", ".join(f"{k}={v:.6g}" for k, v in changed.items()) or "default parameters"
+            state = ", ".join(f"{k}={v:.6g}" for k, v in self.start.items())
+            lines.append(f"at the FMU's own parameters ({shown}) and start values ({state})")
+        else:
+            lines.append("at the named scenes' parameters and initial states")
         lines += [f"  problem: {p}" for p in self.problems]
         keys = list(dict.fromkeys((r.scene, r.run) for r in self.rows))
         signals = list(dict.fromkeys(r.signal for r in self.rows))
-        head = f"{'scene':<15} {'run':<10} " + " ".join(f"{s:>9}" for s in signals) + f" {'bound':>8}  result"
+        w = max([15, *(len(scene) for scene, _ in keys)])
+        head = f"{'scene':<{w}} {'run':<10} " + " ".join(f"{s:>9}" for s in signals) + f" {'bound':>8}  result"
         lines += [head, "-" * len(head)]
         for scene, run in keys:
             rs = {r.signal: r for r in self.rows if (r.scene, r.run) == (scene, run)}
             ok = all(r.passed for r in rs.values())
             errs = " ".join(f"{rs[s].max_error:9.2e}" if s in rs else f"{'':>9}" for s in signals)
             bound = next(iter(rs.values())).bound
-            lines.append(f"{scene:<15} {run:<10} {errs} {bound:8.0e}  {'PASS' if ok else 'FAIL'}")
+            lines.append(f"{scene:<{w}} {run:<10} {errs} {bound:8.0e}  {'PASS' if ok else 'FAIL'}")
         lines.append("overall: " + ("PASS" if self.passed else "FAIL"))
         return "\n".join(lines)
 
@@ -222,6 +282,53 @@ def fmu_kind(model_description) -> str:
         if ident == f"pendulab_{kind}":
             return kind
     raise ValueError(f"not a pendulab FMU: model identifier {ident!r}, expected 'pendulab_rigid' or 'pendulab_elastic'")
+
+
+def fmu_start_values(model_description, kind: str) -> tuple[dict[str, float], dict[str, float]]:
+    """Parameter and state start values of a pendulab FMU, from its model description.
+
+    Parameters
+    ----------
+    model_description : fmpy.model_description.ModelDescription
+        As read by ``fmpy.read_model_description``.
+    kind : {"rigid", "elastic"}
+        The FMU's model kind (:func:`fmu_kind`).
+
+    Returns
+    -------
+    params : dict of str to float
+        Start values of the model parameters (SI units), by name.
+    start : dict of str to float
+        Start values of the states, by name (``model.state_names`` order).
+
+    Raises
+    ------
+    ValueError
+        A parameter or state of the model has no numeric start value in the FMU.
+    """
+    model = make_model(kind)
+    starts = {v.name: v.start for v in model_description.modelVariables}
+    out: list[dict[str, float]] = []
+    for names, what in ((model.param_names, "parameter"), (model.state_names, "state")):
+        values = {}
+        for name in names:
+            try:
+                values[name] = float(starts[name])
+            except (KeyError, TypeError, ValueError):
+                raise ValueError(
+                    f"not a pendulab FMU: {what} {name!r} has no numeric start value (got {starts.get(name)!r})"
+                ) from None
+        out.append(values)
+    return out[0], out[1]
+
+
+def _at_fmu_start(scene: ValidationScene, params: dict[str, float], start: dict[str, float]) -> ValidationScene:
+    """The validation scene with the FMU's own parameters and initial state (horizon, input, bound kept)."""
+    model = make_model(scene.kind, **params)
+    x0 = np.array([start[n] for n in model.state_names])
+    x0.setflags(write=False)
+    sc = dataclasses.replace(scene.scene, model=model, x0=x0, initial=dict(start))
+    return dataclasses.replace(scene, scene=sc)
 
 
 def _input_table(scene: ValidationScene) -> np.ndarray:
@@ -292,7 +399,9 @@ def validate(
     fmu : path-like
         FMU exported by :func:`pendulab.fmu.export` (FMI 2 or 3).
     scenes : sequence of str, optional
-        Names from :data:`SCENES` (default: all scenes of the FMU's model kind).
+        Names from :data:`SCENES`, run with the scenes' own parameters and initial
+        states. Default: every scene of the FMU's model kind, run at the FMU's own
+        parameters and start values (:func:`fmu_start_values`).
     out_dir : path-like, optional
         Where to write the overlay plot ``<fmu stem>_validation.png``.
     progress : callable(str), optional
@@ -325,7 +434,8 @@ def validate(
         raise FileNotFoundError(f"FMU file not found: {str(fmu)!r}")
     problems, md = _read(fmu, validate_fmu, read_model_description)
     kind = fmu_kind(md)
-    chosen = [s for s in SCENES if s.kind == kind]
+    params, start = fmu_start_values(md, kind)
+    chosen = [_at_fmu_start(s, params, start) for s in SCENES if s.kind == kind]
     if scenes:
         known = {s.name: s for s in SCENES}
         bad = [n for n in scenes if n not in known]
@@ -336,6 +446,10 @@ def validate(
             raise ValueError(f"scene(s) {wrong} are not for the {kind} model of {fmu.name}")
         chosen = [known[n] for n in scenes]
     report = ValidationReport(fmu=fmu, kind=kind, problems=problems)
+    if scenes:
+        report.settings = "scenes"
+    else:
+        report.params, report.start = params, start
     m0 = make_model(kind)
     signals = ["theta1", "theta2", *m0.output_names]
     runs = [("CoSimulation", i, f"CS-{n}") for i, n in enumerate(SOLVER_NAMES)] + [("ModelExchange", 0, "ME-CVode")]

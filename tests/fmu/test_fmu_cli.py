@@ -59,3 +59,37 @@ def test_cli_validate_exits_1_on_fail(fmu_builds, monkeypatch, capsys):
     assert main(["fmu", "validate", str(fmu_builds[("rigid", 3)].path), "--scene", "rigid_chaotic_forced"]) == 1
     out = capsys.readouterr().out
     assert "FAIL" in out and "overall: FAIL" in out
+
+
+def test_validate_checks_the_fmu_at_its_own_parameters_and_start(tmp_path, capsys, monkeypatch):
+    """Issue 20: an FMU exported with --set/--initial was validated at the scene's parameters and start."""
+    import importlib
+    import json
+
+    out = tmp_path / "own.fmu"
+    args = ["fmu", "export", "--model", "rigid", "--set", "m2=2.5", "--set", "b1=0.1", "--initial", "theta1=1.0"]
+    assert main([*args, "--out", str(out), "--no-timestamp", "--json"]) == 0
+    exported = json.loads(capsys.readouterr().out)
+    assert exported["params"]["m2"] == 2.5 and exported["start"]["theta1"] == 1.0 and exported["fmu"] == str(out)
+
+    v = importlib.import_module("pendulab.fmu.validate")
+    seen = []
+    run_fmu = v._run_fmu
+
+    def spy(unzipdir, md, scene, *rest):
+        seen.append((scene.scene.model.params.m2, scene.scene.model.params.b1, float(scene.scene.x0[0])))
+        return run_fmu(unzipdir, md, scene, *rest)
+
+    monkeypatch.setattr(v, "_run_fmu", spy)
+    assert main(["fmu", "validate", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["passed"] and report["settings"] == "fmu"
+    assert report["params"]["m2"] == 2.5 and report["params"]["b1"] == 0.1 and report["start"]["theta1"] == 1.0
+    # Every FMU run (and so its reference, from the same scene object) used the FMU's own values, not the scenes' 1 kg / 0.8 rad.
+    assert seen and set(seen) == {(2.5, 0.1, 1.0)}
+
+    seen.clear()
+    assert main(["fmu", "validate", str(out), "--scene", "rigid_forced", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["settings"] == "scenes" and report["params"] == {}
+    assert set(seen) == {(1.0, 0.0, 0.8)}  # on request: the scene's own parameters and start
