@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
 
@@ -27,13 +28,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "communication-step study.",
     )
     p.add_argument("--fmu", type=Path, help="pendulab FMU; default: export one for --kind into --out")
-    p.add_argument("--kind", choices=("rigid", "elastic"), default="rigid", help="model exported when --fmu is not given")
+    p.add_argument(
+        "--kind",
+        choices=("rigid", "elastic"),
+        default=None,
+        help="model exported when neither --fmu nor --task is given (default rigid)",
+    )
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the exported FMU")
     p.add_argument("--controller", choices=_CONTROLLERS, default="lqr")
     p.add_argument(
         "--task",
-        help="shipped swing-up task (e.g. swingup_pendubot): the FMU gets the task's model, the controller its actuation "
-        "and torque limit; start, t_final and comm step from the task; summary.json gets the success flag",
+        help="shipped swing-up task (e.g. pendubot; swingup_pendubot is an alias): the FMU gets the task's model, the "
+        "controller its actuation and torque limit; start, t_final and comm step from the task; summary.json gets the "
+        "success flag",
     )
     p.add_argument("--nmpc-solver", choices=("sqp", "ipopt", "fatrop"), default="sqp", help="NLP solver of nmpc (default sqp)")
     p.add_argument("--comm-step", type=float, help="communication step [s] (default 0.01, or the task's dt)")
@@ -47,15 +54,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="tvlqr: CSV with columns t, states, tau1, tau2 to track (e.g. optimal.csv of `pendulab swingup`); "
         "default: the native energy swing-up",
     )
-    p.add_argument("--actuation", choices=("full", "pendubot", "acrobot"), default="full", help="driven torques (lqr, tvlqr)")
+    p.add_argument(
+        "--actuation",
+        choices=("full", "pendubot", "acrobot"),
+        default=None,
+        help="driven torques (default full; not with --task)",
+    )
     p.add_argument(
         "--param", nargs="*", default=[], metavar="NAME=VALUE", help="FMU parameters (also used for the controller design)"
     )
     p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
     p.add_argument("--solver", choices=("dopri5", "rodas4"), help="embedded solver (default: the FMU's)")
-    p.add_argument("--tolerance", type=float, help="embedded solver tolerance (default: the FMU's)")
-    p.add_argument("--u-max", type=float, default=20.0, help="torque limit [N.m] of swingup/tvlqr (default 20)")
-    p.add_argument("--out", type=Path, default=Path("pendulab-out/cosim"), help="output directory")
+    p.add_argument("--tolerance", type=float, help="embedded solver relative tolerance in (0, 1) (default: the FMU's)")
+    p.add_argument("--u-max", type=float, default=None, help="torque limit [N.m] (default 20; not with --task)")
+    p.add_argument("--out", type=Path, default=Path("pendulab-out/cosim"), help="output directory (default ./pendulab-out/cosim)")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout (messages go to stderr)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--no-gif", action="store_true", help="skip the animation")
     p.add_argument(
         "--gif-fps", type=int, default=20, help="animation frames per simulated second (default 20, at most 160 frames)"
@@ -125,24 +139,92 @@ def _load_task(name: str) -> Any:
         raise CLIError(f"--task: {exc}") from None
 
 
+#: Most communication steps of one run (each step is a row of the result, and an NMPC solve per sample).
+MAX_COMM_STEPS = 1_000_000
+
+
+class _Counted:
+    """A sampled controller that reports each call to a progress bar (same protocol, same outputs)."""
+
+    def __init__(self, ctrl: Any, bar: Any) -> None:
+        self.ctrl, self.bar = ctrl, bar
+        self.sample_time, self.input_names = ctrl.sample_time, ctrl.input_names
+
+    def reset(self) -> None:
+        self.ctrl.reset()
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        u = self.ctrl(t, x)
+        self.bar.iterate(1, "sample")
+        return u
+
+
 def run(args: argparse.Namespace) -> int:
+    """Run ``pendulab cosim``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments.
+
+    Returns
+    -------
+    int
+        0 on success.
+
+    Raises
+    ------
+    CLIError
+        Bad or inapplicable options.
+    """
     from ..control.controllers import controller_for_task, make_controller
+    from ..control.swingup.iterations import iteration_hook
     from ..control.tracking import load_reference_csv
     from ..cosim import cosim, inspect_fmu
     from ..cosim.plots import animate_cosim, plot_cosim
+    from ._common import ProgressBar
 
+    # With --json, stdout carries the summary alone: every message goes to stderr.
+    say = (lambda msg: print(msg, file=sys.stderr)) if args.json else print
     out: Path = args.out
     for flag, value in (("--comm-step", args.comm_step), ("--sample-time", args.sample_time), ("--t-final", args.t_final)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise CLIError(f"{flag} must be a positive number [s], got {value!r}")
     if args.gif_fps < 1:
         raise CLIError(f"--gif-fps must be a positive integer, got {args.gif_fps!r}")
+    if args.tolerance is not None:
+        try:
+            relative_tolerance("--tolerance", args.tolerance)
+        except ValueError as exc:
+            raise CLIError(str(exc)) from None
     task = _load_task(args.task) if args.task is not None else None
-    if task is not None and (args.reference is not None or args.param):
-        raise CLIError("--task sets the model and the plan; it cannot be combined with --reference or --param")
+    if task is not None:
+        given = [f for f, v in (("--reference", args.reference), ("--param", args.param), ("--u-max", args.u_max),
+                                ("--actuation", args.actuation), ("--kind", args.kind)) if v not in (None, [])]  # fmt: skip
+        if given:
+            raise CLIError(
+                f"--task sets the model, actuation, torque limit and plan; {', '.join(given)} cannot be combined with it"
+            )
+    elif args.fmu is not None and args.kind is not None:
+        raise CLIError("--kind chooses the model to export; it does not apply with --fmu (the FMU says its kind)")
+    kind = args.kind or "rigid"
+    actuation = args.actuation or "full"
+    u_max = 20.0 if args.u_max is None else args.u_max
+    if not (math.isfinite(u_max) and u_max > 0):
+        raise CLIError(f"--u-max must be a positive torque [N.m], got {u_max!r}")
     comm_step = args.comm_step if args.comm_step is not None else (task.dt if task is not None else 0.01)
+    default_ts = 0.02 if args.controller == "nmpc" else comm_step
+    sample_time = args.sample_time if args.sample_time is not None else default_ts
+    t_final = args.t_final if args.t_final is not None else (task.t_final if task else _DEFAULT_T_FINAL[args.controller])
+    n_steps = max(1, round(t_final / comm_step))
+    if n_steps > MAX_COMM_STEPS:
+        raise CLIError(
+            f"--t-final {t_final:g} s at comm step {comm_step:g} s is {n_steps} communication steps; at most {MAX_COMM_STEPS} "
+            "(each step is a row of the result and a controller call)"
+        )
+    t_final = n_steps * comm_step  # a whole number of steps
     if task is None:
-        fmu = _fmu_for(args.kind, args.fmu, args.fmi_version, out)
+        fmu = _fmu_for(kind, args.fmu, args.fmi_version, out)
     else:
         fmu = _fmu_for(task.model.kind, args.fmu, args.fmi_version, out, task.model, task.name)
     info = inspect_fmu(fmu)
@@ -152,45 +234,47 @@ def run(args: argparse.Namespace) -> int:
     else:
         params = _named_values(args.param, info.parameter_names, "--param")
     model = info.model(params)
-    default_ts = 0.02 if args.controller == "nmpc" else comm_step
-    sample_time = args.sample_time if args.sample_time is not None else default_ts
-    t_final = args.t_final if args.t_final is not None else (task.t_final if task else _DEFAULT_T_FINAL[args.controller])
-    if args.controller in ("tvlqr", "nmpc"):
-        _progress(f"planning the {args.controller} reference" + ("" if args.reference or task else " (native model)"))
     reference = None
     if args.reference is not None:
         if args.controller not in ("tvlqr", "nmpc"):
             raise CLIError(f"--reference is for --controller tvlqr or nmpc, got --controller {args.controller}")
         reference = load_reference_csv(str(args.reference), model)
+    if args.controller in ("tvlqr", "nmpc"):
+        _progress(f"planning the {args.controller} reference" + ("" if args.reference or task else " (native model)"))
+    planning = ProgressBar(f"planning {args.controller} (IPOPT)", not args.no_progress)
     try:
-        if task is not None:
-            ctrl, x0 = controller_for_task(args.controller, task, sample_time=sample_time, nmpc_solver=args.nmpc_solver)
-        else:
-            ctrl, x0 = make_controller(
-                args.controller, model, sample_time, u_max=args.u_max, reference=reference, actuation=args.actuation,
-                nmpc_solver=args.nmpc_solver,
-            )  # fmt: skip
+        with iteration_hook(lambda: planning.iterate(1, "iter")):
+            if task is not None:
+                ctrl, x0 = controller_for_task(args.controller, task, sample_time=sample_time, nmpc_solver=args.nmpc_solver)
+            else:
+                ctrl, x0 = make_controller(
+                    args.controller, model, sample_time, u_max=u_max, reference=reference, actuation=actuation,
+                    nmpc_solver=args.nmpc_solver,
+                )  # fmt: skip
     except ValueError as exc:
         raise CLIError(f"--controller {args.controller}: {exc}") from None
+    finally:
+        planning.close()
     x0 = _init_state(x0, info.state_names, args.init)
-    t_final = max(1, round(t_final / comm_step)) * comm_step  # a whole number of steps
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")
+    # A progress bar of the controller samples where a run takes seconds (NMPC solves per sample).
+    bar = ProgressBar(f"co-simulating ({args.controller})", not args.no_progress and args.controller == "nmpc")
     try:
-        traj = cosim(fmu, ctrl, comm_step, t_final, x0=x0, params=params, solver=args.solver, tolerance=args.tolerance)
+        traj = cosim(fmu, _Counted(ctrl, bar), comm_step, t_final, x0=x0, params=params, solver=args.solver,
+                     tolerance=args.tolerance)  # fmt: skip
     except ValueError as exc:
         raise CLIError(str(exc)) from None
+    finally:
+        bar.close()
     out.mkdir(parents=True, exist_ok=True)
     traj.to_csv(out / "cosim.csv")
-    title = f"{info.kind} FMU, {args.controller}, comm step {comm_step:g} s"
-    plot_cosim(traj, out / "cosim.png", title)
-    if not args.no_gif:
-        animate_cosim(traj, out / "cosim.gif", fps=args.gif_fps, title=f"{args.controller}: ")
     summary = {
         "fmu": str(fmu),
         "kind": info.kind,
         "fmi_version": info.fmi_version,
         "controller": args.controller,
-        "actuation": task.problem.actuation if task is not None else args.actuation,
+        "actuation": task.problem.actuation if task is not None else actuation,
+        "torque_limit": task.problem.torque_limit if task is not None else u_max,
         "params": params,
         "comm_step": comm_step,
         "sample_time": sample_time,
@@ -204,17 +288,35 @@ def run(args: argparse.Namespace) -> int:
     summary.update(_controller_summary(ctrl))
     if task is not None:
         summary.update(_task_summary(task, traj))
+    _progress("writing figures")
+    plot_cosim(traj, out / "cosim.png", _title(info.kind, args.controller, comm_step, summary),
+               torque_limit=summary["torque_limit"], solve_times=getattr(ctrl, "solve_times", None),
+               sample_time=sample_time)  # fmt: skip
+    if not args.no_gif:
+        animate_cosim(traj, out / "cosim.gif", fps=args.gif_fps, title=f"{args.controller}: ")
     # Atomic, and last: a summary.json means every other output of the run is complete.
     atomic_write_text(out / "summary.json", json.dumps(summary, indent=2))
-    print(f"wrote {out / 'cosim.csv'}, cosim.png{'' if args.no_gif else ', cosim.gif'}, summary.json")
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    say(f"wrote {out / 'cosim.csv'}, cosim.png{'' if args.no_gif else ', cosim.gif'}, summary.json")
     wall, inside = traj.stats["wall_time"] * 1e3, traj.stats["time_in_do_step"] * 1e3
-    print(f"{traj.message}; wall {wall:.1f} ms, of which doStep {inside:.1f} ms")
+    say(f"{traj.message}; wall {wall:.1f} ms, of which doStep {inside:.1f} ms")
     if "solve_time_median" in summary:
         med, mx = summary["solve_time_median"] * 1e3, summary["solve_time_max"] * 1e3
-        print(f"controller solve time median {med:.2f} ms, max {mx:.2f} ms, failures {summary['failures']}")
+        say(f"controller solve time median {med:.2f} ms, max {mx:.2f} ms, failures {summary['failures']}")
     if task is not None:
-        print(f"task {task.name}: {'success' if summary['success'] else 'FAILED'} (t_up {summary['t_up']})")
+        say(f"task {task.name}: {'success' if summary['success'] else 'FAILED'} (t_up {summary['t_up']})")
     return 0
+
+
+def _title(kind: str, controller: str, comm_step: float, summary: dict[str, Any]) -> str:
+    """Figure title: plant, controller, comm step; task and outcome when a task was run."""
+    title = f"{kind} FMU, {controller}, comm step {comm_step:g} s"
+    if "task" in summary:
+        t_up = summary["t_up"]
+        outcome = f"success (up at {t_up:.2f} s)" if summary["success"] else "FAILED"
+        title = f"task {summary['task']}: {outcome}\n" + title
+    return title
 
 
 def _controller_summary(ctrl: Any) -> dict[str, Any]:

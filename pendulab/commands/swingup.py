@@ -6,7 +6,9 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
+from .._checks import bounded_int
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
 
@@ -28,7 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--scene", help="scene TOML file with a [task] section")
     src.add_argument("--list", action="store_true", help="list the shipped tasks and exit")
     p.add_argument("--method", choices=("radau", "legendre", "shooting"), help="transcription (default: the task's)")
-    p.add_argument("--N", type=int, help="number of control intervals (default: the task's)")
+    p.add_argument("--N", help="number of control intervals (default: the task's)")
     p.add_argument("--guess", default="auto", choices=("auto", "linear", "energy", "homotopy"), help="initial guess")
     p.add_argument(
         "--tolerance",
@@ -44,47 +46,85 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--starts", type=int, default=0, help="also track the plan from this many randomized starts near the start (success rate)"
     )
-    p.add_argument("--out", help="output directory (required unless --list)")
+    p.add_argument("--out", help="output directory (default ./pendulab-out/swingup/TASK)")
+    p.add_argument("--max-wall-time", type=float, help="wall-time budget [s] of the planning (IPOPT stops once it is spent)")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout (messages go to stderr)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
     p.add_argument("--fmu", action="store_true", help="also run the closed loop through an exported FMI 2 Co-Simulation FMU")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``pendulab swingup``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments.
+
+    Returns
+    -------
+    int
+        0 when the closed loop succeeds, 1 when the task fails.
+
+    Raises
+    ------
+    CLIError
+        Bad or inapplicable options.
+    """
     from ..control.swingup.episode import run_episode
+    from ..control.swingup.iterations import iteration_hook
     from ..control.swingup.tasks import load_task, task_names
+    from ..control.swingup.transcription import INTERVALS_WHY, MAX_INTERVALS
+    from ._common import ProgressBar, parse_number
 
     if args.list:
         for name in task_names():
             print(f"{name:24s} {load_task(name).description}")
         return 0
-    if not args.out:
-        raise CLIError("--out DIR is required")
-    if args.N is not None and args.N < 2:
-        raise CLIError(f"--N must be an integer >= 2, got {args.N}")
+    N = None
+    if args.N is not None:
+        try:
+            N = bounded_int("--N", args.N, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
+        except ValueError as exc:
+            raise CLIError(str(exc)) from None
     if args.tolerance is not None and not (0.0 < args.tolerance < 1.0):
         raise CLIError(f"--tolerance must be a relative defect in (0, 1), got {args.tolerance}")
     if args.starts < 0:
         raise CLIError(f"--starts must be >= 0, got {args.starts}")
+    budget = parse_number("--max-wall-time", None if args.max_wall_time is None else str(args.max_wall_time), positive=True)
     task = load_task(args.task or args.scene)
-    out = Path(args.out)
+    if args.planning not in (None, "auto", "rigid") and task.model.kind != "elastic":
+        raise CLIError(f"--planning {args.planning} applies to elastic tasks only; task {task.name!r} is rigid")
+    # With --json, stdout carries the summary alone: every message goes to stderr.
+    say = (lambda *a, **k: print(*a, **k, file=sys.stderr)) if args.json else print
+    out = Path(args.out) if args.out else Path("pendulab-out") / "swingup" / task.name
     out.mkdir(parents=True, exist_ok=True)
-    print(f"[swingup] solving {task.name} ({args.method or task.method}, N={args.N or task.N}) ...", file=sys.stderr)
-    ep = run_episode(
-        task,
-        method=args.method,
-        N=args.N,
-        guess=args.guess,
-        tolerance=args.tolerance,
-        refine=not args.no_refine,
-        planning=args.planning,
-    )
+    print(f"[swingup] solving {task.name} ({args.method or task.method}, N={N or task.N}) ...", file=sys.stderr)
+    bar = ProgressBar(f"[swingup] planning {task.name} (IPOPT)", not args.no_progress)
+    try:
+        with iteration_hook(lambda: bar.iterate(1, "iter")):
+            ep = run_episode(
+                task,
+                method=args.method,
+                N=N,
+                guess=args.guess,
+                tolerance=args.tolerance,
+                refine=not args.no_refine,
+                planning=args.planning,
+                max_wall_time=budget,
+            )
+    finally:
+        bar.close()
     summary = ep.summary()
     if not ep.result.success:
         _write_summary(out, summary)
-        print(f"swing-up failed: {ep.result.message}")
-        _print_plan(summary)
-        print(f"summary: {out / 'summary.json'}")
+        if args.json:
+            print(json.dumps(summary, default=float))
+        say(f"swing-up failed: {ep.result.message}")
+        _print_plan(summary, say)
+        say(f"summary: {out / 'summary.json'}")
         return 1
     from ..viz.swingup import animate_episode, plot_episode
 
@@ -111,34 +151,36 @@ def run(args: argparse.Namespace) -> int:
         )
     # Last: a summary.json means every other output of the run is complete.
     _write_summary(out, summary)
+    if args.json:
+        print(json.dumps(summary, default=float))
     s = summary
-    print(f"task {s['task']}: {'SUCCESS' if s['success'] else 'FAILED'} (end effector above {s['height_threshold_m']:.3f} m)")
-    print(f"  solve: {s['ipopt_status']}, {s['iterations']} iterations, {s['solve_time_s']:.2f} s", end="")
-    print(f" (+ build {s['build_time_s']:.2f} s), {s['refinements']} mesh refinements, final N = {s['N']}")
-    _print_plan(s)
-    print(f"  replay: max interval defect {s['replay_interval_defect']:.2e}", end="")
-    print(f", open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
-    print(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m", end="")
-    print(f" (limit {s['torque_limit_Nm']:g}), control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
+    say(f"task {s['task']}: {'SUCCESS' if s['success'] else 'FAILED'} (end effector above {s['height_threshold_m']:.3f} m)")
+    say(f"  solve: {s['ipopt_status']}, {s['iterations']} iterations, {s['solve_time_s']:.2f} s", end="")
+    say(f" (+ build {s['build_time_s']:.2f} s), {s['refinements']} mesh refinements, final N = {s['N']}")
+    _print_plan(s, say)
+    say(f"  replay: max interval defect {s['replay_interval_defect']:.2e}", end="")
+    say(f", open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
+    say(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m", end="")
+    say(f" (limit {s['torque_limit_Nm']:g}), control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
     if "closed_loop_starts" in s:
-        print(f"  closed loop from randomized starts: {s['closed_loop_successes']}/{s['closed_loop_starts']} succeeded")
+        say(f"  closed loop from randomized starts: {s['closed_loop_successes']}/{s['closed_loop_starts']} succeeded")
     if "fmu_success" in s:
-        print(f"  FMU closed loop: {'SUCCESS' if s['fmu_success'] else 'FAILED'}", end="")
-        print(f", max state deviation from the native closed loop {s['fmu_max_state_deviation']:.2e}")
+        say(f"  FMU closed loop: {'SUCCESS' if s['fmu_success'] else 'FAILED'}", end="")
+        say(f", max state deviation from the native closed loop {s['fmu_max_state_deviation']:.2e}")
         figs.append(out / "closed_loop_fmu.csv")
     for f in [out / "summary.json", out / "closed_loop.csv", out / "optimal.csv", *figs]:
-        print(f"  wrote {f}")
+        say(f"  wrote {f}")
     return 0 if s["success"] else 1
 
 
-def _print_plan(s: dict) -> None:
+def _print_plan(s: dict, say: Any = print) -> None:
     if "planning_model" in s and s["model"] == "elastic":
-        print(f"  planning model: {s['planning_model']} (rule: {s['planning_reason']})")
+        say(f"  planning model: {s['planning_model']} (rule: {s['planning_reason']})")
         tried = ", ".join(f"{a['level']} {a['worst']:.2e}" for a in s["planning_attempts"])
-        print(f"  levels tried (worst relative defect on the elastic dynamics): {tried}")
+        say(f"  levels tried (worst relative defect on the elastic dynamics): {tried}")
     if "error_worst" in s:
         verdict = "pass" if s["error_passed"] else "FAIL"
-        print(
+        say(
             f"  error estimate ({s['error_method']}): worst relative defect {s['error_worst']:.2e} "
             f"(interval {s['error_worst_interval']}, {s['error_worst_state']}), tolerance {s['error_tolerance']:.1e}: {verdict}"
         )

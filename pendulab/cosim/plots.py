@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,8 +22,16 @@ def _plt():
     return plt
 
 
-def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
-    """Angles, torques (held per communication step), energy and, for elastic plants, spring stretch vs time.
+def plot_cosim(
+    traj: Trajectory,
+    path: str | Path,
+    title: str = "",
+    *,
+    torque_limit: float | None = None,
+    solve_times: Sequence[float] | None = None,
+    sample_time: float | None = None,
+) -> Path:
+    """Angles, torques (held per communication step), energy, spring stretch (elastic) and controller solve times vs time.
 
     Angles are shown as the deviation from upright (angle mod 2 pi - pi) when
     both stay within 0.5 rad of it, else as absolute angles from hanging.
@@ -36,6 +45,15 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
         Image file to write (parent directories are created).
     title : str
         Figure title; default ``traj.message``.
+    torque_limit : float, optional
+        Torque limit [N.m]: drawn as dashed lines at +- the limit, and the samples where
+        a torque sits on it (within 0.1 %) are marked, when it binds at all.
+    solve_times : sequence of float, optional
+        Controller wall time per sample [s] (``NMPCController.solve_times``): adds a panel
+        with the solve times and the sample time as the real-time limit.
+    sample_time : float, optional
+        Controller sample time [s] (the real-time limit of the solve-time panel; the
+        solve times are plotted at ``k * sample_time``).
 
     Returns
     -------
@@ -44,7 +62,9 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
     """
     plt = _plt()
     elastic = "stretch1" in traj.output_names
-    fig, axes = plt.subplots(4 if elastic else 3, 1, figsize=(8, 9 if elastic else 7.5), sharex=True)
+    timing = solve_times is not None and len(solve_times) > 0 and sample_time is not None
+    n_ax = 3 + int(elastic) + int(timing)
+    fig, axes = plt.subplots(n_ax, 1, figsize=(8, 2.4 * n_ax + 0.4), sharex=True, layout="constrained")
     # A balancing run never leaves the upright neighbourhood: on a -pi..pi axis it would be a
     # flat line, so show the deviation from upright instead.
     from_up = {n: (traj[n] % (2 * np.pi)) - np.pi for n in ("theta1", "theta2")}
@@ -53,26 +73,48 @@ def plot_cosim(traj: Trajectory, path: str | Path, title: str = "") -> Path:
         axes[0].plot(traj.t, from_up[name] if near_up else traj[name], label=name)
     if near_up:
         axes[0].axhline(0.0, color="k", lw=0.6, ls=":")
-        axes[0].set_ylabel("angle - pi (from upright) [rad]")
+        axes[0].set_ylabel("angle - pi\n(from upright) [rad]")
     else:
         for up in (-np.pi, np.pi):  # upright, reached either way round
             axes[0].axhline(up, color="k", lw=0.6, ls=":")
-        axes[0].set_ylabel("angle from hanging [rad]")
+        axes[0].set_ylabel("angle from\nhanging [rad]")
     for name in traj.input_names:
         axes[1].step(traj.t, traj[name], where="post", label=name)
+    if torque_limit is not None:
+        u = np.asarray(traj.u, dtype=float)
+        at_limit = np.abs(u) >= torque_limit * (1.0 - 1e-3)
+        if at_limit.any():
+            for sign in (-1.0, 1.0):
+                axes[1].axhline(sign * torque_limit, color="C3", lw=0.9, ls="--")
+            rows = np.flatnonzero(at_limit.any(axis=1))
+            share = rows.size / max(len(traj.t), 1)
+            axes[1].plot(traj.t[rows], np.sign(u[rows][np.arange(rows.size), np.argmax(np.abs(u[rows]), axis=1)]) * torque_limit,
+                         "|", color="C3", ms=8, label=f"limit +-{torque_limit:g} N.m binds ({share:.0%} of steps)")  # fmt: skip
+        else:
+            peak = float(np.max(np.abs(u))) if u.size else 0.0
+            axes[1].set_title(f"torque limit {torque_limit:g} N.m never reached (peak {peak:.3g} N.m)", fontsize=8, loc="left")
     axes[1].set_ylabel("torque [N.m]")
     axes[2].plot(traj.t, traj["energy"], color="C2", label="energy (FMU output)")
     axes[2].set_ylabel("energy [J]")
+    k = 3
     if elastic:
         for name in ("stretch1", "stretch2"):
-            axes[3].plot(traj.t, traj[name] * 1e3, label=name)
-        axes[3].set_ylabel("spring stretch [mm]")
+            axes[k].plot(traj.t, traj[name] * 1e3, label=name)
+        axes[k].set_ylabel("spring stretch [mm]")
+        k += 1
+    if timing:
+        st = np.asarray(solve_times, dtype=float) * 1e3
+        ts = np.arange(st.size) * float(sample_time)
+        axes[k].plot(ts, st, ".", ms=2.5, color="C4", label=f"solve time (median {np.median(st):.2f} ms, max {st.max():.2f} ms)")
+        axes[k].axhline(float(sample_time) * 1e3, color="C3", lw=0.9, ls="--", label=f"sample time {sample_time * 1e3:g} ms")
+        axes[k].set_yscale("log")
+        axes[k].set_ylabel("controller\nsolve time [ms]")
     axes[-1].set_xlabel("time [s]")
     for ax in axes:
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="upper right")
-    axes[0].set_title(title or traj.message)
-    fig.tight_layout()
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle(title or traj.message)
     from ..viz.save import save_figure
 
     return save_figure(fig, path, dpi=110)
