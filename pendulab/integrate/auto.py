@@ -18,8 +18,26 @@ The rule (backed by the work-precision study, ``docs/benchmarks.md``):
    system takes seconds to compile per tolerance), ``compiled-dopri5`` when a C
    compiler is available (built once per machine, cached on disk);
    otherwise ``cvodes-adams``.
-3. **Stiff:** ``compiled-rodas4`` (L-stable Rosenbrock with the exact
-   Jacobian) when a C compiler is available, otherwise ``cvodes`` (BDF).
+3. **Stiff, but the fast modes excited by the start:** the non-stiff choice of 2.
+   An implicit method steps over a fast mode only when it is not there: an
+   oscillation of the springs above the tolerance must be followed by every
+   error-controlled method, with steps ``~ tol**(1/p) / omega_max`` well inside
+   the explicit stability limit, and an explicit step is several times cheaper
+   than a Rosenbrock step (Jacobian + LU). The *excitation* is the quasi-static
+   distance of the start: per spring, the amplitude of its oscillation about the
+   quasi-static length ``r*`` (zero radial acceleration at the start's angles,
+   rates and torques; :func:`pendulab.model.quasistatic.quasi_static_lengths`),
+   ``a = sqrt((r - r*)**2 + m v**2 / k)`` (the fast-mode energy
+   ``k a**2 / 2``), divided by what the tolerance resolves, ``atol + rtol L``.
+   Excited when the largest ratio exceeds ``EXCITATION_LIMIT`` = 1: a rest-length
+   start, or ``model.state(theta1=1.0)`` (static *hanging* lengths at a swung
+   angle), is excited; a ``quasi_static_state`` start is not.
+4. **Stiff and not excited:** ``compiled-rodas4`` (L-stable Rosenbrock with the
+   exact Jacobian) when a C compiler is available, otherwise ``cvodes`` (BDF).
+
+Measured (``docs/fastpath.md``, 2 s runs at rtol = atol = 1e-8): k = 1e6 N/m from
+rest length or static hanging lengths at theta1 = 1 rad: compiled-dopri5 and taylor
+3.5-4x faster than compiled-rodas4; from the quasi-static state: compiled-rodas4 fastest.
 
 A method the user names is never overridden; the choice and the reason are in
 ``Trajectory.stats["auto"]``.
@@ -35,10 +53,12 @@ import numpy as np
 from ..model.model import Model
 from .methods import METHODS
 
-__all__ = ["AutoChoice", "choose_method", "STABILITY_LIMIT"]
+__all__ = ["AutoChoice", "choose_method", "STABILITY_LIMIT", "EXCITATION_LIMIT", "spring_excitation"]
 
 #: |h lambda| stability limit of an explicit 5th-order Runge-Kutta method on the imaginary axis (DOPRI5: ~3.3).
 STABILITY_LIMIT = 3.3
+#: A stiff start counts as exciting its fast (spring) modes when their amplitude exceeds this many tolerances.
+EXCITATION_LIMIT = 1.0
 
 
 @dataclass(frozen=True)
@@ -57,6 +77,9 @@ class AutoChoice:
         The stiffness threshold at this tolerance [rad/s]: stiff when ``omega_max`` exceeds it.
     reason : str
         One line for logs and the CLI.
+    excitation : float or None
+        Amplitude of the fast (spring) modes at the start in tolerances (:func:`spring_excitation`);
+        None when not evaluated (not stiff, or the rigid model).
     """
 
     method: str
@@ -64,6 +87,7 @@ class AutoChoice:
     omega_max: float
     omega_limit: float
     reason: str
+    excitation: float | None = None
 
     def as_dict(self) -> dict[str, object]:
         """JSON-friendly form.
@@ -79,6 +103,7 @@ class AutoChoice:
             "omega_max": self.omega_max,
             "omega_limit": self.omega_limit,
             "reason": self.reason,
+            "excitation": self.excitation,
         }
 
 
@@ -89,6 +114,42 @@ def _usable(name: str) -> str | None:
         return f"method {name!r} is not registered"
     available = spec.settings.get("available")
     return available() if callable(available) else None
+
+
+def spring_excitation(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, atol: float) -> float:
+    """How far the start excites the spring modes, in tolerances: the quasi-static distance of ``x0``.
+
+    Parameters
+    ----------
+    model : Model
+        Elastic pendulum.
+    x0 : ndarray, shape (8,)
+        Initial state.
+    u0 : ndarray, shape (2,)
+        Torques at the start [N.m].
+    rtol, atol : float
+        Tolerances.
+
+    Returns
+    -------
+    float
+        ``max_j a_j / (atol + rtol L_j)``, ``a_j = sqrt((r_j - r*_j)**2 + m_j v_j**2 / k_j)`` [m]: the
+        amplitude of spring j's oscillation about its quasi-static length ``r*_j`` (energy ``k_j a_j**2 / 2``);
+        ``inf`` when there is no quasi-static length (springs too soft to hold the motion).
+    """
+    from ..model.quasistatic import quasi_static_lengths
+
+    p = model.params
+    x0 = np.asarray(x0, dtype=float)
+    try:
+        r_star = quasi_static_lengths(model, x0[0:2], x0[4:6], u0)
+    except RuntimeError:
+        return math.inf
+    k = np.array([p.k1, p.k2])
+    m = np.array([p.m1, p.m2])
+    amplitude = np.sqrt((x0[2:4] - r_star) ** 2 + m * x0[6:8] ** 2 / k)
+    resolved = atol + rtol * np.array([p.L1, p.L2])
+    return float(np.max(amplitude / resolved))
 
 
 def choose_method(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, atol: float) -> AutoChoice:
@@ -118,7 +179,9 @@ def choose_method(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, ato
     h_acc = tol ** (1.0 / 5.0) / omega_ref
     omega_limit = STABILITY_LIMIT / h_acc
     stiff = omega_max > omega_limit
-    if stiff:
+    excitation = spring_excitation(model, x0, u0, rtol, atol) if stiff and model.kind == "elastic" else None
+    excited = excitation is not None and excitation > EXCITATION_LIMIT
+    if stiff and not excited:
         order = ("compiled-rodas4", "cvodes")
     elif model.kind == "rigid":
         order = ("taylor", "compiled-dopri5", "cvodes-adams")
@@ -132,6 +195,11 @@ def choose_method(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, ato
         skipped.append(f"{name}: {why_not}")
     kind = "stiff" if stiff else "not stiff"
     reason = f"{kind}: omega_max = {omega_max:.3g} rad/s vs limit {omega_limit:.3g} rad/s at tol {tol:.1e}"
+    if excitation is not None:
+        reason += (
+            f"; spring modes {'excited' if excited else 'not excited'} by the start "
+            f"({excitation:.3g} tolerances from quasi-static{': follow them with an explicit method' if excited else ''})"
+        )
     if skipped:
         reason += "; skipped " + "; ".join(skipped)
-    return AutoChoice(name, stiff, omega_max, omega_limit, reason)
+    return AutoChoice(name, stiff, omega_max, omega_limit, reason, excitation)

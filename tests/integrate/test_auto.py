@@ -57,3 +57,29 @@ def test_auto_in_scene_files_and_cli(tmp_path, capsys):
     assert main(["simulate", "--scene", str(path), "--json"]) == 0
     out = capsys.readouterr().out
     assert '"method_choice": "not stiff' in out
+
+
+def test_stiff_start_at_quasi_static_lengths_picks_the_stiff_method():
+    # Measured (docs/fastpath.md, k = 1e6, 2 s, 1e-8): from the quasi-static state compiled-rodas4 is the fastest.
+    model = pl.elastic(k1=1e6, k2=1e6)
+    choice = choose_method(model, quasi_static_state(model, (1.0, 0.0)), np.zeros(2), 1e-8, 1e-8)
+    assert choice.stiff and choice.excitation < 1.0  # Newton's quasi-static lengths: far below one tolerance
+    assert choice.method in ("compiled-rodas4", "cvodes") and "not excited" in choice.reason
+
+
+@pytest.mark.parametrize("start", ["rest-length", "static"])
+def test_stiff_start_that_excites_the_springs_picks_a_non_stiff_method(start):
+    # Issue 20: rest length, or model.state(theta1=1.0) (static hanging lengths at a swung angle), excites the spring
+    # modes; every method must follow them, and compiled-dopri5 / taylor ran 3.5-4x faster than compiled-rodas4.
+    model = pl.elastic(k1=1e6, k2=1e6)
+    x0 = model.state(theta1=1.0, r1=1.0, r2=1.0) if start == "rest-length" else model.state(theta1=1.0)
+    choice = choose_method(model, x0, np.zeros(2), 1e-8, 1e-8)
+    # Spring amplitudes about the quasi-static lengths of 6e-6 m (rest length) and 1.3e-5 m (static hanging lengths)
+    # against atol + rtol L = 2e-8 m: hundreds of tolerances (measured 310 and 671).
+    assert choice.stiff and choice.excitation > 100
+    assert choice.method in ("compiled-dopri5", "cvodes-adams") and "excited by the start" in choice.reason
+    # The excitation is measured in tolerances: the same start at a loose tolerance no longer resolves the springs.
+    loose = choose_method(model, x0, np.zeros(2), 1e-4, 1e-4)
+    assert loose.stiff and loose.excitation < 1.0 and loose.method in ("compiled-rodas4", "cvodes")
+    traj = pl.simulate(model, x0, 0.05)
+    assert traj.stats["auto"]["excitation"] == pytest.approx(choice.excitation)
