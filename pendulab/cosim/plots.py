@@ -86,10 +86,12 @@ def plot_cosim(
         if at_limit.any():
             for sign in (-1.0, 1.0):
                 axes[1].axhline(sign * torque_limit, color="C3", lw=0.9, ls="--")
-            rows = np.flatnonzero(at_limit.any(axis=1))
-            share = rows.size / max(len(traj.t), 1)
-            axes[1].plot(traj.t[rows], np.sign(u[rows][np.arange(rows.size), np.argmax(np.abs(u[rows]), axis=1)]) * torque_limit,
-                         "|", color="C3", ms=8, label=f"limit +-{torque_limit:g} N.m binds ({share:.0%} of steps)")  # fmt: skip
+            rows = at_limit.any(axis=1)
+            share = rows.sum() / max(len(traj.t), 1)
+            peak_sign = np.sign(u[np.arange(len(u)), np.argmax(np.abs(u), axis=1)])
+            # A translucent band on the limit where a torque sits on it (nan elsewhere: not drawn).
+            axes[1].plot(traj.t, np.where(rows, peak_sign * torque_limit, np.nan), color="C3", lw=5, alpha=0.3,
+                         solid_capstyle="butt", label=f"on the limit +-{torque_limit:g} N.m ({share:.0%} of steps)")  # fmt: skip
         else:
             peak = float(np.max(np.abs(u))) if u.size else 0.0
             axes[1].set_title(f"torque limit {torque_limit:g} N.m never reached (peak {peak:.3g} N.m)", fontsize=8, loc="left")
@@ -113,7 +115,7 @@ def plot_cosim(
     for ax in axes:
         ax.grid(True, alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8, loc="upper right")
+            ax.legend(fontsize=8, loc="best", framealpha=0.8)
     fig.suptitle(title or traj.message)
     from ..viz.save import save_figure
 

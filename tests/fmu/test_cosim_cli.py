@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from pendulab.cli import main
@@ -100,3 +101,36 @@ def test_example_runs(cosim_fmu, tmp_path):
     assert out["n_rejected"] > 0 and out["retry_vs_plain"] < 1e-7
     assert 0 < out["rigid_vs_elastic"] < 0.01  # k = 5e4 N/m: 5.7e-3 rad over 1 s
     assert (tmp_path / "side_by_side.png").stat().st_size > 20_000
+
+
+def test_cosim_cli_json_and_torque_limit_figure(cosim_fmu, tmp_path, capsys):
+    out = tmp_path / "json"
+    fmu = str(cosim_fmu("rigid", 2))
+    # Energy swing-up at a 2 N.m limit: the torque saturates while pumping, so the limit lines are drawn.
+    argv = ["cosim", "--fmu", fmu, "--controller", "swingup", "--u-max", "2", "--t-final", "3", "--no-gif", "--json"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads(capsys.readouterr().out)  # the whole of stdout is one JSON object
+    assert summary == json.loads((out / "summary.json").read_text())
+    assert summary["torque_limit"] == 2.0 and summary["max_abs_torque"] == pytest.approx(2.0)  # saturated at the limit
+    with Image.open(out / "cosim.png") as im:
+        assert im.size[1] > 700  # three panels and the title
+    # Options that do not apply are errors, not ignored.
+    assert main(["cosim", "--fmu", fmu, "--kind", "elastic", "--out", str(out)]) == 2
+    assert "--kind" in capsys.readouterr().err
+
+
+def test_plot_cosim_marks_binding_limit_and_solve_times(tmp_path):
+    from dataclasses import replace
+
+    import pendulab as pl
+    from pendulab.cosim.plots import plot_cosim
+
+    model = pl.rigid()
+    traj = pl.simulate(model, model.state(theta1=0.3), 2.0, dt=0.01)
+    u = np.zeros((traj.t.size, 2))
+    u[:50, 0] = 1.5  # on the limit for the first half second
+    held = replace(traj, u=u)
+    plain = plot_cosim(held, tmp_path / "plain.png", "t")
+    path = plot_cosim(held, tmp_path / "c.png", "t", torque_limit=1.5, solve_times=[0.002] * 100, sample_time=0.02)
+    with Image.open(path) as im, Image.open(plain) as im0:
+        assert im.size[1] > im0.size[1]  # one more panel: the solve times
