@@ -257,3 +257,41 @@ def test_deprecated_name_in_a_block_is_an_error(tmp_path):
     doc.write_text("```python\nfrom pendulab.control import sampled\nsampled.make_controller\n```\n", encoding="utf-8")
     with pytest.raises(DeprecationWarning, match="is deprecated; use"):
         _run(python_blocks(doc)[0], Notebook({"__name__": "__main__"}, tmp_path))
+
+
+# -- docs that count: the numbers the docs state match what ships --------------------------------------------
+_WORDS = {"one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10}
+
+
+def _shipped_scene_files(group: str | None = None) -> list[Path]:
+    base = ROOT / "pendulab" / "scenes"
+    return sorted((base / group if group else base).glob("*.toml"))
+
+
+def test_scenes_doc_counts_the_shipped_scenes():
+    """docs/scenes.md said 14 scenes while 15 shipped (issue 20): every count it states is the number of files."""
+    text = (ROOT / "docs" / "scenes.md").read_text(encoding="utf-8")
+    top = len(_shipped_scene_files())
+    counts = [int(n) for n in re.findall(r"the (\d+) (?:shipped )?scenes", text)]
+    assert counts and set(counts) == {top}, f"docs/scenes.md counts {counts}, {top} TOML files ship"
+    for group in ("bench", "validation"):
+        stated = re.search(rf"`{group}/` \((\d+) scenes", text)
+        assert stated and int(stated.group(1)) == len(_shipped_scene_files(group)), group
+    # ... and the table of shipped scenes names every one of them.
+    table = text.split("## Shipped scenes", 1)[1]
+    missing = [p.stem for p in _shipped_scene_files() if f"`{p.stem}`" not in table]
+    assert not missing, f"docs/scenes.md does not list {missing}"
+
+
+def test_docs_counting_scenes_elsewhere_agree():
+    """Any 'N shipped scenes' / 'N scenes in pendulab/scenes' in README.md or docs/ is the number of top-level files."""
+    top = len(_shipped_scene_files())
+    pattern = re.compile(r"\b(\d+|" + "|".join(_WORDS) + r") (?:shipped scenes|scenes in `?pendulab/scenes/?`?)", re.I)
+    wrong = []
+    for path in DOC_FILES:
+        for m in pattern.finditer(path.read_text(encoding="utf-8")):
+            word = m.group(1).lower()
+            n = _WORDS.get(word) if word in _WORDS else int(word)
+            if n != top:
+                wrong.append(f"{path.relative_to(ROOT)}: {m.group(0)!r}")
+    assert not wrong, f"{top} scenes ship: {wrong}"
