@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import math
+import zipfile
 from array import array
 from pathlib import Path
 from typing import Any
@@ -349,7 +350,7 @@ class FmuBackend:
         kwargs = {"params": self._params, "x0": x0, "solver": self._solver, "tolerance": self._tol}
         try:
             self._plant = FmuPlant(self.info, **kwargs)
-        except OSError as exc:  # the binary inside the archive cannot be loaded
+        except (OSError, zipfile.BadZipFile) as exc:  # the archive or the binary inside cannot be loaded
             if not self._cached:
                 raise
             from ..cosim.plant import inspect_fmu
@@ -358,7 +359,7 @@ class FmuBackend:
             self.info = inspect_fmu(path)
             try:
                 self._plant = FmuPlant(self.info, **kwargs)
-            except OSError as exc2:
+            except (OSError, zipfile.BadZipFile) as exc2:
                 raise RuntimeError(
                     f"the cached FMU {path} fails to load even after a rebuild ({exc2}); delete {path.parent} and retry"
                 ) from exc2

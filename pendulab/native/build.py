@@ -456,13 +456,27 @@ def cached_artifact(path: Path, make: Callable[[Path], object], *, what: str, re
             warnings.warn(
                 f"pendulab: the cached file {path} {reason}; rebuilding it (the cache folder is {folder})",
                 CacheRebuildWarning,
-                stacklevel=3,
+                stacklevel=_stacklevel_outside_package(),
             )
         _build_into(path, make, what)
     reason = verify_cached(path)
     if reason is not None:  # pragma: no cover - someone damaged it again between the rename and here
         raise RuntimeError(f"{what}: the cached file {path} {reason} right after it was built; delete {folder} and retry")
     return path
+
+
+#: The pendulab package folder: a warning points at the first frame outside it (the user's call).
+_PACKAGE_DIR = str(Path(__file__).resolve().parents[1])
+
+
+def _stacklevel_outside_package() -> int:
+    """``stacklevel`` (for a ``warnings.warn`` in the caller) of the first frame outside the pendulab package."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level
 
 
 def _build_into(path: Path, make: Callable[[Path], object], what: str) -> None:
