@@ -292,15 +292,17 @@ def build_cached(
     """
     folder = cache_dir() if directory is None else Path(directory)
     path = folder / f"{name}-{source_digest(sources, units)[:20]}{shared_library_suffix()}"
-    if rebuild is None and verify_cached(path) is None:
+    reason = rebuild if rebuild is not None else verify_cached(path)
+    if reason is None:
         return path
     who = f"{purpose} needs" if purpose else "pendulab needs"
     try:
         cc_path = find_compiler(cc)
     except CompilerNotFoundError as exc:
+        damaged = "" if reason == "is missing" else f" (the cached file {path} {reason} and must be rebuilt)"
         raise CompilerNotFoundError(
-            f"{who} a C compiler to build its native library (once per machine, cached in {folder}), and no C compiler "
-            f"was found (tried {_candidates(cc)}); hint: {COMPILER_HINT}{', ' + hint if hint else ''}"
+            f"{who} a C compiler to build its native library (once per machine, cached in {folder}){damaged}, and no C "
+            f"compiler was found (tried {_candidates(cc)}); hint: {COMPILER_HINT}{', ' + hint if hint else ''}"
         ) from exc
 
     def compile_into(out: Path) -> None:

@@ -227,3 +227,15 @@ def test_rtol_of_one_or_more_is_refused_before_anything_is_built(tmp_path, monke
             with pytest.raises(ValueError, match=r"rtol must be a relative tolerance in \(0, 1\)"):
                 pl.simulate(pl.rigid(), X0, 1.0, method=method, rtol=rtol)
     assert not (tmp_path / "cache").exists()  # refused before the library was looked up or built
+
+
+def test_damaged_library_without_a_compiler_says_it_is_damaged_and_where(built, tmp_path):
+    good, _ = built
+    cache = tmp_path / "cache"
+    shutil.copytree(good, cache)
+    lib = library(cache)
+    damage(lib, "truncate")
+    proc = run(cache, PATH=str(tmp_path / "no-bin"), CC="no-such-compiler")
+    assert proc.returncode != 0  # a clean error (the damaged file is never loaded), not a crash
+    assert proc.returncode > 0 and "CompilerNotFoundError" in proc.stderr
+    assert f"the cached file {lib} does not match its SHA-256 digest" in proc.stderr and "no C compiler" in proc.stderr
