@@ -39,6 +39,29 @@ def _title(m: Mode) -> str:
     return f"{m.label}\n{m.kind}, lambda = {m.eigenvalue.real:.3g} 1/s"
 
 
+def _params_line(model: Model) -> str:
+    """The key parameters of a mode figure: masses, lengths, springs, and the dampers that are not zero."""
+    p = model.params
+    parts = [f"m1 = {p.m1:g}, m2 = {p.m2:g} kg", f"L1 = {p.L1:g}, L2 = {p.L2:g} m"]
+    if model.kind == "elastic":
+        parts.append(f"k1 = {p.k1:g}, k2 = {p.k2:g} N/m")
+        if p.c1 or p.c2:
+            parts.append(f"c1 = {p.c1:g}, c2 = {p.c2:g} N.s/m")
+    if p.b1 or p.b2:
+        parts.append(f"b1 = {p.b1:g}, b2 = {p.b2:g} N.m.s/rad")
+    return "; ".join(parts)
+
+
+def _torque_line(eq: Equilibrium) -> str:
+    """The torque holding the equilibrium, and which joints it acts on."""
+    u = np.asarray(eq.u, dtype=float)
+    if not np.any(u):
+        return "no torque"
+    acting = [name for name, v in zip(("tau1", "tau2"), u, strict=True) if v]
+    actuation = {("tau1",): "shoulder only (pendubot)", ("tau2",): "elbow only (acrobot)"}.get(tuple(acting), "both joints")
+    return f"holding torque tau1 = {u[0]:.4g}, tau2 = {u[1]:.4g} N.m ({actuation})"
+
+
 def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitude: float = 0.25) -> Figure:
     """Snapshots of each oscillatory and unstable mode about an equilibrium.
 
@@ -58,13 +81,18 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
     Returns
     -------
     matplotlib.figure.Figure
-        One panel per oscillatory or unstable mode.
+        One panel per oscillatory or unstable mode; the title names the
+        equilibrium, the torque holding it (and the joints it acts on) and the
+        key parameters (masses, lengths, springs, non-zero dampers).
     """
     eq = equilibrium(model, at) if isinstance(at, str) else at
     shown = [m for m in modes(model, eq) if m.kind in ("oscillatory", "unstable")]
     reach = model.params.L1 + model.params.L2
     base = _chain(model, eq.x)
-    fig, axes = plt.subplots(1, max(len(shown), 1), figsize=(3.2 * max(len(shown), 1), 3.8), squeeze=False)
+    n = max(len(shown), 1)
+    width = max(3.2 * n, 7.5)
+    # Square panels plus room for the two-line suptitle, the panel titles and the axis labels.
+    fig, axes = plt.subplots(1, n, figsize=(width, width / n + 1.7), squeeze=False, layout="constrained")
     for ax, m in zip(axes[0], shown, strict=False):
         dx = np.zeros(model.nx)
         dx[: model.nq] = m.shape
@@ -80,7 +108,7 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
             ax.plot(c[:, 0], c[:, 1], "-o", color=color, lw=1.8, ms=6, label=f"{'+' if sign > 0 else '-'} shape")
             ax.plot(-sign * shift, 0, "k^", ms=8)
         if shift:
-            ax.text(0.5, 0.02, "extremes drawn side by side", transform=ax.transAxes, ha="center", fontsize=7)
+            ax.text(0.5, 0.97, "extremes drawn side by side", transform=ax.transAxes, ha="center", va="top", fontsize=7)
         lim = 1.35 * reach
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
@@ -90,8 +118,10 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
         ax.set_title(_title(m), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7, loc="lower left")
-    fig.suptitle(f"{model.kind} double pendulum, modes at {eq.name}", fontsize=11)
-    fig.tight_layout()
+    fig.suptitle(
+        f"{model.kind} double pendulum, modes at {eq.name} ({eq.stability}); {_torque_line(eq)}\n{_params_line(model)}",
+        fontsize=10,
+    )
     return fig
 
 
