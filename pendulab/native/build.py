@@ -468,7 +468,7 @@ def cached_artifact(path: Path, make: Callable[[Path], object], *, what: str, re
 
 
 #: The pendulab package folder: a warning points at the first frame outside it (the user's call).
-_PACKAGE_DIR = str(Path(__file__).resolve().parents[1])
+_PACKAGE_DIR = str(Path(__file__).resolve().parents[1]) + os.sep
 
 
 def _stacklevel_outside_package() -> int:
