@@ -239,8 +239,13 @@ def _run_realai(args: argparse.Namespace) -> int:
     finally:
         planning.close()
     summary = result.to_dict()
+    if hasattr(result, "t"):
+        from ..viz.scorecard import plot_realai
+
+        plot_realai(result, out / "realai.png")
+    # Last: a realai.json means every other output of the run is complete.
     atomic_write_text(out / "realai.json", json.dumps(summary, indent=2) + "\n")
-    print(f"wrote {out / 'realai.json'}, realai.csv", file=sys.stderr)
+    print(f"wrote {out / 'realai.json'}, realai.csv, realai.png", file=sys.stderr)
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

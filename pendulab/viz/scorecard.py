@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -14,7 +15,7 @@ import numpy as np  # noqa: E402
 from ..control.scorecard import Scorecard  # noqa: E402
 from .save import save_figure  # noqa: E402
 
-__all__ = ["plot_scorecard"]
+__all__ = ["plot_scorecard", "plot_realai"]
 
 
 def plot_scorecard(card: Scorecard, path: str | Path) -> Path:
@@ -57,3 +58,54 @@ def plot_scorecard(card: Scorecard, path: str | Path) -> Path:
     ax.set_yticks([0.25, 0.5, 0.75, 1.0], ["", "0.5", "", "1"], fontsize=7)
     ax.set_title("category score (0-1)", fontsize=9)
     return save_figure(fig, path)
+
+
+def plot_realai(result: Any, path: str | Path) -> Path:
+    """The leaderboard run of ``pendulab score --realai``: angles, torques against the limit, end-effector height.
+
+    Parameters
+    ----------
+    result : RealAIResult
+        A run of :func:`pendulab.control.realai.realai_score`.
+    path : str or Path
+        Output image (e.g. ``realai.png``).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    from ..control.realai import TORQUE_LIMIT, leaderboard_model, to_relative
+
+    t, x, u = result.t, result.x, result.u
+    model = leaderboard_model(result.task)
+    L1, L2 = model.params.L1, model.params.L2
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, layout="constrained")
+    q2 = to_relative(x)[:, 1]
+    axes[0].plot(t, x[:, 0], label="theta1 (absolute)")
+    axes[0].plot(t, x[:, 1], label="theta2 (absolute)")
+    axes[0].plot(t, q2, ls="--", lw=1.0, label="q2 = theta2 - theta1")
+    axes[0].axhline(np.pi, color="k", lw=0.6, ls=":")
+    axes[0].set_ylabel("angle from\nhanging [rad]")
+    for j, name in enumerate(("tau1", "tau2")):
+        axes[1].step(t, u[:, j], where="post", label=name)
+    for sign in (-1.0, 1.0):
+        axes[1].axhline(sign * TORQUE_LIMIT, color="C3", lw=0.9, ls="--")
+    axes[1].plot([], [], color="C3", lw=0.9, ls="--", label=f"limit +-{TORQUE_LIMIT:g} N.m")
+    axes[1].set_ylabel("torque [N.m]")
+    height = -L1 * np.cos(x[:, 0]) - L2 * np.cos(x[:, 1])
+    axes[2].plot(t, height, color="C2", label="end-effector height")
+    axes[2].axhline(0.9 * (L1 + L2), color="C3", lw=0.9, ls="--", label="0.9 (L1 + L2): success line")
+    t_up = result.swingup_time
+    if result.success:
+        for ax in axes:
+            ax.axvline(t_up, color="0.4", lw=0.8, ls="-.")
+        axes[2].plot([], [], color="0.4", lw=0.8, ls="-.", label=f"swing-up time {t_up:.3f} s")
+    axes[2].set_ylabel("height [m]")
+    axes[-1].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="best", framealpha=0.8)
+    outcome = f"success, score {result.score:.3f}" if result.success else "no swing-up, score 0"
+    fig.suptitle(f"RealAIGym {result.task} / {result.controller}: {outcome}")
+    return save_figure(fig, path, dpi=110)

@@ -43,23 +43,85 @@ class IterationCallback(ca.Callback):
         self._sizes = {"x": nx, "lam_x": nx, "g": ng, "lam_g": ng, "lam_p": np_, "f": 1}
         self.construct(name, {})
 
-    def get_n_in(self) -> int:  # noqa: D102 - CasADi Callback protocol
+    def get_n_in(self) -> int:
+        """Number of inputs: the NLP solver's outputs (CasADi ``Callback`` protocol).
+
+        Returns
+        -------
+        int
+            ``casadi.nlpsol_n_out()``.
+        """
         return ca.nlpsol_n_out()
 
-    def get_n_out(self) -> int:  # noqa: D102
+    def get_n_out(self) -> int:
+        """Number of outputs (one: the stop flag).
+
+        Returns
+        -------
+        int
+            1.
+        """
         return 1
 
-    def get_name_in(self, i: int) -> str:  # noqa: D102
+    def get_name_in(self, i: int) -> str:
+        """Name of input ``i`` (the NLP solver's output of that index).
+
+        Parameters
+        ----------
+        i : int
+            Input index.
+
+        Returns
+        -------
+        str
+            ``casadi.nlpsol_out(i)``.
+        """
         return ca.nlpsol_out(i)
 
-    def get_name_out(self, i: int) -> str:  # noqa: D102
+    def get_name_out(self, i: int) -> str:
+        """Name of the output.
+
+        Parameters
+        ----------
+        i : int
+            Output index (0).
+
+        Returns
+        -------
+        str
+            ``"ret"``.
+        """
         return "ret"
 
-    def get_sparsity_in(self, i: int) -> Any:  # noqa: D102
+    def get_sparsity_in(self, i: int) -> Any:
+        """Dense vectors of the NLP's sizes (empty for the inputs IPOPT does not pass).
+
+        Parameters
+        ----------
+        i : int
+            Input index.
+
+        Returns
+        -------
+        casadi.Sparsity
+            Dense column of the input's size.
+        """
         n = self._sizes.get(ca.nlpsol_out(i))
         return ca.Sparsity(0, 0) if n is None else ca.Sparsity.dense(n)
 
-    def eval(self, arg: Any) -> list[int]:  # noqa: D102
+    def eval(self, arg: Any) -> list[int]:
+        """Run the installed hooks after an IPOPT iteration.
+
+        Parameters
+        ----------
+        arg : list
+            The current iterate (x, f, g, multipliers); not used by the hooks.
+
+        Returns
+        -------
+        list of int
+            ``[1]`` when a hook asks to stop, else ``[0]``.
+        """
         stop = False
         for hook in tuple(_HOOKS):
             stop = bool(hook()) or stop
@@ -79,6 +141,11 @@ def iteration_hook(hook: Callable[[], bool | None]) -> Iterator[None]:
     Yields
     ------
     None
+
+    Raises
+    ------
+    TypeError
+        ``hook`` is not callable.
     """
     if not callable(hook):
         raise TypeError(f"hook must be callable, got {type(hook).__name__}")

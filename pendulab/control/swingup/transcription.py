@@ -71,6 +71,8 @@ class Transcription:
         plus ``N * degree`` collocation states for collocation.
     build_time : float
         Wall time spent building the NLP [s].
+    callback : IterationCallback or None
+        The NLP's IPOPT ``iteration_callback`` (:mod:`.iterations`), kept alive with the solver.
     """
 
     method: str
