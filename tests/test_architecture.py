@@ -21,7 +21,8 @@ PKG = ROOT / "pendulab"
 
 #: Lowest first. A module may import its own layer and the layers below it, never one above.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_checks", "_version", "_io", "model"),
+    ("_checks", "_version", "_io"),
+    ("model",),
     ("analysis", "native"),
     ("integrate",),
     ("scene", "scenes"),
