@@ -73,6 +73,17 @@ def test_nmpc_before_time_zero_is_a_value_error(pendubot):
     assert ctrl(0.0, x).shape == (1,)  # still usable after the refused calls
 
 
+def test_nmpc_solve_time_budget_falls_back(pendubot):
+    x = np.array([np.pi - 0.1, np.pi, 0.0, 0.0])
+    capped = nmpc_controller(pendubot.model, actuation="pendubot", u_max=6.0, horizon=10, solver="ipopt", max_solve_time=1e-6)
+    u = capped(0.0, x)
+    # IPOPT stopped by the budget: a counted failure, and the LQR fallback torque within the limit instead.
+    assert capped.last_status == "Maximum_WallTime_Exceeded" and capped.failures == 1
+    assert np.all(np.isfinite(u)) and abs(u[0]) <= 6.0
+    with pytest.raises(ValueError, match="max_solve_time must be a positive"):
+        NMPCOptions(max_solve_time=0.0)
+
+
 # -- scorecard ---------------------------------------------------------------------------
 
 

@@ -87,6 +87,9 @@ class NMPCOptions:
         Weight on the slack of the soft bounds.
     slack_tol : float
         A solution whose slack exceeds this [rad/s] counts as infeasible (the hard bound would be violated).
+    max_solve_time : float or None
+        Wall-time cap of one ``ipopt`` solve [s] (a solve cut short is a counted failure with the
+        fallback torque); ``sqp`` is bounded by its iteration cap. None: no cap.
     """
 
     horizon: int = 20
@@ -101,6 +104,7 @@ class NMPCOptions:
     velocity_limit: float | None = None
     slack_weight: float = 1e3
     slack_tol: float = 1e-3
+    max_solve_time: float | None = None
 
     def __post_init__(self) -> None:
         # Every numeric field is checked and stored as the number it stands for (a string "1" is not a weight).
@@ -124,6 +128,8 @@ class NMPCOptions:
             object.__setattr__(self, "r", positive_float("r", self.r))
         if self.velocity_limit is not None:
             object.__setattr__(self, "velocity_limit", positive_float("velocity_limit", self.velocity_limit, "[rad/s]"))
+        if self.max_solve_time is not None:
+            object.__setattr__(self, "max_solve_time", positive_float("max_solve_time", self.max_solve_time, "[s]"))
 
     @property
     def iterations_cap(self) -> int:
@@ -434,6 +440,7 @@ def nmpc_controller(
     ocp = build_ocp(
         plan, names, N=opts.horizon, sample_time=h, substeps=_substeps(plan, h, opts.substeps), Q=Q, R=R, P=top.P, u_max=u_max,
         velocity_limit=opts.velocity_limit, slack_weight=opts.slack_weight, solver=opts.solver, max_iter=opts.iterations_cap,
+        max_solve_time=opts.max_solve_time,
     )  # fmt: skip
     return NMPCController(model, plan, opts, names, u_max, x_ref, u_ref, goal, ocp, top.K)
 

@@ -119,6 +119,7 @@ def build_ocp(
     slack_weight: float,
     solver: str,
     max_iter: int,
+    max_solve_time: float | None = None,
 ) -> ShootingOCP:
     """Build the tracking NLP ``min sum |x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2 + |x_N - xr_N|_P^2``.
 
@@ -155,6 +156,10 @@ def build_ocp(
         exact Hessian; ``fatrop``: fatrop with automatic structure detection.
     max_iter : int
         Iteration cap of the solver.
+    max_solve_time : float, optional
+        Wall-time cap of one IPOPT solve [s] (IPOPT's ``max_wall_time``; an iterate cut short
+        is a failed solve, handled by the controller's fallback). The real-time SQP is bounded
+        by its iteration cap. None: no cap.
 
     Returns
     -------
@@ -209,7 +214,7 @@ def build_ocp(
     x_idx = np.array([[k * (nx + nu) + i for i in range(nx)] for k in range(N + 1)])
     u_idx = np.array([[k * (nx + nu) + nx + i for i in range(nu)] for k in range(N)])
     equality = [bool(lo == hi) for lo, hi in zip(lbg, ubg, strict=True)]
-    fn = ca.nlpsol("nmpc", *_solver_plugin(solver, nlp, W, Pp, G, max_iter, equality))
+    fn = ca.nlpsol("nmpc", *_solver_plugin(solver, nlp, W, Pp, G, max_iter, equality, max_solve_time))
     return ShootingOCP(
         fn, solver, N, nx, m, ns, x_idx, u_idx, nx + 2 * ns,
         np.array(lbx), np.array(ubx), np.array(lbg), np.array(ubg), step,
@@ -217,7 +222,7 @@ def build_ocp(
 
 
 def _solver_plugin(
-    solver: str, nlp: dict, W: ca.SX, Pp: ca.SX, G: ca.SX, max_iter: int, equality: list[bool]
+    solver: str, nlp: dict, W: ca.SX, Pp: ca.SX, G: ca.SX, max_iter: int, equality: list[bool], max_solve_time: float | None
 ) -> tuple[str, dict, dict[str, Any]]:
     """Plugin name, NLP and options of one solver choice."""
     # A solve that meets NaN (a diverged warm start far from the reference) is a counted failure with a
@@ -229,6 +234,8 @@ def _solver_plugin(
             "warm_start_init_point": "yes", "warm_start_bound_push": 1e-6, "warm_start_mult_bound_push": 1e-6,
             "mu_init": 1e-3, "linear_solver": "mumps",
         }  # fmt: skip
+        if max_solve_time is not None:
+            ipopt["max_wall_time"] = float(max_solve_time)
         return "ipopt", nlp, {**common, "ipopt": ipopt}
     if solver == "fatrop":
         fatrop = {"print_level": 0, "max_iter": max_iter, "tol": 1e-6, "mu_init": 1e-2}
