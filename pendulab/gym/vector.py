@@ -24,7 +24,6 @@ from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from .._checks import check_spring_lengths
 from ..integrate.taylor import structure_key, translate
 from ..integrate.taylor.availability import heyoka_module
 from ..model.pycode import to_python
@@ -145,8 +144,7 @@ class DoublePendulumVectorEnv(VectorEnv):
         if unknown:
             raise ValueError(f"options: unknown key(s) {unknown}; expected 'state'")
         if "state" in options:
-            X0 = self._model.check_state(options["state"], "options['state']")
-            check_spring_lengths(self._model.kind, X0, "options['state']")
+            X0 = self._model.check_start(options["state"], "options['state']")
             X0 = np.array(np.broadcast_to(X0, (self.num_envs, self._model.nx)))
         else:
             X0 = np.array([self._initial_state() for _ in range(self.num_envs)])
