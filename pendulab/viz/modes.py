@@ -92,7 +92,7 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
     n = max(len(shown), 1)
     width = max(3.2 * n, 7.5)
     # Square panels plus room for the two-line suptitle, the panel titles and the axis labels.
-    fig, axes = plt.subplots(1, n, figsize=(width, width / n + 1.7), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(1, n, figsize=(width, width / n + 1.5), squeeze=False, layout="constrained")
     for ax, m in zip(axes[0], shown, strict=False):
         dx = np.zeros(model.nx)
         dx[: model.nq] = m.shape
@@ -107,15 +107,13 @@ def plot_mode_shapes(model: Model, at: str | Equilibrium = "down-down", amplitud
             c[:, 0] -= sign * shift
             ax.plot(c[:, 0], c[:, 1], "-o", color=color, lw=1.8, ms=6, label=f"{'+' if sign > 0 else '-'} shape")
             ax.plot(-sign * shift, 0, "k^", ms=8)
-        if shift:
-            ax.text(0.5, 0.97, "extremes drawn side by side", transform=ax.transAxes, ha="center", va="top", fontsize=7)
         lim = 1.35 * reach
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
         ax.set_aspect("equal")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-        ax.set_title(_title(m), fontsize=9)
+        ax.set_title(_title(m) + ("\n(extremes drawn side by side)" if shift else ""), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7, loc="lower left")
     fig.suptitle(
