@@ -19,13 +19,17 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from .._checks import bounded_int
 from ..integrate.taylor import TaylorSystem, translate
 from ..integrate.taylor.availability import heyoka_module
 from ..integrate.taylor.translate import used_parameter_count
@@ -33,10 +37,73 @@ from ..model.builders import build_elastic, build_rigid
 from ..model.model import model_functions
 from .events import EventPlan
 
-__all__ = ["BatchKey", "ChunkTask", "ChunkOut", "run_chunk", "STATUS_OK", "STATUS_EVENT", "STATUS_FAILED"]
+__all__ = [
+    "BatchKey",
+    "ChunkTask",
+    "ChunkOut",
+    "ChunkStoppedError",
+    "run_chunk",
+    "default_batch_size",
+    "check_batch_size",
+    "SIMD_ENV",
+    "SLICE_STEPS",
+    "MAX_BATCH_SIZE",
+    "STATUS_OK",
+    "STATUS_EVENT",
+    "STATUS_FAILED",
+]
 
 STATUS_PENDING, STATUS_OK, STATUS_EVENT, STATUS_FAILED = 0, 1, 2, 3
 _TERMINAL_MIN = -(2**32)  # heyoka: outcome -i-1 (> -2**32) = stopped by terminal event i
+#: Environment variable that overrides heyoka's recommended SIMD width (e.g. to compare hosts).
+SIMD_ENV = "PENDULAB_SIMD_SIZE"
+#: Largest accepted batch width (lanes); wider batches only cost compile time and idle lanes.
+MAX_BATCH_SIZE = 64
+#: Batch steps per propagation slice: budgets and the stop flag are checked between slices.
+SLICE_STEPS = 2000
+#: Internal event indices of the elastic model's spring-collapse events (r1 = 0, r2 = 0).
+_SPRING_EVENTS = {-10: 1, -11: 2}
+
+
+class ChunkStoppedError(Exception):
+    """A chunk stopped because its stop flag was set (Ctrl-C in the process that runs the ensemble)."""
+
+
+def check_batch_size(value: object, name: str = "batch_size") -> int:
+    """``value`` as a batch width in [1, :data:`MAX_BATCH_SIZE`], else ``ValueError`` naming ``name``.
+
+    Parameters
+    ----------
+    value : object
+        Received value.
+    name : str
+        Argument name used in the message.
+
+    Returns
+    -------
+    int
+        The width.
+    """
+    return bounded_int(name, value, low=1, high=MAX_BATCH_SIZE, why="SIMD lanes of one batch integrator")
+
+
+def default_batch_size() -> int:
+    """The batch width (SIMD lanes) used when none is given: the one place that decides it.
+
+    Returns
+    -------
+    int
+        ``PENDULAB_SIMD_SIZE`` when set, else ``heyoka.recommended_simd_size()``.
+
+    Raises
+    ------
+    ValueError
+        ``PENDULAB_SIMD_SIZE`` is not an integer in [1, 64].
+    """
+    env = os.environ.get(SIMD_ENV)
+    if env is not None and env.strip():
+        return check_batch_size(env.strip(), f"environment variable {SIMD_ENV}")
+    return int(heyoka_module().recommended_simd_size())
 
 
 @dataclass(frozen=True)
@@ -77,6 +144,11 @@ class ChunkTask:
         Model parameter vectors.
     t_final : float
     t_eval : ndarray or None
+    max_steps : int
+        Step budget of each run (batch steps of its lane).
+    deadline : float or None
+        Wall-clock time (``time.time()``, seconds since the epoch) after which unfinished runs
+        fail with a budget message; None for no limit.
     """
 
     key: BatchKey
@@ -85,6 +157,8 @@ class ChunkTask:
     p: np.ndarray
     t_final: float
     t_eval: np.ndarray | None
+    max_steps: int = 1_000_000
+    deadline: float | None = None
 
 
 @dataclass
@@ -189,6 +263,10 @@ def build(key: BatchKey) -> _Built:
             else:
                 nt_events.append(hy.nt_event_batch(expr, _Recorder(k), direction=d))
                 nt_index.append(k)
+        if key.kind == "elastic":  # a spring through zero length ends its run as failed (simulate's rule)
+            for k, j in _SPRING_EVENTS.items():
+                t_events.append(hy.t_event_batch(xs[1 + j], direction=hy.event_direction.negative))
+                t_index.append(k)
         S = key.batch_size
         # heyoka sizes the parameters by the highest index used (structural zeros can remove the last ones).
         events_used = [ev.expression for ev in (*t_events, *nt_events)]
@@ -253,16 +331,26 @@ def _pars(built: _Built, P: np.ndarray, nu: int) -> np.ndarray:
     return cols[:, inv]
 
 
-def run_chunk(task: ChunkTask) -> ChunkOut:
+def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkOut:
     """Integrate one chunk of runs with one batch integrator (see the module docstring).
 
     Parameters
     ----------
     task : ChunkTask
+        The runs, their horizon and budgets.
+    stop : callable, optional
+        ``stop() -> bool``, checked between propagation slices; True ends the chunk.
 
     Returns
     -------
     ChunkOut
+        Per-run results; a run over its step budget or past the deadline has status failed
+        with a message naming the budget.
+
+    Raises
+    ------
+    ChunkStoppedError
+        ``stop()`` returned True.
     """
     hy = heyoka_module()
     built = build(task.key)
@@ -281,6 +369,7 @@ def run_chunk(task: ChunkTask) -> ChunkOut:
     t_eval = task.t_eval
     X = np.full((m, len(t_eval), nx), np.nan) if t_eval is not None else None
     lane_run = np.full(S, -1, dtype=np.int64)
+    lane_steps = np.zeros(S, dtype=np.int64)
     ptr = np.zeros(S, dtype=np.int64)
     for ev in ta.nt_events if built.nt_index else ():
         cb = ev.callback
@@ -289,9 +378,11 @@ def run_chunk(task: ChunkTask) -> ChunkOut:
     times = np.zeros(S)
     next_run = 0
     t_index = built.t_index
-    time_limit, nf = hy.taylor_outcome.time_limit, hy.taylor_outcome.err_nf_state
+    outcome_names = hy.taylor_outcome
+    time_limit, nf, step_limit = outcome_names.time_limit, outcome_names.err_nf_state, outcome_names.step_limit
     n_steps = 0
     has_events = bool(built.nt_index or built.t_index)
+    max_steps, deadline = int(task.max_steps), task.deadline
 
     def fill(lane: int) -> None:
         nonlocal next_run
@@ -299,6 +390,7 @@ def run_chunk(task: ChunkTask) -> ChunkOut:
             r = next_run
             next_run += 1
             lane_run[lane] = r
+            lane_steps[lane] = 0
             times[lane] = 0.0
             target[lane] = task.t_final
             ta.state[:, lane] = task.x0[r]
@@ -312,43 +404,64 @@ def run_chunk(task: ChunkTask) -> ChunkOut:
             ta.state[:, lane] = task.x0[0]
             ta.pars[:, lane] = pars_all[:, 0]
 
+    def fail(r: int, t: float, why: str) -> None:
+        status[r] = STATUS_FAILED
+        messages[r] = f"method 'taylor' (ensemble) failed at t = {t!r}: {why}"
+
     for lane in range(S):
         fill(lane)
     ta.set_time(times)
     while np.any(lane_run >= 0):
-        res = ta.propagate_until(target.copy(), c_output=X is not None)
+        if stop is not None and stop():
+            raise ChunkStoppedError(f"ensemble chunk {task.index} stopped")
+        res = ta.propagate_until(target.copy(), max_steps=SLICE_STEPS, c_output=X is not None)
         times[:] = ta.time
         if X is not None:
             _record_grid(res[0], t_eval, times, lane_run, ptr, X)
+        late = deadline is not None and time.time() > deadline
         refill = []
         for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
             n_steps += int(steps)
             r = lane_run[lane]
             if r < 0:
                 continue
+            lane_steps[lane] += int(steps)
             o = int(outcome)
             if outcome == time_limit:
                 status[r] = STATUS_OK
             elif _TERMINAL_MIN < o < 0:
                 k = t_index[-o - 1]
-                status[r] = STATUS_EVENT
-                term_ev[r] = k
-                ev_times[k, r] = times[lane]
+                if k in _SPRING_EVENTS:
+                    j = _SPRING_EVENTS[k]
+                    fail(r, float(times[lane]), f"spring length r{j} reached 0 m (a bob passed through its joint)")
+                else:
+                    status[r] = STATUS_EVENT
+                    term_ev[r] = k
+                    ev_times[k, r] = times[lane]
             elif o >= 0:  # a terminal event whose callback let the run go on (not used here)
                 continue
-            elif outcome == hy.taylor_outcome.success:
-                continue
+            elif outcome in (outcome_names.success, step_limit):
+                if lane_steps[lane] >= max_steps:
+                    fail(r, float(times[lane]), f"step budget exhausted (max_steps = {max_steps} steps)")
+                elif late:
+                    fail(r, float(times[lane]), "wall-time budget exhausted (max_wall_time)")
+                else:
+                    continue
             else:
-                status[r] = STATUS_FAILED
                 why = "the state became non-finite (err_nf_state)" if outcome == nf else f"heyoka outcome {outcome}"
-                messages[r] = f"method 'taylor' (ensemble) failed at t = {times[lane]!r}: {why}"
+                fail(r, float(times[lane]), why)
             state = np.array(ta.state[:, lane])
             if status[r] != STATUS_FAILED and not np.all(np.isfinite(state)):
-                status[r] = STATUS_FAILED
-                messages[r] = f"method 'taylor' (ensemble) failed at t = {times[lane]!r}: the state became non-finite"
+                fail(r, float(times[lane]), "the state became non-finite")
             x_final[r] = state
             t_end[r] = times[lane]
             refill.append(lane)
+        if late:  # runs not started yet fail at once: the budget is spent
+            while next_run < m:
+                fail(next_run, 0.0, "wall-time budget exhausted (max_wall_time) before the run started")
+                t_end[next_run] = 0.0
+                x_final[next_run] = task.x0[next_run]
+                next_run += 1
         for lane in refill:
             fill(lane)
         if refill:

@@ -8,22 +8,42 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
-from .._checks import positive_float
+from .._checks import bounded_int, check_model, check_spring_lengths, positive_float, relative_tolerance
 from ..integrate import METHODS, simulate
 from ..integrate.taylor.availability import heyoka_module
 from ..model.model import Model
-from .batch import STATUS_EVENT, STATUS_FAILED, STATUS_OK, BatchKey, ChunkOut, ChunkTask, run_chunk
+from .batch import (
+    STATUS_EVENT,
+    STATUS_FAILED,
+    STATUS_OK,
+    BatchKey,
+    ChunkOut,
+    ChunkStoppedError,
+    ChunkTask,
+    check_batch_size,
+    default_batch_size,
+    run_chunk,
+)
 from .events import Event, EventPlan, resolve_events
+from .pool import completed, ignore_sigint, shutdown_now
 from .result import EnsembleResult
 
-__all__ = ["ensemble", "check_params", "check_x0"]
+__all__ = ["ensemble", "check_params", "check_x0", "MAX_RUNS", "DEFAULT_MAX_STEPS"]
+
+#: Largest number of runs of one ensemble (a (n, nx) float array of 10**8 runs is already 6 GB).
+MAX_RUNS = 10**8
+#: Largest number of dense output points (runs x times) of one ensemble (10**9 x nx x 8 bytes).
+MAX_DENSE = 10**8
+#: Default step budget of each run (as ``simulate``'s option ``max_steps``).
+DEFAULT_MAX_STEPS = 1_000_000
 
 _STATUS_NAMES = {STATUS_OK: "ok", STATUS_EVENT: "event", STATUS_FAILED: "failed"}
 
@@ -43,11 +63,14 @@ def ensemble(
     rtol: float = 1e-12,
     atol: float = 1e-12,
     progress: Callable[[int, int], Any] | bool | None = None,
+    batch_size: int | None = None,
+    max_steps: int = DEFAULT_MAX_STEPS,
+    max_wall_time: float | None = None,
 ) -> EnsembleResult:
     """Integrate many runs of one model, each with its own initial state and parameters.
 
     With ``method="taylor"`` (default) the runs go through heyoka's SIMD batch integrator
-    (``taylor_adaptive_batch``, ``heyoka.recommended_simd_size()`` lanes), its ODE built from
+    (``taylor_adaptive_batch`` with ``batch_size`` lanes), its ODE built from
     the model's CasADi graph by the same translator as ``simulate(method="taylor")``;
     parameters are runtime parameters, so per-run values never recompile. Events are handled
     per lane: a run stops at its own terminal event and records its own first crossing times
@@ -87,9 +110,22 @@ def ensemble(
         Local workers (default ``os.cpu_count()``): forked processes for ensembles of 5,000 runs
         or more, threads below; ignored with ``client``.
     rtol, atol : float
-        Tolerances; heyoka's ``tol = min(rtol, atol)``.
+        Tolerances, ``rtol`` in (0, 1); heyoka's ``tol = min(rtol, atol)``.
     progress : callable or bool, optional
         ``progress(done, total)`` after each chunk (runs), or True for a tqdm bar.
+    batch_size : int, optional
+        SIMD lanes of the batch integrator, in [1, 64]. Default
+        :func:`~pendulab.ensemble.batch.default_batch_size`: the environment variable
+        ``PENDULAB_SIMD_SIZE`` when set, else ``heyoka.recommended_simd_size()`` (2, 4 or 8
+        depending on the host). Results are identical (bitwise) for the same chunking and
+        ``batch_size``; another width or chunking changes them at the rounding level only.
+    max_steps : int, default 1 000 000
+        Step budget of each run (batch steps of its lane, checked every
+        :data:`~pendulab.ensemble.batch.SLICE_STEPS` steps); a run over it ends with status
+        ``"failed"`` and a message naming the budget.
+    max_wall_time : float, optional
+        Wall-time budget of the whole ensemble [s]; runs unfinished when it is spent end with
+        status ``"failed"`` (their message names the budget). Default: none.
 
     Returns
     -------
@@ -97,50 +133,62 @@ def ensemble(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
-        Empty ensemble, mismatched shapes, non-finite states or parameters, unknown parameter
-        or event names, bad ``t_eval``, ``chunk_size`` or ``threads`` (the message names the
-        argument and the value).
+        Empty ensemble, mismatched shapes, non-finite states or parameters, elastic spring
+        lengths <= 0, ``rtol`` outside (0, 1), unknown parameter or event names, bad ``t_eval``,
+        ``chunk_size``, ``threads``, ``batch_size`` or budgets (the message names the argument
+        and the value).
+    KeyboardInterrupt
+        Ctrl-C: running chunks stop within one propagation slice, queued ones are cancelled
+        and worker processes ended.
     ImportError
         heyoka (``pendulab[taylor]``) or, with ``client``, dask.distributed (``pendulab[dask]``)
         is not installed; the message names the extra.
     RuntimeError
         A chunk failed (the message names the chunk indices); never a partial result.
     """
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be a pendulab Model (pl.rigid(), pl.elastic()), got {type(model).__name__}")
+    check_model(model)
     tf = positive_float("t_final", t_final, "[s]")
     P = check_params(model, params)
     X0 = check_x0(model, x0, None if P is None else len(P))
     n = len(X0)
     if P is None:
         P = np.tile(model.p, (n, 1))
-    rt, at = positive_float("rtol", rtol), positive_float("atol", atol)
+    rt, at = relative_tolerance("rtol", rtol), positive_float("atol", atol)
     te = _check_t_eval(t_eval, tf)
+    if te is not None:
+        bounded_int("len(x0) * len(t_eval)", n * len(te), high=MAX_DENSE, why="memory of the dense output x (8 bytes per value)")
     plan = resolve_events(model, events)
     cs = _positive_int("chunk_size", chunk_size)
     nthreads = (os.cpu_count() or 1) if threads is None else _positive_int("threads", threads)
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method must be 'taylor' or a key of pendulab.METHODS {sorted(METHODS)}, got {method!r}")
+    steps = bounded_int("max_steps", max_steps, low=1, high=2**31 - 1, why="the step budget of each run")
+    wall = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time, "[s]")
+    S = None if batch_size is None else check_batch_size(batch_size)
     report = _progress(progress, n)
     start = time.perf_counter()
+    deadline = None if wall is None else time.time() + wall
     if method != "taylor":
-        out = _fallback(model, X0, P, tf, plan, method, te, rt, at, report)
+        out = _fallback(model, X0, P, tf, plan, method, te, rt, at, report, steps, wall)
         stats = {"method": method, "n_runs": n, "n_chunks": n, "threads": 1}
     else:
-        hy = heyoka_module()
-        S = int(hy.recommended_simd_size())
+        heyoka_module()  # names the extra when heyoka is missing
+        S = default_batch_size() if S is None else S
         zero = tuple(int(i) for i in np.flatnonzero(np.all(P == 0.0, axis=0)))
         key = BatchKey(model.kind, zero, min(rt, at), plan, S)
         if client is not None:
             from .cluster import run_on_dask
 
-            tasks = _tasks(key, X0, P, tf, te, cs)
+            size = cs
+            tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
             outs = run_on_dask(client, tasks, report)
             workers = "dask"
         else:
-            local = min(cs, max(S, math.ceil(n / (4 * nthreads))))
-            tasks = _tasks(key, X0, P, tf, te, local)
+            size = local_chunk_size(n, cs, S, nthreads)
+            tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
             outs = _run_local(tasks, nthreads, report)
             workers = nthreads
         out = _assemble(outs, n, len(plan.names))
@@ -148,11 +196,13 @@ def ensemble(
             "method": "taylor",
             "n_runs": n,
             "n_chunks": len(tasks),
+            "chunk_size": size,
             "threads": workers,
             "batch_size": S,
             "tol": min(rt, at),
             "n_steps": int(sum(o.n_steps for o in outs)),
         }
+    stats.update(rtol=rt, atol=at, max_steps=steps, max_wall_time=wall)
     report(None)
     stats["wall_time"] = time.perf_counter() - start
     x_final, t_end, status, message, ev_times, term_ev, X = out
@@ -231,15 +281,18 @@ def check_params(model: Model, params: Any) -> np.ndarray | None:
             raise ValueError(f"params must have shape (n, {len(names)}) in param_names order {list(names)}, got shape {P.shape}")
     if len(P) == 0:
         raise ValueError("params: the ensemble is empty (n = 0 runs); give at least one run")
+    bounded_int("number of runs (rows of params)", len(P), high=MAX_RUNS, why="memory of the result arrays")
     bad = np.flatnonzero(~np.all(np.isfinite(P), axis=1))
     if bad.size:
         raise ValueError(f"params must be finite; run {int(bad[0])} has {dict(zip(names, P[bad[0]].tolist(), strict=True))}")
-    # Admissible ranges are per parameter: the column extremes are checked by the model's own validation.
-    for row in (P.min(axis=0), P.max(axis=0)):
+    # Each distinct run is validated as a whole by the model's own parameter checks: some rules join
+    # parameters (m2 lc2^2 + I2 > 0), so mixing columns of different runs would refuse valid runs.
+    uniq, first = np.unique(P, axis=0, return_index=True)
+    for row, i in zip(uniq, first, strict=True):
         try:
-            model.with_params(**dict(zip(names, row.tolist(), strict=True)))
+            model.params.replace(**dict(zip(names, row.tolist(), strict=True)))
         except (ValueError, TypeError) as exc:
-            raise ValueError(f"params: inadmissible value ({exc})") from exc
+            raise ValueError(f"params: run {int(i)} is inadmissible ({exc})") from exc
     return P
 
 
@@ -279,11 +332,13 @@ def check_x0(model: Model, x0: Any, n: int | None) -> np.ndarray:
         raise ValueError(f"x0 must have shape (n, {nx}) in state order {list(model.state_names)}, got shape {X.shape}")
     if len(X) == 0:
         raise ValueError(f"x0: the ensemble is empty (shape {X.shape}); give at least one run")
+    bounded_int("number of runs (rows of x0)", len(X), high=MAX_RUNS, why="memory of the result arrays")
     if n is not None and len(X) != n:
         raise ValueError(f"x0 has {len(X)} runs but params has {n}; they must match")
     bad = np.flatnonzero(~np.all(np.isfinite(X), axis=1))
     if bad.size:
         raise ValueError(f"x0 must be finite; run {int(bad[0])} has {X[bad[0]].tolist()}")
+    check_spring_lengths(model.kind, X, "x0")
     return X
 
 
@@ -334,9 +389,45 @@ def _progress(progress: Any, total: int) -> Callable[[int | None], None]:
 
 
 # -- execution ---------------------------------------------------------------------
-def _tasks(key: BatchKey, X0: np.ndarray, P: np.ndarray, tf: float, te: np.ndarray | None, size: int) -> list[ChunkTask]:
+def local_chunk_size(n: int, chunk_size: int, batch_size: int, threads: int) -> int:
+    """Runs per local chunk: at most ``chunk_size``, small enough to keep ``threads`` workers busy.
+
+    A pure function of its arguments (never of the host): the same arguments give the same
+    chunking, hence bitwise-identical results.
+
+    Parameters
+    ----------
+    n : int
+        Number of runs.
+    chunk_size : int
+        Upper bound per chunk.
+    batch_size : int
+        SIMD lanes (a chunk never has fewer runs than lanes, unless ``chunk_size`` says so).
+    threads : int
+        Local workers.
+
+    Returns
+    -------
+    int
+        ``min(chunk_size, max(batch_size, ceil(n / (4 threads))))``.
+    """
+    return min(chunk_size, max(batch_size, math.ceil(n / (4 * threads))))
+
+
+def _tasks(
+    key: BatchKey,
+    X0: np.ndarray,
+    P: np.ndarray,
+    tf: float,
+    te: np.ndarray | None,
+    size: int,
+    max_steps: int,
+    deadline: float | None,
+) -> list[ChunkTask]:
     n = len(X0)
-    return [ChunkTask(key, i, X0[a : a + size], P[a : a + size], tf, te) for i, a in enumerate(range(0, n, size))]
+    return [
+        ChunkTask(key, i, X0[a : a + size], P[a : a + size], tf, te, max_steps, deadline) for i, a in enumerate(range(0, n, size))
+    ]
 
 
 def _executor(threads: int, n_tasks: int, n_runs: int) -> Executor:
@@ -346,10 +437,11 @@ def _executor(threads: int, n_tasks: int, n_runs: int) -> Executor:
     stops is Python: measured on the 400x400 flip map, 2 threads ran no faster than 1 while 2
     processes ran 1.5-1.9x faster. Forked workers inherit the compiled integrators, so they start in
     milliseconds; below _PROCESS_MIN_RUNS runs, or where fork is unavailable, threads are used.
+    Worker processes ignore SIGINT: Ctrl-C reaches the parent, which cancels the queue and ends them.
     """
     workers = min(threads, n_tasks)
     if n_runs >= _PROCESS_MIN_RUNS and "fork" in multiprocessing.get_all_start_methods():
-        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"))
+        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"), initializer=ignore_sigint)
     return ThreadPoolExecutor(max_workers=workers)
 
 
@@ -359,6 +451,7 @@ _PROCESS_MIN_RUNS = 5000
 
 def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | None], None]) -> list[ChunkOut]:
     if threads == 1 or len(tasks) == 1:
+        # In this thread: a SIGINT raises KeyboardInterrupt between two propagation slices.
         outs = []
         for t in tasks:
             outs.append(_guarded(t))
@@ -366,9 +459,14 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
         return outs
     outs_by: dict[int, ChunkOut] = {}
     failed: list[tuple[int, BaseException]] = []
-    with _executor(threads, len(tasks), sum(len(t.x0) for t in tasks)) as pool:
-        futures = {pool.submit(run_chunk, t): t for t in tasks}
-        for f in as_completed(futures):
+    stop = threading.Event()
+    pool = _executor(threads, len(tasks), sum(len(t.x0) for t in tasks))
+    try:
+        if isinstance(pool, ThreadPoolExecutor):
+            futures = {pool.submit(run_chunk, t, stop.is_set): t for t in tasks}
+        else:
+            futures = {pool.submit(run_chunk, t): t for t in tasks}
+        for f in completed(futures):
             t = futures[f]
             exc = f.exception()
             if exc is not None:
@@ -376,6 +474,13 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
                 continue
             outs_by[t.index] = f.result()
             report(len(t.x0))
+    except BaseException:
+        # Ctrl-C (or any error here): running thread chunks stop at their next slice, queued chunks are
+        # cancelled, worker processes are ended; nothing waits for the rest of the ensemble.
+        stop.set()
+        shutdown_now(pool)
+        raise
+    pool.shutdown(wait=True)
     if failed:
         failed.sort(key=lambda e: e[0])
         idx = [i for i, _ in failed]
@@ -388,6 +493,8 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
 def _guarded(task: ChunkTask) -> ChunkOut:
     try:
         return run_chunk(task)
+    except ChunkStoppedError:
+        raise KeyboardInterrupt from None
     except Exception as exc:
         raise RuntimeError(f"ensemble: chunks [{task.index}] failed; first error: {type(exc).__name__}: {exc}") from exc
 
@@ -426,8 +533,10 @@ def _fallback(
     rtol: float,
     atol: float,
     report: Callable[[int | None], None],
+    max_steps: int,
+    max_wall_time: float | None,
 ) -> tuple:
-    """One ``simulate`` per run (methods other than taylor; no events, no t_eval)."""
+    """One ``simulate`` per run (methods other than taylor; no events, no t_eval), each within the budgets."""
     if plan.names:
         raise ValueError(f"events need method='taylor' (heyoka, {_extra()}), got method={method!r}")
     if te is not None:
@@ -438,10 +547,21 @@ def _fallback(
     status = np.full(n, STATUS_OK, dtype=np.int8)
     message = [""] * n
     names = model.param_names
+    start = time.perf_counter()
     for r in range(n):
+        opts: dict[str, Any] = {"max_steps": max_steps}
+        if max_wall_time is not None:
+            left = max_wall_time - (time.perf_counter() - start)
+            if left <= 0:
+                status[r:] = STATUS_FAILED
+                for k in range(r, n):
+                    message[k] = "wall-time budget exhausted (max_wall_time) before the run started"
+                report(n - r)
+                break
+            opts["max_wall_time"] = left
         m = model if np.array_equal(P[r], model.p) else model.with_params(**dict(zip(names, P[r].tolist(), strict=True)))
         try:
-            traj = simulate(m, X0[r], tf, dt=tf, method=method, rtol=rtol, atol=atol)
+            traj = simulate(m, X0[r], tf, dt=tf, method=method, rtol=rtol, atol=atol, options=opts)
             x_final[r], t_end[r] = traj.x[-1], traj.t[-1]
         except Exception as exc:  # a failed run is reported per run, never silently
             status[r] = STATUS_FAILED

@@ -8,6 +8,10 @@ each costs tens of milliseconds, so whole runs go to worker processes.
 Workers are *forked*: they inherit the caller's memory, so ``fn`` may be a
 closure over unpicklable objects (CasADi Functions, a solved trajectory
 optimization); only the items and the results cross the process boundary.
+
+Ctrl-C: workers ignore SIGINT (it goes to the whole process group), the parent catches it,
+cancels the queued chunks and ends the workers at once (:func:`shutdown_now`), so the map
+stops within about a second and no worker prints a traceback.
 """
 
 from __future__ import annotations
@@ -16,11 +20,16 @@ import itertools
 import math
 import multiprocessing
 import os
-from collections.abc import Callable, Iterable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+import signal
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
-__all__ = ["map_runs", "default_workers"]
+__all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed"]
+
+#: Seconds between two checks for Ctrl-C while waiting for workers.
+POLL_INTERVAL = 0.1
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -39,6 +48,73 @@ def default_workers() -> int:
         ``os.cpu_count()`` (at least 1).
     """
     return max(1, os.cpu_count() or 1)
+
+
+def ignore_sigint() -> None:
+    """Worker-process initializer: ignore SIGINT (the parent handles Ctrl-C and ends the workers).
+
+    On Linux the worker also asks the kernel to end it when its parent dies (``PR_SET_PDEATHSIG``),
+    so a parent killed outright never leaves workers computing on their own.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+            if os.getppid() == 1:  # the parent already died between fork and prctl
+                os._exit(1)
+        except (OSError, AttributeError):
+            pass
+
+
+def completed(futures: Iterable[Future], poll: float = POLL_INTERVAL) -> Iterator[Future]:
+    """Futures as they complete, like ``as_completed``, but interruptible by Ctrl-C at any time.
+
+    A blocking ``as_completed`` waits on a lock; when the kernel delivers SIGINT to another thread
+    (the pool's feeder or manager thread) the main thread is not woken and Python's handler runs
+    only once some future completes, which for long chunks is minutes later. Waiting in slices of
+    ``poll`` seconds lets the handler run within ``poll``.
+
+    Parameters
+    ----------
+    futures : iterable of Future
+        The futures to wait for.
+    poll : float
+        Seconds per wait.
+
+    Yields
+    ------
+    Future
+        Each future once it is done.
+    """
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, timeout=poll, return_when=FIRST_COMPLETED)
+        yield from done
+
+
+def shutdown_now(pool: Executor) -> None:
+    """Cancel the queued work of ``pool`` and end its worker processes without waiting for running work.
+
+    Thread pools cannot be killed: their running tasks must watch a stop flag
+    (the ensemble's chunks check one between propagation slices).
+
+    Parameters
+    ----------
+    pool : concurrent.futures.Executor
+        A process or thread pool.
+    """
+    # The worker list must be read before shutdown(), which forgets it.
+    procs = list((getattr(pool, "_processes", None) or {}).values()) if isinstance(pool, ProcessPoolExecutor) else []
+    pool.shutdown(wait=False, cancel_futures=True)
+    if procs:
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+        for p in procs:
+            p.join(timeout=5.0)
 
 
 def _run_chunk(job: int, chunk: list[Any]) -> list[Any]:
@@ -107,19 +183,20 @@ def map_runs(
     _JOBS[job] = fn
     try:
         ctx = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
+        pool = ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx, initializer=ignore_sigint)
+        try:
             futures = {pool.submit(_run_chunk, job, todo[s : s + size]): i for i, s in enumerate(starts)}
             done = 0
-            try:
-                for fut in as_completed(futures):
-                    results[futures[fut]] = fut.result()
-                    done += len(results[futures[fut]] or ())
-                    if progress is not None:
-                        progress(done, total)
-            except BaseException:
-                # A failed run or Ctrl-C: drop the queued chunks instead of finishing them.
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise
+            for fut in completed(futures):
+                results[futures[fut]] = fut.result()
+                done += len(results[futures[fut]] or ())
+                if progress is not None:
+                    progress(done, total)
+        except BaseException:
+            # A failed run or Ctrl-C: drop the queued chunks and end the workers instead of finishing them.
+            shutdown_now(pool)
+            raise
+        pool.shutdown(wait=True)
     finally:
         del _JOBS[job]
     return [r for chunk in results for r in (chunk or ())]

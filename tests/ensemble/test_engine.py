@@ -9,6 +9,7 @@ import pytest
 
 import pendulab as pl
 from pendulab.ensemble import EnsembleResult, Event
+from pendulab.ensemble.engine import local_chunk_size
 
 hy = pytest.importorskip("heyoka")
 
@@ -124,7 +125,9 @@ def test_threads_and_chunks_do_not_change_results(model):
     # Another chunking puts runs in other SIMD lanes: rounding-level differences only.
     np.testing.assert_allclose(a.x_final, b.x_final, rtol=0, atol=1e-12)
     np.testing.assert_allclose(a.event_times["flip"], b.event_times["flip"], rtol=0, atol=1e-12)
-    assert seen[-1] == (40, 40) and b.stats["n_chunks"] == 5
+    # The chunking is a pure function of (n, chunk_size, batch_size, threads), never of the host.
+    assert b.stats["chunk_size"] == local_chunk_size(40, 8, b.stats["batch_size"], 2)
+    assert seen[-1] == (40, 40) and b.stats["n_chunks"] == math.ceil(40 / b.stats["chunk_size"])
 
 
 def test_table_and_npz(model, tmp_path):
