@@ -70,15 +70,12 @@ def summarize(label: str, model: Model, traj: Trajectory) -> dict[str, Any]:
     grid) and the **energy balance error** ``max |E(t) - E(0) - W(t) + D(t)|``: the part of the energy change
     that the torques and dampers do not explain, i.e. the integration (and quadrature) error.
     """
-    from ..integrate.simulate import energy_flows
+    from ..integrate.simulate import trajectory_energy_flows
 
     energy = traj["energy"]
     change = energy - energy[0]
     drift = float(np.max(np.abs(change)))
-    if "input_work" in traj.stats and "dissipated" in traj.stats:
-        work, dissipated = np.asarray(traj.stats["input_work"]), np.asarray(traj.stats["dissipated"])
-    else:
-        work, dissipated = energy_flows(model, traj.t, traj.x, traj.u)
+    work, dissipated = trajectory_energy_flows(model, traj)
     forced = bool(np.any(traj.u != 0.0))
     damped = bool(np.any(dissipated != 0.0))
     balance = float(np.max(np.abs(change - work + dissipated)))
@@ -219,3 +216,17 @@ class ProgressBar:
 
             self.bar = tqdm(total=None, desc=self.desc, unit=unit, smoothing=0.1, file=sys.stderr)
         self.bar.update(n)
+
+    def note(self, text: str) -> None:
+        """Write one line of status on stderr (between bar updates, without garbling the bar); a no-op when disabled.
+
+        Parameters
+        ----------
+        text : str
+            The line, e.g. ``"building the NLP (radau N=100) ..."``.
+        """
+        if not self.enabled:
+            return
+        from tqdm import tqdm
+
+        tqdm.write(f"{self.desc}: {text}", file=sys.stderr)

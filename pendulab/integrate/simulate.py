@@ -54,6 +54,7 @@ __all__ = [
     "BUDGET_OPTIONS",
     "TimeInput",
     "energy_flows",
+    "trajectory_energy_flows",
     "MAX_INPUT_INTERVALS",
 ]
 
@@ -264,6 +265,29 @@ def energy_flows(model: Model, t: np.ndarray, x: np.ndarray, u: np.ndarray) -> t
         dp = np.gradient(p, h, edge_order=2)
         dissipated -= h * h / 12.0 * (dp - dp[0])
     return work, dissipated
+
+
+def trajectory_energy_flows(model: Model, traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Input work and dissipated energy [J] accumulated along a trajectory of :func:`simulate`.
+
+    Parameters
+    ----------
+    model : Model
+        The model the trajectory is of.
+    traj : Trajectory
+        A run; when its input was held on a finer grid than the output grid (a
+        :class:`TimeInput`), the flows the run recorded on that grid
+        (``stats["input_work"]``, ``stats["dissipated"]``), else :func:`energy_flows`
+        on the output grid with ``traj.u`` held over each interval.
+
+    Returns
+    -------
+    work, dissipated : ndarray, shape (N,)
+        From 0 to each output time [J]; the energy balance is ``E - E[0] = work - dissipated``.
+    """
+    if "input_work" in traj.stats and "dissipated" in traj.stats:
+        return np.asarray(traj.stats["input_work"], dtype=float), np.asarray(traj.stats["dissipated"], dtype=float)
+    return energy_flows(model, traj.t, traj.x, traj.u)
 
 
 def simulate(

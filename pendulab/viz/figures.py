@@ -302,7 +302,9 @@ def energy_components(run: Run) -> dict[str, np.ndarray]:
 def fig_energy(runs: Any) -> Figure:
     """Energy exchange: kinetic, gravitational, spring (elastic only) and total energy [J], one panel per run.
 
-    The legend reports the largest drift of the total energy from its initial value.
+    The legend reports the largest drift of the total energy from its initial value; for a forced or
+    damped run, the balance ``E(0) + input work - dissipated`` is drawn dashed over the total, and the
+    legend reports the energy balance error (the largest gap between them).
 
     Parameters
     ----------
@@ -319,8 +321,10 @@ def fig_energy(runs: Any) -> Figure:
     ValueError
         ``runs`` is empty or malformed (from :func:`~pendulab.viz.drawing.as_runs`).
     """
+    from ..integrate.simulate import trajectory_energy_flows
+
     runs = as_runs(runs)
-    fig, axes = _figure(len(runs), 1, sharex=True, height=3.2)
+    fig, axes = _figure(len(runs), 1, sharex=True, height=3.2, layout="constrained")
     for ax, run in zip(axes[:, 0], runs, strict=True):
         parts = energy_components(run)
         t = run.traj.t
@@ -328,14 +332,21 @@ def fig_energy(runs: Any) -> Figure:
         ax.plot(t, parts["gravitational"], lw=0.9, label="gravitational")
         if run.model.kind == "elastic":
             ax.plot(t, parts["spring"], lw=0.9, label="spring")
-        drift = float(np.max(np.abs(parts["total"] - parts["total"][0])))
-        ax.plot(t, parts["total"], "k", lw=1.4, label=f"total (max drift {drift:.1e} J)")
+        total = parts["total"]
+        work, dissipated = trajectory_energy_flows(run.model, run.traj)
+        if np.any(work) or np.any(dissipated):
+            balance = total[0] + work - dissipated
+            error = float(np.max(np.abs(total - balance)))
+            ax.plot(t, total, "k", lw=1.4, label=f"total (change {total[-1] - total[0]:+.3g} J)")
+            ax.plot(t, balance, "--", color="tab:red", lw=1.2, label=f"E(0) + work - dissipated\n(balance error {error:.1e} J)")
+        else:
+            drift = float(np.max(np.abs(total - total[0])))
+            ax.plot(t, total, "k", lw=1.4, label=f"total (max drift {drift:.1e} J)")
         ax.set_ylabel("energy [J]")
         ax.set_title(f"{run.label}: energy exchange (gravity zero at the pivot height)")
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(_TIME)
-    fig.tight_layout()
     return fig
 
 
