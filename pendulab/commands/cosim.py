@@ -178,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
         Bad or inapplicable options.
     """
     from ..control.controllers import controller_for_task, make_controller
-    from ..control.swingup.iterations import iteration_hook
+    from ..control.swingup.iterations import observe
     from ..control.tracking import load_reference_csv
     from ..cosim import cosim, inspect_fmu
     from ..cosim.plots import animate_cosim, plot_cosim
@@ -243,7 +243,7 @@ def run(args: argparse.Namespace) -> int:
         _progress(f"planning the {args.controller} reference" + ("" if args.reference or task else " (native model)"))
     planning = ProgressBar(f"planning {args.controller} (IPOPT)", not args.no_progress)
     try:
-        with iteration_hook(lambda: planning.iterate(1, "iter")):
+        with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
             if task is not None:
                 ctrl, x0 = controller_for_task(args.controller, task, sample_time=sample_time, nmpc_solver=args.nmpc_solver)
             else:

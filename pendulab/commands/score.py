@@ -130,7 +130,7 @@ def run_score(args: argparse.Namespace) -> int:
         return _run_realai(args)
     from ..control.controllers import TASK_CONTROLLERS
     from ..control.scorecard import CATEGORIES, score
-    from ..control.swingup.iterations import iteration_hook
+    from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task, task_names
 
     if args.controller not in TASK_CONTROLLERS:
@@ -166,7 +166,7 @@ def run_score(args: argparse.Namespace) -> int:
         bar(done, total)
 
     try:
-        with iteration_hook(lambda: planning.iterate(1, "iter")):
+        with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
             card = score(
                 args.controller, task, runs=runs, categories=cats, seed=seed, workers=workers, progress=progress,
                 completed=completed, on_records=save, max_wall_time=budget,
@@ -220,7 +220,7 @@ def _resume(path: Path, settings: dict[str, Any]) -> tuple:
 
 
 def _run_realai(args: argparse.Namespace) -> int:
-    from ..control.swingup.iterations import iteration_hook
+    from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import short_name
 
     task = short_name(args.task)
@@ -234,7 +234,7 @@ def _run_realai(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
     try:
-        with iteration_hook(lambda: planning.iterate(1, "iter")):
+        with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
             result = realai_score(task, args.controller, csv_path=out / "realai.csv")
     finally:
         planning.close()

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         Bad or inapplicable options.
     """
     from ..control.swingup.episode import run_episode
-    from ..control.swingup.iterations import iteration_hook
+    from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task, task_names
     from ..control.swingup.transcription import INTERVALS_WHY, MAX_INTERVALS
     from ._common import ProgressBar, parse_number
@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={N or task.N}) ...", file=sys.stderr)
     bar = ProgressBar(f"[swingup] planning {task.name} (IPOPT)", not args.no_progress)
     try:
-        with iteration_hook(lambda: bar.iterate(1, "iter")):
+        with observe(lambda: bar.iterate(1, "iter"), lambda d: bar.note(f"building the NLP ({d}) ...")):
             ep = run_episode(
                 task,
                 method=args.method,

@@ -21,10 +21,51 @@ from typing import Any
 
 import casadi as ca
 
-__all__ = ["IterationCallback", "iteration_hook", "wall_time_budget"]
+__all__ = ["IterationCallback", "iteration_hook", "wall_time_budget", "build_hook", "notify_build", "observe"]
 
 #: Installed hooks, outermost first. Each is called with no argument after every IPOPT iteration.
 _HOOKS: list[Callable[[], bool | None]] = []
+#: Installed build listeners: called with a one-line description before an NLP is built (not on a cache hit).
+_BUILD_HOOKS: list[Callable[[str], None]] = []
+
+
+def notify_build(description: str) -> None:
+    """Tell the build listeners that an NLP is about to be built (a single CasADi call of seconds to a minute).
+
+    Parameters
+    ----------
+    description : str
+        One line, e.g. ``"radau N=100 degree 3, elastic model"``.
+    """
+    for hook in tuple(_BUILD_HOOKS):
+        hook(description)
+
+
+@contextlib.contextmanager
+def build_hook(hook: Callable[[str], None]) -> Iterator[None]:
+    """Call ``hook(description)`` before each swing-up NLP built inside the block (progress of the NLP build).
+
+    Parameters
+    ----------
+    hook : callable
+        ``hook(description) -> None``.
+
+    Yields
+    ------
+    None
+
+    Raises
+    ------
+    TypeError
+        ``hook`` is not callable.
+    """
+    if not callable(hook):
+        raise TypeError(f"hook must be callable, got {type(hook).__name__}")
+    _BUILD_HOOKS.append(hook)
+    try:
+        yield
+    finally:
+        _BUILD_HOOKS.remove(hook)
 
 
 class IterationCallback(ca.Callback):
@@ -187,3 +228,27 @@ def wall_time_budget(seconds: float | None) -> Iterator[Any]:
     budget = _Budget(seconds)
     with iteration_hook(budget):
         yield budget
+
+
+@contextlib.contextmanager
+def observe(on_iteration: Callable[[], Any], on_build: Callable[[str], Any]) -> Iterator[None]:
+    """Progress of the swing-up NLPs inside the block: ``on_build(description)``, then ``on_iteration()`` per iteration.
+
+    Parameters
+    ----------
+    on_iteration : callable
+        Called after each IPOPT iteration (its return value is ignored: it never stops a solve).
+    on_build : callable
+        Called with a one-line description before an NLP is built.
+
+    Yields
+    ------
+    None
+    """
+
+    def tick() -> bool:
+        on_iteration()
+        return False
+
+    with iteration_hook(tick), build_hook(on_build):
+        yield

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..._checks import bounded_int
 from ...model.model import model_functions
-from .iterations import IterationCallback
+from .iterations import IterationCallback, notify_build
 from .problem import SwingUpProblem
 
 __all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING", "MAX_INTERVALS"]
@@ -356,6 +356,7 @@ def get_transcription(
 def _build(
     kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple
 ) -> Transcription:
+    notify_build(f"{method} N={N}" + (f" degree {degree}" if method in COLLOCATION else "") + f", {kind} model")
     t_start = time.perf_counter()
     f = model_functions(kind)["rhs"]
     nx = f.size1_in(0)
