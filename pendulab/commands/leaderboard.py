@@ -56,7 +56,9 @@ def write_leaderboard(
         saying so instead of a score.
     """
     from ..control.scorecard import CATEGORIES, score
+    from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task
+    from ._common import ProgressBar
 
     out = DEFAULT_PATH if path is None else Path(path)
     command = "pendulab score --leaderboard" + (f" --runs {runs}" if runs != 20 else "") + (f" --out {path}" if path else "")
@@ -67,24 +69,23 @@ def write_leaderboard(
             if (ctrl, task_name) in SKIPPED:
                 cards[(ctrl, task_name)] = SKIPPED[(ctrl, task_name)]
                 continue
-            bar = None
-            if progress:
-                from tqdm.auto import tqdm
+            planning = ProgressBar(f"planning {ctrl} on {task_name} (IPOPT)", progress)
+            bar = ProgressBar(f"{ctrl} on {task_name}", progress)
 
-                bar = tqdm(desc=f"{ctrl} on {task_name}", unit="run", leave=False)
-
-            def report(done: int, total: int, bar: Any = bar) -> None:
-                if bar is not None:
-                    bar.total = total
-                    bar.update(done - bar.n)
+            def report(done: int, total: int, planning: ProgressBar = planning, bar: ProgressBar = bar) -> None:
+                planning.close()
+                bar(done, total)
 
             try:
-                cards[(ctrl, task_name)] = score(ctrl, task, runs=runs, workers=workers, progress=report)
+                with observe(
+                    lambda p=planning: p.iterate(1, "iter"), lambda d, p=planning: p.note(f"building the NLP ({d}) ...")
+                ):
+                    cards[(ctrl, task_name)] = score(ctrl, task, runs=runs, workers=workers, progress=report)
             except (ValueError, RuntimeError) as exc:  # e.g. a swing-up the optimizer cannot solve
                 cards[(ctrl, task_name)] = f"not available ({_one_line(exc)})"
             finally:
-                if bar is not None:
-                    bar.close()
+                planning.close()
+                bar.close()
 
     lines = [
         "# Leaderboard",

@@ -24,7 +24,7 @@ from .guess import Guess
 from .iterations import wall_time_budget
 from .planning import Plan, _solved, plan
 from .solve import SwingUpResult
-from .tasks import Task
+from .tasks import Task, resolve_task
 from .transcription import INTERVALS_WHY, MAX_INTERVALS
 
 __all__ = ["Episode", "run_episode", "SuccessRate", "closed_loop_success_rate"]
@@ -166,7 +166,7 @@ class Episode:
 
 
 def run_episode(
-    task: Task,
+    task: Task | str,
     *,
     method: str | None = None,
     N: int | None = None,
@@ -182,7 +182,8 @@ def run_episode(
 
     Parameters
     ----------
-    task : Task
+    task : Task or str
+        The task or its name (``pendubot``; ``swingup_pendubot`` is an alias).
     method, N : optional
         Override the task's transcription and (initial) number of intervals.
     guess : str, Guess or SwingUpResult
@@ -217,7 +218,10 @@ def run_episode(
     ValueError
         Bad overrides (unknown planning name, a planning model on a rigid task,
         a tolerance outside (0, 1), N outside [2, MAX_INTERVALS]).
+    TypeError
+        ``task`` is neither a Task nor a name.
     """
+    task = resolve_task(task)
     if N is not None:
         N = bounded_int("N", N, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
     if tolerance is not None:
@@ -291,7 +295,7 @@ class SuccessRate:
 
 
 def closed_loop_success_rate(
-    task: Task,
+    task: Task | str,
     starts: int = 20,
     seed: int = 0,
     *,
@@ -303,9 +307,10 @@ def closed_loop_success_rate(
 
     Parameters
     ----------
-    task : Task
+    task : Task or str
+        The task or its name.
     starts : int
-        Number of randomized starts (>= 1).
+        Number of randomized starts, in [1, 100000].
     seed : int
         Seed of :func:`numpy.random.default_rng`.
     episode : Episode, optional
@@ -326,10 +331,12 @@ def closed_loop_success_rate(
     Raises
     ------
     ValueError
-        ``starts`` < 1, negative spreads, or an episode of another task.
+        ``starts`` out of range, negative spreads, or an episode of another task.
+    TypeError
+        ``task`` is neither a Task nor a name.
     """
-    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
-        raise ValueError(f"starts must be an integer >= 1, got {starts!r}")
+    task = resolve_task(task)
+    starts = bounded_int("starts", starts, low=1, high=100_000, why="closed-loop simulations, one per start")
     if not (angle_spread >= 0.0 and rate_spread >= 0.0):
         raise ValueError(f"angle_spread and rate_spread must be >= 0, got {angle_spread!r} and {rate_spread!r}")
     if episode is not None and episode.task.name != task.name:
