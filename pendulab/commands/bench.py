@@ -81,6 +81,11 @@ def _resumable(journal: Path, args: argparse.Namespace) -> int:
         return 0  # the study itself reports an unreadable journal
 
 
+def _resume_hint(journal: Path) -> None:
+    """After Ctrl-C: where the finished work is and how to continue (stderr; a new line ends the progress bar's)."""
+    print(f"\nfinished work is kept in {journal}; run the same command with --resume to continue", file=sys.stderr)
+
+
 def _work_precision(args: argparse.Namespace) -> int:
     from ..bench import workprecision as wp
 
@@ -101,6 +106,9 @@ def _work_precision(args: argparse.Namespace) -> int:
             journal=journal,
             resume=args.resume,
         )
+    except KeyboardInterrupt:
+        _resume_hint(journal)
+        raise
     finally:
         bar.close()
     elapsed = time.perf_counter() - start
@@ -181,6 +189,9 @@ def _stability(args: argparse.Namespace) -> int:
     bar, progress = _progress("bench stability", args)
     try:
         result = st.run_stability(quick=args.quick, progress=progress, journal=journal, resume=args.resume)
+    except KeyboardInterrupt:
+        _resume_hint(journal)
+        raise
     finally:
         bar.close()
     elapsed = time.perf_counter() - start

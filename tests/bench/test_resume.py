@@ -96,7 +96,7 @@ def test_cli_interrupt_then_resume_json(tmp_path, monkeypatch, capsys):
     assert main(args) == 130
     assert (tmp_path / "work_precision_journal.json").exists()
     assert not (tmp_path / "work_precision.csv").exists()
-    capsys.readouterr()
+    assert "--resume" in capsys.readouterr().err  # the interrupted command says how to continue
     monkeypatch.undo()
     assert main([*args, "--resume", "--json", "--no-progress"]) == 0
     out = capsys.readouterr().out
