@@ -63,6 +63,7 @@ from __future__ import annotations
 import copy
 import math
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -71,7 +72,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
-from .._checks import positive_float
+from .._checks import bounded_int, check_model, check_spring_lengths, positive_float, relative_tolerance
 from ..model.model import Model
 from ..model.quasistatic import quasi_static_lengths
 from ..model.statics import static_spring_lengths
@@ -88,6 +89,13 @@ __all__ = [
 
 #: Integration methods of :func:`largest_lyapunov`.
 LYAPUNOV_METHODS: tuple[str, ...] = ("taylor", "cvodes")
+#: Largest number of renormalisations (transient included) of one estimate: the arrays t, running and
+#: log_growth hold 8 bytes per renormalisation each, and each one is a Python round trip.
+MAX_RENORM = 10_000_000
+#: Default step budget of one estimate (integrator steps, transient included; as ``simulate``'s ``max_steps``).
+DEFAULT_MAX_STEPS = 100_000_000
+#: Taylor steps per propagation slice: Ctrl-C and the budgets are checked between slices.
+_SLICE_STEPS = 2000
 #: Spring-length choices of the energy-matched initial states.
 SPRING_STARTS: tuple[str, ...] = ("quasi-static", "static")
 
@@ -156,9 +164,7 @@ class LyapunovEstimate:
 
 # -- argument checks --------------------------------------------------------------------
 def _check_model(model: Any) -> Model:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be a pendulab Model (pl.rigid(...) or pl.elastic(...)), got {type(model).__name__}")
-    return model
+    return check_model(model)
 
 
 def _nonnegative_float(name: str, value: Any) -> float:
@@ -253,7 +259,9 @@ def variational_taylor_system(model: Model, tol: float = 1e-12) -> tuple[list, n
     return list(vsys.sys), np.asarray(pars_of(np.zeros(model.nu), model.p))
 
 
-def _run_taylor(model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray, n_skip: int, rtol: float) -> tuple:
+def _run_taylor(
+    model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray, n_skip: int, rtol: float, budget: _Budget
+) -> tuple:
     from ..integrate.taylor.availability import heyoka_module
 
     hy = heyoka_module()
@@ -265,18 +273,53 @@ def _run_taylor(model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray,
     ta.pars[:] = pars
     logs = np.empty(len(times))
     n_steps = 0
+    step_limit, time_limit = hy.taylor_outcome.step_limit, hy.taylor_outcome.time_limit
     for i, t in enumerate(times):
-        res = ta.propagate_until(float(t))
-        n_steps += int(res[3])
-        if res[0] != hy.taylor_outcome.time_limit or not np.all(np.isfinite(ta.state)):
+        while True:  # slices of at most _SLICE_STEPS steps: a SIGINT is handled between two slices
+            res = ta.propagate_until(float(t), max_steps=_SLICE_STEPS)
+            n_steps += int(res[3])
+            budget.check(n_steps, ta.time, float(times[-1]))
+            if res[0] != step_limit:
+                break
+        if res[0] != time_limit or not np.all(np.isfinite(ta.state)):
             raise RuntimeError(
                 f"largest_lyapunov: method 'taylor' (heyoka) stopped at t = {ta.time:.6g} s of {times[-1]:.6g} s "
                 f"with status {res[0]} (state finite: {bool(np.all(np.isfinite(ta.state)))})"
             )
+        _check_springs(model, ta.state[:nx], ta.time)
         norm = float(np.linalg.norm(ta.state[nx:]))
         logs[i] = math.log(norm)
         ta.state[nx:] /= norm
     return logs, np.array(ta.state[:nx]), np.array(ta.state[nx:]), n_steps
+
+
+def _check_springs(model: Model, x: np.ndarray, t: float) -> None:
+    """simulate's rule: a spring through zero length ends the run (the polar coordinates break down)."""
+    if model.kind == "elastic" and not np.all(np.asarray(x)[2:4] > 0.0):
+        raise RuntimeError(
+            f"largest_lyapunov: spring length reached {np.asarray(x)[2:4].tolist()} m <= 0 at t = {t:.6g} s "
+            "(a bob passed through its joint); stiffer springs or a gentler start keep the springs extended"
+        )
+
+
+@dataclass
+class _Budget:
+    """Step and wall-time budget of one estimate."""
+
+    max_steps: int
+    max_wall_time: float | None
+    start: float = field(default_factory=time.perf_counter)
+
+    def check(self, n_steps: int, t: float, t_end: float) -> None:
+        if n_steps > self.max_steps:
+            raise RuntimeError(
+                f"largest_lyapunov: step budget exhausted (max_steps = {self.max_steps}) at t = {t:.6g} s of {t_end:.6g} s"
+            )
+        if self.max_wall_time is not None and time.perf_counter() - self.start > self.max_wall_time:
+            raise RuntimeError(
+                f"largest_lyapunov: wall-time budget exhausted (max_wall_time = {self.max_wall_time:g} s) "
+                f"at t = {t:.6g} s of {t_end:.6g} s"
+            )
 
 
 # -- CVODES (CasADi) --------------------------------------------------------------------
@@ -301,7 +344,9 @@ def _cvodes_integrator(model: Model, rtol: float) -> ca.Function:
     return F
 
 
-def _run_cvodes(model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray, n_skip: int, rtol: float) -> tuple:
+def _run_cvodes(
+    model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray, n_skip: int, rtol: float, budget: _Budget
+) -> tuple:
     nx = model.nx
     F = _cvodes_integrator(model, rtol)
     z = np.concatenate([x0, d0])
@@ -316,6 +361,8 @@ def _run_cvodes(model: Model, x0: np.ndarray, d0: np.ndarray, times: np.ndarray,
             ) from exc
         if not np.all(np.isfinite(z)):
             raise RuntimeError(f"largest_lyapunov: method 'cvodes' reached a non-finite state by t = {t:.6g} s")
+        _check_springs(model, z[:nx], float(t))
+        budget.check(0, float(t), float(times[-1]))
         norm = float(np.linalg.norm(z[nx:]))
         logs[i] = math.log(norm)
         z[nx:] /= norm
@@ -338,6 +385,8 @@ def largest_lyapunov(
     method: str = "taylor",
     tangent0: Any = None,
     seed: int = 0,
+    max_steps: int = DEFAULT_MAX_STEPS,
+    max_wall_time: float | None = None,
 ) -> LyapunovEstimate:
     """Largest Lyapunov exponent of the free motion from ``x0`` (Benettin's renormalisation).
 
@@ -366,6 +415,10 @@ def largest_lyapunov(
         with ``seed`` (a generic direction has a component along the most unstable one).
     seed : int, default 0
         Seed of the default tangent vector.
+    max_steps : int, default 100 000 000
+        Step budget of the Taylor integration (transient included), checked every 2000 steps.
+    max_wall_time : float, optional
+        Wall-time budget [s], checked between propagation slices (Taylor) or intervals (CVODES).
 
     Returns
     -------
@@ -375,13 +428,19 @@ def largest_lyapunov(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
-        ``model`` is not a Model; ``x0`` or ``tangent0`` of the wrong shape or non-finite;
-        ``tangent0`` zero; ``t_total`` or ``renorm_interval`` not positive and finite;
+        ``x0`` or ``tangent0`` of the wrong shape or non-finite; an elastic ``x0`` with a
+        spring length r1 or r2 <= 0; ``tangent0`` zero; more than :data:`MAX_RENORM`
+        renormalisations; ``t_total`` or ``renorm_interval`` not positive and finite;
         ``t_transient`` negative or non-finite; ``renorm_interval > t_total``; ``rtol``
         outside (0, 1); unknown ``method``.
     RuntimeError
-        The integrator failed (the message names the method, the time reached and the status).
+        The integrator failed, a spring passed through zero length, or a budget was spent (the
+        message names the method or budget, the time reached and the status).
+    KeyboardInterrupt
+        Ctrl-C, handled between propagation slices (milliseconds).
     TaylorUnavailableError
         ``method="taylor"`` without heyoka installed (an ``ImportError``).
     """
@@ -394,19 +453,26 @@ def largest_lyapunov(
     t_tr = _nonnegative_float("t_transient", t_transient)
     if tau > T:
         raise ValueError(f"renorm_interval must be at most t_total = {T!r} s, got {renorm_interval!r} s")
-    tol = positive_float("rtol", rtol)
-    if tol >= 1.0:
-        raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
-    if method not in _RUNNERS:
+    tol = relative_tolerance("rtol", rtol)
+    if not isinstance(method, str) or method not in _RUNNERS:
         raise ValueError(f"method must be one of {list(LYAPUNOV_METHODS)}, got {method!r}")
+    check_spring_lengths(model.kind, x, "x0")
     d0 = _check_tangent(model, tangent0, seed)
+    steps = bounded_int("max_steps", max_steps, low=1, high=2**62, why="the step budget of one estimate")
+    wall = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time, "[s]")
 
     n_tr = math.ceil(t_tr / tau - 1e-9) if t_tr > 0 else 0
     n = max(1, math.ceil(T / tau - 1e-9))
+    if n_tr + n > MAX_RENORM:
+        raise ValueError(
+            f"renorm_interval = {renorm_interval!r} s gives {n_tr + n} renormalisations over t_transient + t_total = "
+            f"{t_tr + T:g} s, above the limit MAX_RENORM = {MAX_RENORM} (memory and time of the estimate); "
+            "choose a longer renorm_interval"
+        )
     t_skip = np.minimum(tau * np.arange(1, n_tr + 1), t_tr)
     t_avg = t_tr + np.minimum(tau * np.arange(1, n + 1), T)
     times = np.concatenate([t_skip, t_avg])
-    logs, xf, df, n_steps = _RUNNERS[method](model, x, d0, times, n_tr, tol)
+    logs, xf, df, n_steps = _RUNNERS[method](model, x, d0, times, n_tr, tol, _Budget(steps, wall))
     logs = logs[n_tr:]
     t = t_avg - t_tr
     running = np.cumsum(logs) / t
@@ -575,8 +641,7 @@ def energy_matched_states(
         ``n`` not a positive integer, an empty ``models``, or an ``energy`` below the
         potential energy of every angle tried (1000 n draws).
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n must be a positive integer, got {n!r}")
+    n = bounded_int("n", n, high=1_000_000, why="each state is found by a root search in Python")
     models = [_check_model(m) for m in models]
     if not models:
         raise ValueError("models must contain at least one Model, got none")

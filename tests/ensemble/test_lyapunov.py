@@ -162,5 +162,27 @@ def test_bad_inputs_raise_value_error(rigid: pl.Model, kwargs: dict, match: str)
 
 
 def test_not_a_model_raises() -> None:
-    with pytest.raises(ValueError, match="model"):
+    with pytest.raises(TypeError, match="model must be a pendulab Model, got str"):
         largest_lyapunov("rigid", np.zeros(4), 1.0)  # type: ignore[arg-type]
+
+
+def test_collapsed_spring_and_rtol_one_are_refused() -> None:
+    el = pl.elastic()
+    x0 = el.rest_state()
+    x0[2] = 0.0
+    with pytest.raises(ValueError, match=r"x0: spring lengths r1, r2 must be > 0"):
+        largest_lyapunov(el, x0, 1.0)
+    with pytest.raises(ValueError, match=r"rtol must be a relative tolerance in \(0, 1\), got 1"):
+        largest_lyapunov(pl.rigid(), [2.0, 2.0, 0.0, 0.0], 1.0, rtol=1.0)
+
+
+def test_renormalisation_count_is_bounded_before_any_allocation() -> None:
+    # 1e9 renormalisations used to grow memory without limit; now a clear error naming the limit.
+    with pytest.raises(ValueError, match=r"renorm_interval.*MAX_RENORM = 10000000"):
+        largest_lyapunov(pl.rigid(), [2.0, 2.0, 0.0, 0.0], 1.0, renorm_interval=1e-9)
+
+
+def test_step_budget_ends_a_long_estimate() -> None:
+    # 10 s of the chaotic release needs far more than 100 Taylor steps: the budget names itself.
+    with pytest.raises(RuntimeError, match=r"step budget exhausted \(max_steps = 100\)"):
+        largest_lyapunov(pl.rigid(), [2.0, 2.0, 0.0, 0.0], 10.0, max_steps=100)
