@@ -114,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
                 refine=not args.no_refine,
                 planning=args.planning,
                 max_wall_time=budget,
+                stage=lambda what: print(f"[swingup] {what} ...", file=sys.stderr),
             )
     finally:
         bar.close()

@@ -526,6 +526,9 @@ def score(
         if key not in by_key or by_key[key][2] != rec.level:
             raise ValueError(f"completed record {key} (level {rec.level}) is not a run of this scorecard (other settings?)")
         done[key] = rec
+    total = len(plan)
+    if progress is not None:
+        progress(len(done), total)  # the bar shows up before the plant is compiled
     # One substep count for every run, fine enough for the stiffest/lightest plant of the plan, and its sample
     # map compiled here before the workers fork (so it is built once, not once per worker).
     n_sub = _plan_substeps(tk, ctrl, x0, plan)
@@ -537,9 +540,6 @@ def score(
         return RunRecord(name, li, level, r, sd, res.success, res.reason, res.t_up)
 
     todo = [item for item in plan if (item[0], item[1], item[3], item[4]) not in done]
-    total = len(plan)
-    if progress is not None:
-        progress(len(done), total)
     for batch in _batches(todo, workers):
         if max_wall_time is not None and time.perf_counter() - t0 > max_wall_time:
             raise TimeoutError(

@@ -9,6 +9,7 @@ separately), and one plan for all starts costs one solve instead of twenty.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -177,6 +178,7 @@ def run_episode(
     refine: bool = True,
     planning: str | None = None,
     max_wall_time: float | None = None,
+    stage: Callable[[str], Any] | None = None,
 ) -> Episode:
     """Plan the task, prove the plan, replay it, track it in closed loop and score the episode.
 
@@ -202,6 +204,8 @@ def run_episode(
     max_wall_time : float, optional
         Wall-time budget of the planning [s]: IPOPT stops at its next iteration once it
         is spent and the episode reports a failed plan saying so. None: no budget.
+    stage : callable, optional
+        ``stage(description)`` before each step after planning (replay, closed-loop simulation): progress.
 
     Returns
     -------
@@ -253,8 +257,12 @@ def run_episode(
     # Without refinement a converged plan that misses the tolerance is still tracked (and reported as failed).
     if not (res.success or (not refine and _solved(res))):
         return Episode(task, res, None, None, None, None, start, pl_)
+    if stage is not None and do_replay:
+        stage("replaying the plan open loop")
     rep = replay(res) if do_replay else None
     ctrl = tvlqr(res if res.success else replace(res, success=True), dt=task.dt)
+    if stage is not None:
+        stage(f"closed-loop simulation (TVLQR + LQR, {task.t_final:g} s, CVODES)")
     cl = simulate(task.model, start, task.t_final, dt=task.dt, method="cvodes", rtol=1e-8, atol=1e-8, u=ctrl)
     hc = height_success(cl, task.rest_lengths, task.success_fraction)
     return Episode(task, res, rep, ctrl, cl, hc, start, pl_)
