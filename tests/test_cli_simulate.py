@@ -138,6 +138,8 @@ def test_model_auto_stiff_scene_runs_the_rigid_model(tmp_path, capsys):
 def test_model_auto_soft_scene_runs_the_elastic_model(tmp_path, capsys):
     summary, err, cols = _auto(tmp_path, capsys, "elastic_soft", "--t-final", "0.5")
     assert summary["model_level"] == "elastic" and "chosen: elastic" in err
+    # The scene's own run: its method (not the level's name) and that solver's statistics.
+    assert summary["model"] == "elastic" and not summary["method"].startswith("elastic") and summary["n_rhs"]
     full = load_scene("elastic_soft").simulate(t_final=0.5)
     # The chosen level is the scene's own native run: identical samples.
     np.testing.assert_allclose(cols["theta2"], full["theta2"], rtol=0, atol=1e-12)

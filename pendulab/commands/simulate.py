@@ -115,8 +115,8 @@ def _simulate_auto(scene: Any) -> tuple[Any, Any, dict[str, Any]]:
     """The cheapest model level within the scene's tolerance: the model run, its own trajectory, summary extras.
 
     A rigid level runs the rigid counterpart itself (its own states, solver and statistics; no spring rows);
-    ``rigid+quasi-static`` adds the quasi-static spring stretch, labelled as such; ``linearized`` keeps the
-    scene model's states (exact zero-order-hold steps of the linearization).
+    ``rigid+quasi-static`` adds the quasi-static spring stretch, labelled as such; the scene's own model level
+    runs the scene; ``linearized`` keeps the scene model's states (exact zero-order-hold steps of the linearization).
     """
     from ..bench.hierarchy import choose_model
     from ..integrate import simulate
@@ -148,8 +148,9 @@ def _simulate_auto(scene: Any) -> tuple[Any, Any, dict[str, Any]]:
             extra["stretch_source"] = "quasi-static"
             extra["max_stretch_m"] = float(np.max(np.abs(stretch)))
         return rigid, traj, extra
-    if level.name == "linearized":
-        extra["method_note"] = "exact zero-order-hold steps of the linearization at the nearest equilibrium"
+    if level.name != "linearized":  # the scene's own model: its own run, with the solver's statistics and inputs
+        return scene.model, scene.simulate(), extra
+    extra["method_note"] = "exact zero-order-hold steps of the linearization at the nearest equilibrium"
     start = time.perf_counter()
     traj = level.simulate(scene)
     # The summary reports the chosen model's own run time (the hierarchy's trajectories carry no solver stats).
