@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._checks import relative_tolerance, require_extra
 from . import CLIError
 from ._common import ProgressBar
 
@@ -31,7 +32,8 @@ def register(subparsers: Any) -> None:
             "integrate (method taylor) until a link flips (|theta| = pi) or T passes. Points whose energy is too "
             "low to ever flip are skipped (exact). Writes DIR/flipmap.npz (theta1, theta2, t_flip[i_theta1, "
             "i_theta2], NaN = no flip) and DIR/flipmap.png; with --compare (default for --model elastic) also "
-            "the rigid map and DIR/flipmap_compare.png (rigid | elastic)."
+            "the rigid map and DIR/flipmap_compare.png (rigid | elastic). Finished blocks of runs are recorded in "
+            "DIR/flipmap_<kind>.partial.npz as they complete; --resume continues an interrupted run from there."
         ),
     )
     fm.add_argument("--model", default="rigid", metavar="KIND", help="rigid (default) | elastic")
@@ -45,6 +47,10 @@ def register(subparsers: Any) -> None:
     cmp = fm.add_mutually_exclusive_group()
     cmp.add_argument("--compare", dest="compare", action="store_true", default=None, help="also draw rigid | elastic")
     cmp.add_argument("--no-compare", dest="compare", action="store_false", help="no comparison (elastic)")
+    fm.add_argument("--max-wall-time", default=None, metavar="S", help="wall-time budget of each map [s] (default none)")
+    fm.add_argument(
+        "--resume", action="store_true", help="continue an interrupted run from DIR/flipmap_<kind>.partial.npz (same settings)"
+    )
     fm.add_argument("--no-progress", action="store_true", help="no progress bar")
     fm.set_defaults(func=run_flipmap)
 
@@ -69,25 +75,52 @@ def _positive(option: str, text: str) -> float:
     return value
 
 
-def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: float, rtol: float, threads: Any) -> Any:
+def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: float, rtol: float, threads: Any, out: Path) -> Any:
     from ..ensemble.flipmap import flip_map
     from ..model.model import make_model
 
     model = make_model(kind, **({"k1": k, "k2": k} if kind == "elastic" else {}))
+    checkpoint = out / f"flipmap_{kind}.partial.npz"
     bar = ProgressBar(f"flip map {kind}", not args.no_progress)
+    wall = None if args.max_wall_time is None else _positive("--max-wall-time", args.max_wall_time)
     try:
-        return flip_map(model, grid, t_max, client=args.scheduler, threads=threads, progress=bar, rtol=rtol)
+        fmap = flip_map(
+            model,
+            grid,
+            t_max,
+            client=args.scheduler,
+            threads=threads,
+            progress=bar,
+            rtol=rtol,
+            max_wall_time=wall,
+            checkpoint=checkpoint,
+            resume=args.resume,
+            block_size=_BLOCK,
+        )
+    except ValueError as exc:
+        if "checkpoint" in str(exc):
+            raise CLIError(f"--resume: {exc}") from None
+        raise
     finally:
         bar.close()
+    return fmap, checkpoint
+
+
+#: Runs per recorded block of the CLI's flip maps (each finished block is written to the partial file).
+_BLOCK = 5000
 
 
 def run_flipmap(args: argparse.Namespace) -> int:
     """Execute ``pendulab ensemble flipmap``; return the exit status."""
     if args.model not in _KINDS:
         raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
-    grid = _int("--grid", args.grid, 1, 20000)
+    grid = _int("--grid", args.grid, 1, 4000)
     t_max = _positive("--t-max", args.t_max)
     rtol = _positive("--rtol", args.rtol)
+    try:
+        relative_tolerance("--rtol", rtol)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
     threads = None if args.threads is None else _int("--threads", args.threads, 1, 4096)
     if args.k is not None and args.model == "rigid" and not args.compare:
         raise CLIError("--k: only meaningful with --model elastic or --compare")
@@ -98,28 +131,36 @@ def run_flipmap(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CLIError(f"--out {args.out!r}: exists and is not a directory")
+    require_extra("heyoka", "taylor", "pendulab ensemble flipmap")
+    if args.scheduler is not None:
+        require_extra("distributed", "dask", "--scheduler")
     out.mkdir(parents=True, exist_ok=True)
 
     from ..ensemble.flipmap import plot_flip_map, plot_flip_map_compare
 
     t0 = time.perf_counter()
-    main = _compute(args.model, k, args, grid, t_max, rtol, threads)
+    main, partial = _compute(args.model, k, args, grid, t_max, rtol, threads, out)
     written = [main.save_npz(out / "flipmap.npz")]
+    partials = [partial]
     fig = plot_flip_map(main, out / "flipmap.png")
     written.append(out / "flipmap.png")
     _close(fig)
     maps = {args.model: main}
     if compare:
         other = "elastic" if args.model == "rigid" else "rigid"
-        maps[other] = _compute(other, k, args, grid, t_max, rtol, threads)
+        maps[other], partial = _compute(other, k, args, grid, t_max, rtol, threads, out)
         written.append(maps[other].save_npz(out / f"flipmap_{other}.npz"))
+        partials.append(partial)
         fig = plot_flip_map_compare([maps["rigid"], maps["elastic"]], out / "flipmap_compare.png")
         written.append(out / "flipmap_compare.png")
         _close(fig)
+    for p in partials:  # every map is in its .npz now
+        p.unlink(missing_ok=True)
     for kind, m in maps.items():
         n = m.t_flip.size
+        resumed = f", {m.n_resumed} taken from the partial file" if m.n_resumed else ""
         print(
-            f"{kind}: {grid} x {grid}, t_max {t_max:g} s: {m.n_simulated} runs integrated "
+            f"{kind}: {grid} x {grid}, t_max {t_max:g} s: {m.n_simulated} runs integrated{resumed} "
             f"({int(m.skipped.sum())} skipped below V_flip = {m.energy_threshold:.4f} J), "
             f"{int(m.flipped.sum())}/{n} flip; {m.wall_time:.2f} s"
         )

@@ -46,7 +46,9 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import bounded_int, check_model, relative_tolerance
 from .._io import atomic_path
+from .._version import __version__
 
 __all__ = [
     "FlipMap",
@@ -59,6 +61,11 @@ __all__ = [
 ]
 
 _STARTS = ("quasi-static", "static")
+#: Largest number of grid points per angle, and of the whole grid (each point holds a state and a time).
+MAX_GRID = 20000
+MAX_GRID_POINTS = 16_000_000
+#: Runs per recorded block of :func:`flip_map` with a ``checkpoint`` (each block is saved when done).
+DEFAULT_BLOCK = 10000
 
 
 @dataclass(frozen=True)
@@ -88,6 +95,11 @@ class FlipMap:
         Number of integrations actually run (after the energy skip and symmetry).
     wall_time : float
         Wall-clock time of :func:`flip_map` [s].
+    settings : dict
+        How the map was computed: ``start``, ``rtol``, ``batch_size``, ``skip_low_energy``,
+        ``symmetry``, ``max_steps``, ``pendulab_version`` (stored in the NPZ file).
+    n_resumed : int
+        Integrations taken from a checkpoint instead of being run again.
     """
 
     theta1: np.ndarray
@@ -100,6 +112,8 @@ class FlipMap:
     skipped: np.ndarray | None = None
     n_simulated: int = 0
     wall_time: float = float("nan")
+    settings: dict[str, Any] = field(default_factory=dict)
+    n_resumed: int = 0
 
     @property
     def flipped(self) -> np.ndarray:
@@ -111,7 +125,8 @@ class FlipMap:
 
         Keys: ``theta1`` (n1,), ``theta2`` (n2,) [rad], ``t_flip`` (n1, n2) [s]
         indexed ``[i_theta1, i_theta2]`` with NaN for no flip; also ``t_max``,
-        ``kind``, ``energy_threshold``, ``skipped`` and ``params`` (JSON).
+        ``kind``, ``energy_threshold``, ``skipped``, ``params`` (JSON) and ``settings``
+        (JSON: start mode, tolerance, batch width, pendulab version, ...).
 
         Parameters
         ----------
@@ -137,6 +152,7 @@ class FlipMap:
                 energy_threshold=np.float64(self.energy_threshold),
                 skipped=skipped,
                 params=np.str_(json.dumps(self.params)),
+                settings=np.str_(json.dumps({**self.settings, "pendulab_version": __version__})),
             )
         return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
 
@@ -164,6 +180,7 @@ class FlipMap:
                 params=json.loads(str(z["params"])),
                 energy_threshold=float(z["energy_threshold"]),
                 skipped=z["skipped"],
+                settings=json.loads(str(z["settings"])) if "settings" in z.files else {},
             )
 
 
@@ -203,8 +220,7 @@ def flip_map_grid(n: int, theta_range: Sequence[float] = (-math.pi, math.pi)) ->
     ValueError
         ``n`` is not a positive integer, or a bad range.
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n_grid must be a positive integer, got {n!r}")
+    n = bounded_int("n_grid", n, high=MAX_GRID, why="grid points per angle")
     lo, hi = _check_range("theta_range", theta_range)
     h = (hi - lo) / n
     centre = 0.5 * (lo + hi)
@@ -240,6 +256,7 @@ def flip_energy_threshold(model: Any) -> float:
     import casadi as ca
     from scipy.optimize import minimize
 
+    check_model(model)
     nq, nx = model.nq, model.nx
     pot = model.functions["potential"]
     best = math.inf
@@ -295,6 +312,7 @@ def flip_initial_states(model: Any, theta1: Any, theta2: Any, *, start: str = "q
     ValueError
         Unknown ``start`` or mismatched shapes.
     """
+    check_model(model)
     if start not in _STARTS:
         raise ValueError(f"start must be one of {list(_STARTS)}, got {start!r}")
     t1 = np.asarray(theta1, dtype=float).ravel()
@@ -326,6 +344,12 @@ def flip_map(
     chunk_size: int = 2000,
     progress: Callable[[int, int], Any] | bool | None = None,
     rtol: float = 1e-12,
+    batch_size: int | None = None,
+    max_steps: int = 1_000_000,
+    max_wall_time: float | None = None,
+    checkpoint: str | Path | None = None,
+    resume: bool = False,
+    block_size: int = DEFAULT_BLOCK,
 ) -> FlipMap:
     """Time to the first flip for every release angle of a grid.
 
@@ -334,7 +358,8 @@ def flip_map(
     model : Model
         Rigid or elastic model (no torques are applied).
     n_grid : int or (int, int)
-        Grid points per angle (n1 = n2), or ``(n1, n2)``.
+        Grid points per angle (n1 = n2), or ``(n1, n2)``; at most :data:`MAX_GRID` per angle and
+        :data:`MAX_GRID_POINTS` in all.
     t_max : float
         Horizon [s] (> 0).
     theta_range : (float, float)
@@ -357,9 +382,25 @@ def flip_map(
     chunk_size : int
         Runs per task.
     progress : callable(done, total) or bool, optional
-        Progress reporting, as in :func:`pendulab.ensemble`.
+        Progress reporting over all runs, as in :func:`pendulab.ensemble`.
     rtol : float
-        Integration tolerance (also the absolute tolerance).
+        Integration tolerance in (0, 1) (also the absolute tolerance).
+    batch_size : int, optional
+        SIMD lanes (see :func:`pendulab.ensemble`); default the host's, or ``PENDULAB_SIMD_SIZE``.
+    max_steps : int
+        Step budget of each run.
+    max_wall_time : float, optional
+        Wall-time budget of the whole map [s].
+    checkpoint : str or Path, optional
+        Partial-results file (``.npz``): the runs go in blocks of ``block_size``, and after each
+        block the finished flip times are written there atomically. Removed when the map is done.
+    resume : bool
+        Continue from ``checkpoint`` (blocks already recorded are not run again; the file must
+        have been written with the same model, grid and settings). Without it an existing
+        checkpoint is overwritten.
+    block_size : int
+        Runs per recorded block (with ``checkpoint``). The blocks are the same with or without a
+        resume, so a resumed map equals an uninterrupted one bit for bit.
 
     Returns
     -------
@@ -368,17 +409,29 @@ def flip_map(
 
     Raises
     ------
+    TypeError
+        ``model`` is not a pendulab Model.
     ValueError
-        Bad grid, horizon, range or ``start``.
+        Bad grid, horizon, range, ``start``, ``rtol`` or budget; a checkpoint of other settings.
     RuntimeError
-        An integration failed (the engine's status says which).
+        An integration failed or a budget was spent (the engine's message says which).
+    KeyboardInterrupt
+        Ctrl-C; with ``checkpoint`` the finished blocks are kept.
     """
+    from .batch import default_batch_size
     from .engine import ensemble
 
     t0 = time.perf_counter()
+    check_model(model)
     n1, n2 = (n_grid, n_grid) if not isinstance(n_grid, (tuple, list)) else tuple(n_grid)
+    n1 = bounded_int("n_grid", n1, high=MAX_GRID, why="grid points per angle")
+    n2 = bounded_int("n_grid", n2, high=MAX_GRID, why="grid points per angle")
+    bounded_int("n_grid total points n1 * n2", n1 * n2, high=MAX_GRID_POINTS, why="memory of the states and flip times")
     if not (isinstance(t_max, (int, float, np.floating, np.integer)) and math.isfinite(t_max) and t_max > 0):
         raise ValueError(f"t_max must be a finite number > 0 [s], got {t_max!r}")
+    tol = relative_tolerance("rtol", rtol)
+    block = bounded_int("block_size", block_size, high=10**8, why="runs per recorded block")
+    S = default_batch_size() if batch_size is None else batch_size
     th1 = flip_map_grid(n1, theta_range)
     th2 = flip_map_grid(n2, theta_range if theta2_range is None else theta2_range)
     T1, T2 = np.meshgrid(th1, th2, indexing="ij")
@@ -398,24 +451,65 @@ def flip_map(
         flat = np.arange(n1 * n2).reshape(n1, n2)
         todo &= flat <= flat[::-1, ::-1]  # the mirror of [i, j] is [n1-1-i, n2-1-j]
     idx = np.flatnonzero(todo.ravel())
+    params = {k: float(v) for k, v in model.params.resolved().items()}
+    settings = {
+        "start": start,
+        "rtol": tol,
+        "atol": tol,
+        "batch_size": int(S),
+        "chunk_size": int(chunk_size),
+        "threads": threads,
+        "skip_low_energy": bool(skip_low_energy),
+        "symmetry": bool(symmetry),
+        "max_steps": int(max_steps),
+        "theta1_range": [float(th1[0]), float(th1[-1])],
+        "theta2_range": [float(th2[0]), float(th2[-1])],
+        "block_size": block if checkpoint is not None else None,
+    }
+    # What a checkpoint must match to be resumed (the results depend on all of it, chunking included).
+    identity = {"kind": model.kind, "params": params, "n1": n1, "n2": n2, "t_max": float(t_max), **settings}
+    values = np.full(idx.size, np.nan)
+    done = np.zeros(idx.size, bool)
+    blocks = [(a, min(a + block, idx.size)) for a in range(0, idx.size, block)] if checkpoint is not None else [(0, idx.size)]
+    n_resumed = 0
+    if checkpoint is not None and resume and Path(checkpoint).exists():
+        values, done = _load_checkpoint(Path(checkpoint), identity, idx.size)
+        n_resumed = int(done.sum())
+    report = _overall_progress(progress, idx.size, n_resumed)
+    deadline = None if max_wall_time is None else time.perf_counter() + float(max_wall_time)
+    try:
+        for a, b in blocks:
+            if b <= a or done[a:b].all():
+                continue
+            left = None if deadline is None else max(deadline - time.perf_counter(), 1e-9)
+            base = int(done.sum())
+            res = ensemble(
+                model,
+                x_all[idx[a:b]],
+                float(t_max),
+                events=["flip"],
+                method="taylor",
+                client=client,
+                threads=threads,
+                chunk_size=chunk_size,
+                rtol=tol,
+                atol=tol,
+                progress=lambda d, _n, base=base: report(base + d),
+                batch_size=S,
+                max_steps=max_steps,
+                max_wall_time=left,
+            )
+            _check_status(res, x_all[idx[a:b]])
+            values[a:b] = np.asarray(res.event_times["flip"], dtype=float)
+            done[a:b] = True
+            if checkpoint is not None:
+                _save_checkpoint(Path(checkpoint), identity, values, done)
+    finally:
+        report(None)
     t_flip = np.full((n1, n2), np.nan)
     if idx.size:
-        res = ensemble(
-            model,
-            x_all[idx],
-            float(t_max),
-            events=["flip"],
-            method="taylor",
-            client=client,
-            threads=threads,
-            chunk_size=chunk_size,
-            rtol=rtol,
-            atol=rtol,
-            progress=progress,
-        )
-        _check_status(res, x_all[idx])
         tf = t_flip.ravel()
-        tf[idx] = np.asarray(res.event_times["flip"], dtype=float)
+        tf[idx] = values
         t_flip = tf.reshape(n1, n2)
         if symmetry:
             mirror = t_flip[::-1, ::-1]
@@ -427,12 +521,64 @@ def flip_map(
         t_flip=t_flip,
         t_max=float(t_max),
         kind=model.kind,
-        params={k: float(v) for k, v in model.params.resolved().items()},
+        params=params,
         energy_threshold=threshold,
         skipped=skipped,
-        n_simulated=int(idx.size),
+        n_simulated=int(idx.size) - n_resumed,
         wall_time=time.perf_counter() - t0,
+        settings=settings,
+        n_resumed=n_resumed,
     )
+
+
+def _save_checkpoint(path: Path, identity: dict[str, Any], values: np.ndarray, done: np.ndarray) -> None:
+    """Write the finished flip times atomically (an interrupted write keeps the previous checkpoint)."""
+    with atomic_path(path) as tmp:
+        np.savez(tmp, identity=np.str_(json.dumps(identity, sort_keys=True)), values=values, done=done)
+
+
+def _load_checkpoint(path: Path, identity: dict[str, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Flip times and done mask of a checkpoint written with the same ``identity``; ValueError otherwise."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            stored = json.loads(str(z["identity"]))
+            values, done = np.array(z["values"], dtype=float), np.array(z["done"], dtype=bool)
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"checkpoint {str(path)!r} cannot be read as a flip-map checkpoint ({exc}); delete it") from exc
+    expected = json.loads(json.dumps(identity, sort_keys=True))
+    if stored != expected or values.shape != (n,) or done.shape != (n,):
+        diff = sorted(k for k in set(stored) | set(expected) if stored.get(k) != expected.get(k))
+        raise ValueError(
+            f"checkpoint {str(path)!r} was written with other settings ({', '.join(diff) or 'sizes'} differ); "
+            "run without resume to start over"
+        )
+    return values, done
+
+
+def _overall_progress(progress: Any, total: int, start: int) -> Callable[[int | None], None]:
+    """One progress report over all blocks: ``report(done)`` with the absolute count, ``report(None)`` to close."""
+    if progress is None or progress is False:
+        return lambda done: None
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=total, initial=start, unit="run", desc="flip map")
+
+        def tq(done: int | None) -> None:
+            if done is None:
+                bar.close()
+            else:
+                bar.update(done - bar.n)
+
+        return tq
+    if not callable(progress):
+        raise ValueError(f"progress must be a callable progress(done, total), True or None, got {progress!r}")
+
+    def cb(done: int | None) -> None:
+        if done is not None:
+            progress(done, total)
+
+    return cb
 
 
 def _check_status(res: Any, x0: np.ndarray) -> None:
@@ -453,6 +599,14 @@ def _check_status(res: Any, x0: np.ndarray) -> None:
 
 
 # -- figures --------------------------------------------------------------------
+def _save(fig: Any, path: str | Path) -> None:
+    """Save a PNG atomically: an interrupted run never leaves a truncated image."""
+    # Constrained layout sizes the panels; with equal-aspect images it can still leave the x-labels
+    # outside the canvas (seen with --k 3000), so the saved area is the tight box of every artist.
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=150, bbox_inches="tight", pad_inches=0.08)
+
+
 def _draw(fmap: FlipMap, ax: Any, *, cmap: str, vmin: float, vmax: float, show_threshold: bool) -> Any:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
@@ -482,6 +636,18 @@ def _draw(fmap: FlipMap, ax: Any, *, cmap: str, vmin: float, vmax: float, show_t
     ax.set_xlabel(r"$\theta_1$ at release [rad]")
     ax.set_ylabel(r"$\theta_2$ at release [rad]")
     return im
+
+
+def _plain_ticks(cbar: Any) -> None:
+    """Colour-bar ticks as plain numbers (0.3, 1, 4), not 3 x 10^-1."""
+    from matplotlib.ticker import FuncFormatter
+
+    def minor(v: float, _pos: int) -> str:  # label 2, 3, 5 per decade only: no overlapping labels
+        lead = f"{v:.0e}"[0]
+        return f"{v:g}" if lead in "235" else ""
+
+    cbar.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+    cbar.ax.yaxis.set_minor_formatter(FuncFormatter(minor))
 
 
 def _limits(maps: Sequence[FlipMap]) -> tuple[float, float]:
@@ -539,12 +705,11 @@ def plot_flip_map(
     ax = ax if ax is not None else fig.add_subplot()
     vmin, vmax = _limits([fmap])
     im = _draw(fmap, ax, cmap=cmap, vmin=vmin, vmax=vmax, show_threshold=show_threshold)
-    fig.colorbar(im, ax=ax, label="time to first flip [s]")
+    _plain_ticks(fig.colorbar(im, ax=ax, label="time to first flip [s]"))
     n1, n2 = fmap.t_flip.shape
     ax.set_title(title or f"{_title(fmap)}: {n1} x {n2} released at rest, white = no flip in {fmap.t_max:g} s", fontsize=9)
     if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150)
+        _save(fig, path)
     return fig
 
 
@@ -591,9 +756,8 @@ def plot_flip_map_compare(
         ax.set_title(f"{_title(fmap)}\n{frac:.1%} flip within {fmap.t_max:g} s", fontsize=9)
     for ax in axes[0][1:]:
         ax.set_ylabel("")
-    fig.colorbar(im, ax=list(axes[0]), label="time to first flip [s]", shrink=0.9)
+    _plain_ticks(fig.colorbar(im, ax=list(axes[0]), label="time to first flip [s]", shrink=0.9))
     fig.suptitle("Double pendulum released at rest: white = no flip", fontsize=10)
     if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150)
+        _save(fig, path)
     return fig

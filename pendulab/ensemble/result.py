@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_path
+from .._version import __version__
 
 __all__ = ["EnsembleResult"]
 
@@ -101,13 +103,22 @@ class EnsembleResult:
             out[name] = v
         return out
 
-    def to_npz(self, path: str | os.PathLike) -> None:
-        """Write every array (and the names) to a compressed ``.npz`` file.
+    def to_npz(self, path: str | os.PathLike) -> Path:
+        """Write every array, the names and the settings to a compressed ``.npz`` file (atomically).
+
+        Besides the arrays the file holds ``settings``: a JSON object with the run's settings and
+        statistics (``method``, ``rtol``, ``atol``, ``batch_size``, ``chunk_size``, ``max_steps``,
+        ``max_wall_time``, ...) and ``pendulab_version``; :meth:`from_npz` reads it all back.
 
         Parameters
         ----------
         path : str or path-like
             Target file; ``numpy.load(path)`` reads it back (``event_time_<name>`` per event).
+
+        Returns
+        -------
+        Path
+            The file written (``.npz`` appended when missing).
         """
         arrays: dict[str, Any] = {
             "x_final": self.x_final,
@@ -120,6 +131,7 @@ class EnsembleResult:
             "state_names": np.array(self.state_names),
             "param_names": np.array(self.param_names),
             "event_names": np.array(list(self.event_times), dtype=str),
+            "settings": np.str_(json.dumps({**_plain(self.stats), "pendulab_version": __version__})),
         }
         for name, t in self.event_times.items():
             arrays[f"event_time_{name}"] = t
@@ -129,3 +141,58 @@ class EnsembleResult:
         final = Path(path) if str(path).endswith(".npz") else Path(f"{path}.npz")  # NumPy's naming rule
         with atomic_path(final) as tmp:
             np.savez_compressed(tmp, **arrays)
+        return final
+
+    @classmethod
+    def from_npz(cls, path: str | os.PathLike) -> EnsembleResult:
+        """Read a result written by :meth:`to_npz`.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` file.
+
+        Returns
+        -------
+        EnsembleResult
+            Equal array by array to the one written; ``stats`` holds the stored settings
+            (including ``pendulab_version``).
+
+        Raises
+        ------
+        ValueError
+            The file is not an ensemble result (a key is missing).
+        """
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in _KEYS if k not in z.files]
+            if missing:
+                raise ValueError(f"path {str(path)!r} is not an ensemble result written by to_npz (missing {missing})")
+            events = [str(e) for e in z["event_names"]]
+            return cls(
+                x_final=z["x_final"],
+                t_final=z["t_final"],
+                event_times={e: z[f"event_time_{e}"] for e in events},
+                status=z["status"],
+                message=z["message"],
+                terminal_event=z["terminal_event"],
+                x=z["x"] if "x" in z.files else None,
+                t_eval=z["t_eval"] if "t_eval" in z.files else None,
+                x0=z["x0"],
+                params=z["params"],
+                state_names=tuple(str(v) for v in z["state_names"]),
+                param_names=tuple(str(v) for v in z["param_names"]),
+                stats=json.loads(str(z["settings"])) if "settings" in z.files else {},
+            )
+
+
+_KEYS = ("x_final", "t_final", "status", "message", "terminal_event", "x0", "params", "state_names", "param_names", "event_names")
+
+
+def _plain(d: dict[str, Any]) -> dict[str, Any]:
+    """JSON-friendly copy of a stats dict (NumPy scalars to Python, others to str)."""
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        if isinstance(v, np.generic):
+            v = v.item()
+        out[str(k)] = v if v is None or isinstance(v, (bool, int, float, str)) else str(v)
+    return out
