@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import require_extra
+
 __all__ = [
     "EnsembleBench",
     "hand_written_rigid",
@@ -63,7 +65,7 @@ def hand_written_rigid(params: Any) -> tuple[list[tuple[Any, Any]], Any]:
     ValueError
         Parameters with distributed mass or dampers (not covered by these equations).
     """
-    import heyoka as hy
+    hy = require_extra("heyoka", "taylor", "the ensemble benchmark")
 
     pr = params.resolved()
     if pr["lc1"] != pr["L1"] or pr["lc2"] != pr["L2"] or pr["I1"] or pr["I2"] or pr["b1"] or pr["b2"]:
@@ -98,7 +100,7 @@ def check_hand_written(model: Any, n: int = 50, seed: int = 0) -> float:
     float
         max |f_hand - f_model| over the states, relative to max(1, |f_model|).
     """
-    import heyoka as hy
+    hy = require_extra("heyoka", "taylor", "the ensemble benchmark")
 
     system, variables = hand_written_rigid(model.params)
     f = hy.cfunc([e for _, e in system], vars=list(variables))
@@ -135,7 +137,7 @@ def hand_loop(model: Any, x0: np.ndarray, t_max: float, tol: float = 1e-12) -> t
     RuntimeError
         heyoka stopped for another reason than a flip or ``t_max``.
     """
-    import heyoka as hy
+    hy = require_extra("heyoka", "taylor", "the ensemble benchmark")
 
     system, (th1, th2, _, _) = hand_written_rigid(model.params)
     events = [hy.t_event(th1**2 - math.pi**2), hy.t_event(th2**2 - math.pi**2)]
@@ -281,7 +283,16 @@ def run_ensemble_bench(
     -------
     EnsembleBench
         Rows per configuration and the agreement check.
+
+    Raises
+    ------
+    MissingExtraError
+        heyoka (``pendulab[taylor]``) or, with ``workers``, dask.distributed (``pendulab[dask]``)
+        is not installed; the message names the extra.
     """
+    require_extra("heyoka", "taylor", "pendulab bench ensemble")
+    if workers:
+        require_extra("dask.distributed", "dask", "pendulab bench ensemble --workers (Dask rows)")
     from ..ensemble.engine import ensemble
     from ..model.model import rigid
 
@@ -314,7 +325,8 @@ def run_ensemble_bench(
     for w in workers:
         name = steps[done]
         tick(name)
-        from dask.distributed import Client, LocalCluster
+        dd = require_extra("dask.distributed", "dask", "the ensemble benchmark's Dask rows (--workers)")
+        Client, LocalCluster = dd.Client, dd.LocalCluster  # noqa: N806
 
         with (
             LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
