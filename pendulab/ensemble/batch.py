@@ -414,7 +414,10 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     while np.any(lane_run >= 0):
         if stop is not None and stop():
             raise ChunkStoppedError(f"ensemble chunk {task.index} stopped")
-        res = ta.propagate_until(target.copy(), max_steps=SLICE_STEPS, c_output=X is not None)
+        active = lane_run >= 0
+        # A slice ends at the first step budget of a lane, so a budget is exact, not rounded up to a slice.
+        budget_left = int(np.min(max_steps - lane_steps[active])) if active.any() else SLICE_STEPS
+        res = ta.propagate_until(target.copy(), max_steps=max(1, min(SLICE_STEPS, budget_left)), c_output=X is not None)
         times[:] = ta.time
         if X is not None:
             _record_grid(res[0], t_eval, times, lane_run, ptr, X)

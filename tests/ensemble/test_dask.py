@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
+from pendulab._checks import MissingExtraError
 from pendulab.ensemble.batch import ChunkTask
 from pendulab.ensemble.cluster import run_on_dask
 
@@ -32,10 +33,11 @@ def _x0(n=24):
 def test_dask_equals_local(client):
     model = pl.rigid()
     x0 = _x0()
-    # chunk_size 8 = the local chunking of 24 runs on 1 thread: same lanes, bitwise-equal results.
-    local = pl.ensemble(model, x0, 2.0, events=["flip"], threads=1, chunk_size=8)
-    remote = pl.ensemble(model, x0, 2.0, events=["flip"], client=client, chunk_size=8)
-    assert remote.stats["n_chunks"] == 3
+    # Like with like: the batch width is forced (not the host's SIMD width) and chunk_size 2 is below
+    # every local rule's floor, so local and Dask chunks are the same runs in the same lanes: bitwise equal.
+    local = pl.ensemble(model, x0, 2.0, events=["flip"], threads=1, chunk_size=2, batch_size=4)
+    remote = pl.ensemble(model, x0, 2.0, events=["flip"], client=client, chunk_size=2, batch_size=4)
+    assert remote.stats["chunk_size"] == local.stats["chunk_size"] == 2 and remote.stats["n_chunks"] == 12
     np.testing.assert_array_equal(remote.x_final, local.x_final)
     np.testing.assert_array_equal(remote.event_times["flip"], local.event_times["flip"])
     np.testing.assert_array_equal(remote.status, local.status)
@@ -54,7 +56,7 @@ def test_failed_chunk_raises_naming_it(client):
     from pendulab.ensemble.batch import BatchKey
     from pendulab.ensemble.events import EventPlan
 
-    key = BatchKey("rigid", (), 1e-12, EventPlan(), 8)
+    key = BatchKey("rigid", (), 1e-12, EventPlan(), 4)
     tasks = [
         ChunkTask(key, 0, good.x0, good.params, 1.0, None),
         ChunkTask(key, 1, np.zeros((2, 3)), good.params[:2], 1.0, None),  # wrong state size: fails in the worker
@@ -65,5 +67,15 @@ def test_failed_chunk_raises_naming_it(client):
 
 def test_without_distributed_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
-    with pytest.raises(ImportError, match=r"pendulab\[dask\]"):
+    with pytest.raises(MissingExtraError, match=r"pendulab\[dask\]"):
         pl.ensemble(pl.rigid(), _x0(2), 1.0, client="tcp://127.0.0.1:1")
+
+
+def test_no_workers_ends_with_one_line_error(monkeypatch):
+    # A cluster with no worker at all: the wait is bounded (here 1 s) and says what is wrong.
+    monkeypatch.setenv("PENDULAB_DASK_NO_WORKER_TIMEOUT", "1")
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as c:
+            with pytest.raises(RuntimeError, match=r"no Dask worker connected to .* for 1 s") as info:
+                pl.ensemble(pl.rigid(), _x0(4), 1.0, client=c, chunk_size=2)
+    assert "\n" not in str(info.value) and "NoneType" not in str(info.value)
