@@ -178,3 +178,8 @@ def test_stability_prints_no_json_unasked(tmp_path, capsys):
     # A failed map cell (class FAILED) would be drawn blank; here every cell has a class.
     cells = np.loadtxt(tmp_path / "stability_map.csv", delimiter=",", skiprows=1, usecols=1)
     assert cells.size == 3 * 2 * 3  # 3 methods x 2 stiffnesses x 3 steps in the quick map
+
+
+def test_merge_and_resume_together_is_an_error(tmp_path, capsys):
+    assert main(["bench", "work-precision", "--quick", "--merge", "--resume", "--out", str(tmp_path)]) == 2
+    assert "--merge and --resume" in capsys.readouterr().err
