@@ -18,9 +18,9 @@ from ._common import ProgressBar
 
 __all__ = ["register"]
 
-_DEFAULT_OUT = "docs/benchmarks"  # bench hierarchy only (its module's owner decides); the studies below use pendulab-out
 _OUT_WP = "pendulab-out/bench-work-precision"
 _OUT_STABILITY = "pendulab-out/bench-stability"
+_OUT_HIERARCHY = "pendulab-out/bench-hierarchy"
 _DOCS_NOTE = "; --out docs/benchmarks regenerates the shipped docs (see docs/benchmarks.md)"
 
 
@@ -385,7 +385,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     st.set_defaults(func=_stability)
 
     hi = sub.add_parser("hierarchy", help="model-hierarchy choice over spring stiffness x release angle")
-    hi.add_argument("--out", default=_DEFAULT_OUT, help=f"output directory (default {_DEFAULT_OUT})")
+    hi.add_argument("--out", default=_OUT_HIERARCHY, help=f"output directory (default ./{_OUT_HIERARCHY}{_DOCS_NOTE})")
     hi.add_argument("--quick", action="store_true", help="3 x 2 grid (CI smoke run)")
     hi.add_argument("--tolerance", type=float, default=1e-2, help="error tolerance on theta1, theta2 [rad], x2, y2 [m]")
     hi.set_defaults(func=_hierarchy)
