@@ -27,12 +27,15 @@ Perturbations (:class:`Perturbation`), in the order they act within a sample:
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
+import shutil
 import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import casadi as ca
@@ -176,8 +179,10 @@ def substeps(model: Model, sample_time: float, x0: np.ndarray | None = None) -> 
 
 @cache
 def _jit_directory() -> str:
-    """A private temporary directory (one per process) for CasADi's JIT sources and libraries."""
-    return tempfile.mkdtemp(prefix="pendulab-jit-")
+    """A private temporary directory (one per process) for the generated sources and libraries, removed at exit."""
+    folder = tempfile.mkdtemp(prefix="pendulab-jit-")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
 
 
 @cache
@@ -209,14 +214,38 @@ def _sample_map(kind: str, n_sub: int) -> ca.Function:
         k4 = f(z + h * k3)
         z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     name = f"sample_rk4_{kind}_{n_sub}"
-    args = ([ca.vertcat(x, u, p, cf, h)], [ca.vertcat(z, pos(z, p)[3])])
+    fn = ca.Function(name, [ca.vertcat(x, u, p, cf, h)], [ca.vertcat(z, pos(z, p)[3])])
     try:
-        # The compiler's directory: CasADi would otherwise write the generated C into the current
-        # directory (the user's) and does not always remove it.
-        jit = {"flags": ["-O1"], "directory": _jit_directory() + os.sep}
-        return ca.Function(name, *args, {"jit": True, "compiler": "shell", "jit_options": jit})
-    except RuntimeError:  # no C compiler: same function, interpreted
-        return ca.Function(name, *args)
+        return _compiled(fn)
+    except RuntimeError:  # no C compiler (or it failed): same function, interpreted
+        return fn
+
+
+def _compiled(fn: ca.Function) -> ca.Function:
+    """``fn`` generated as C, compiled by the project's compiler runner and loaded (``casadi.external``).
+
+    Not CasADi's own JIT: its shell compiler runs ``cc`` through ``system()``, which ignores SIGINT in
+    this process while the compiler runs, so a Ctrl-C then killed the compiler, was lost here, and the
+    scorecard went on with the interpreted function. :func:`pendulab.native.build.compile_shared` runs
+    the compiler in its own process group, so Ctrl-C raises ``KeyboardInterrupt`` here and kills it.
+    The sources go to a private temporary directory, never the user's current directory.
+    """
+    from ..native.build import compile_shared, shared_library_suffix
+
+    folder = Path(_jit_directory())
+    source = f"{fn.name()}.c"
+    _generate(fn, folder, source)
+    lib = folder / f"{fn.name()}{shared_library_suffix()}"
+    # -O1: a sample map of a few hundred RHS evaluations compiles in about a second (-O2 takes several).
+    compile_shared(folder, [source], lib, extra_flags=("-O1", "-fvisibility=default", "-w"))
+    return ca.external(fn.name(), str(lib))
+
+
+def _generate(fn: ca.Function, folder: Path, source: str) -> None:
+    """Write the C source of ``fn`` to ``folder / source``."""
+    gen = ca.CodeGenerator(source)
+    gen.add(fn)
+    gen.generate(str(folder) + os.sep)
 
 
 def _pushes(rng: np.random.Generator, pert: Perturbation, t_final: float) -> list[tuple[int, float, float, float]]:

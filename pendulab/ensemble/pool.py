@@ -16,6 +16,7 @@ stops within about a second and no worker prints a traceback.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import multiprocessing
@@ -57,6 +58,10 @@ def ignore_sigint() -> None:
     so a parent killed outright never leaves workers computing on their own.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # map_runs forks with SIGINT blocked (a Ctrl-C between fork and this line would raise in the child):
+    # now that it is ignored, unblock it (a pending one is discarded).
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     if sys.platform.startswith("linux"):
         try:
             import ctypes
@@ -115,6 +120,19 @@ def shutdown_now(pool: Executor) -> None:
                 p.terminate()
         for p in procs:
             p.join(timeout=5.0)
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """Block SIGINT in this thread while workers are forked; a Ctrl-C meanwhile is delivered right after."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _run_chunk(job: int, chunk: list[Any]) -> list[Any]:
@@ -185,7 +203,8 @@ def map_runs(
         ctx = multiprocessing.get_context("fork")
         pool = ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx, initializer=ignore_sigint)
         try:
-            futures = {pool.submit(_run_chunk, job, todo[s : s + size]): i for i, s in enumerate(starts)}
+            with _sigint_blocked():  # the workers are forked in the first submit
+                futures = {pool.submit(_run_chunk, job, todo[s : s + size]): i for i, s in enumerate(starts)}
             done = 0
             for fut in completed(futures):
                 results[futures[fut]] = fut.result()
