@@ -88,11 +88,21 @@ def _check_clean(status: int | None, err: str) -> None:
     assert "Traceback" not in err and "EOFError" not in err and "BrokenPipeError" not in err, err[-3000:]
 
 
-def test_score_stops_and_keeps_finished_runs(tmp_path):
+@pytest.mark.parametrize(
+    "delay",
+    [
+        # At once: while the plant's sample map is compiled (a C compiler run) and the workers are forked. The
+        # compiler used to run through system(), which ignores SIGINT: the interrupt was lost, the card went on.
+        0.0,
+        # Among the runs of the worker pool.
+        1.0,
+    ],
+)
+def test_score_stops_and_keeps_finished_runs(tmp_path, delay):
     out = tmp_path / "card"
-    # 200 runs per level: about 3000 runs, minutes of work; the signal lands among the runs of the pool.
+    # 200 runs per level: about 3000 runs, minutes of work.
     args = ["score", "--controller", "lqr", "--task", "pendubot", "--runs", "200", "--workers", "2", "--out", str(out)]
-    status, err = _interrupt(args, "score lqr on pendubot", 1.0, tmp_path)
+    status, err = _interrupt(args, "score lqr on pendubot", delay, tmp_path)
     _check_clean(status, err)
     assert not (out / "scorecard.json").exists()  # no scorecard from an interrupted run
     # Finished batches were recorded (atomically: the file always parses) for --resume.
