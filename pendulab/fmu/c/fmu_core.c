@@ -569,20 +569,19 @@ CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, 
 
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname) {
     if (core_check_state_blob(inst, saved, sizeof(CoreData), fname) != ST_OK) return ST_ERROR;
-    int machine = inst->d.machine;
-    if (machine == MS_ERROR) {
-        /* restart from a state stored before the error (FMI 2.0 section 2.1.3, FMI 3.0 section 2.2.3): the
-         * instance resumes the life-cycle state it had when the FMU state was taken */
-        machine = saved->machine;
-        int legal = inst->is_cosim ? (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
-                                   : (MS_INSTANTIATED | MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED);
-        if (!(machine & legal)) {
-            core_logf(inst, ST_ERROR, "%s: FMU state was taken in %s, which a %s instance cannot resume", fname,
-                      core_machine_name(machine), inst->is_cosim ? "Co-Simulation" : "Model Exchange");
-            return ST_ERROR;
-        }
+    /* The instance resumes the life-cycle state stored with the FMU state, as the Reference FMUs do: a fresh
+     * instance (Instantiated) restored from a serialized state taken in step mode is in step mode (fmusim's
+     * resume-from-file flow: instantiate -> restore -> step), and a restart from a state stored before an
+     * error is possible (FMI 2.0 section 2.1.3, FMI 3.0 section 2.2.3). Only a state of the other interface
+     * (an ME event/continuous-time state into a CS instance, a CS step state into an ME instance) is refused. */
+    int machine = saved->machine;
+    int legal = inst->is_cosim ? (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
+                               : (MS_INSTANTIATED | MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED);
+    if (!(machine & legal)) {
+        core_logf(inst, ST_ERROR, "%s: FMU state was taken in %s, which a %s instance cannot resume", fname,
+                  core_machine_name(machine), inst->is_cosim ? "Co-Simulation" : "Model Exchange");
+        return ST_ERROR;
     }
-    inst->d = *saved; /* otherwise the life-cycle state stays the importer's */
-    inst->d.machine = machine;
+    memcpy(&inst->d, saved, sizeof(CoreData)); /* the blob may be unaligned (a deserialized byte buffer) */
     return ST_OK;
 }

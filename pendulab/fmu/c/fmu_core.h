@@ -113,8 +113,9 @@ CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t 
  * core_check_state_blob checks size and model magic and then every field with the setters' rules
  * (finite time, finite states, finite inputs, parameters with their sign
  * rules, tolerance in (0, 1), max_step >= 0, solver 0/1, a solver block that is unset or consistent);
- * a rejected state logs why and changes nothing. core_restore in the Error state resumes the
- * life-cycle state stored with the FMU state (restart after an error, as the standard allows). */
+ * a rejected state logs why and changes nothing. core_restore resumes the life-cycle state stored
+ * with the FMU state (as the Reference FMUs do: instantiate -> restore -> step, and restart after an
+ * error); a state of the other interface (ME modes into CS or back) is refused. */
 CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, const char *fname);
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname);
 
