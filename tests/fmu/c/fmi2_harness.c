@@ -91,6 +91,25 @@ int main(int argc, char **argv) {
     fmi2Real th2;
     CHECK(fmi2GetReal(c, &vr_theta1, 1, &th2) == fmi2OK);
     CHECK(memcmp(&th, &th2, sizeof th) == 0);
+    /* fmusim's resume-from-file flow: a fresh instance, restore the serialized state, step (no initialization) */
+    {
+        fmi2Component r = fmi2Instantiate("resumed", fmi2CoSimulation, argv[2], "", &cb, fmi2False, fmi2False);
+        fmi2FMUstate s3 = NULL;
+        fmi2Real th3;
+        CHECK(r != NULL);
+        CHECK(fmi2DeSerializeFMUstate(r, buf, size, &s3) == fmi2OK);
+        CHECK(fmi2SetFMUstate(r, s3) == fmi2OK);
+        CHECK(fmi2GetReal(r, &vr_theta1, 1, &th3) == fmi2OK);
+        double tr = t_saved;
+        for (int k = n / 2; k < n; k++) {
+            CHECK(fmi2DoStep(r, tr, h, fmi2True) == fmi2OK);
+            tr += h;
+        }
+        CHECK(fmi2GetReal(r, &vr_theta1, 1, &th3) == fmi2OK);
+        CHECK(memcmp(&th, &th3, sizeof th) == 0);
+        CHECK(fmi2FreeFMUstate(r, &s3) == fmi2OK);
+        fmi2FreeInstance(r);
+    }
     /* misuse: error status and a logged message, never a crash */
     int before = n_errors_logged;
     fmi2Real nan = NAN;

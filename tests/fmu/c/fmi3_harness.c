@@ -83,6 +83,26 @@ int main(int argc, char **argv) {
     }
     CHECK(fmi3GetFloat64(c, &vr_theta1, 1, &th2, 1) == fmi3OK);
     CHECK(memcmp(&th, &th2, sizeof th) == 0);
+    /* fmusim's resume-from-file flow: a fresh instance, restore the serialized state, step (no initialization) */
+    {
+        fmi3Instance r = fmi3InstantiateCoSimulation("resumed", argv[2], "", fmi3False, fmi3False, fmi3False, fmi3False,
+                                                     NULL, 0, NULL, logger, NULL);
+        fmi3FMUState s3 = NULL;
+        fmi3Float64 th3;
+        CHECK(r != NULL);
+        CHECK(fmi3DeserializeFMUState(r, buf, size, &s3) == fmi3OK);
+        CHECK(fmi3SetFMUState(r, s3) == fmi3OK);
+        CHECK(fmi3GetFloat64(r, &vr_theta1, 1, &th3, 1) == fmi3OK);
+        double tr = t_saved;
+        for (int k = n / 2; k < n; k++) {
+            CHECK(fmi3DoStep(r, tr, h, fmi3True, &ev, &term, &early, &last) == fmi3OK);
+            tr += h;
+        }
+        CHECK(fmi3GetFloat64(r, &vr_theta1, 1, &th3, 1) == fmi3OK);
+        CHECK(memcmp(&th, &th3, sizeof th) == 0);
+        CHECK(fmi3FreeFMUState(r, &s3) == fmi3OK);
+        fmi3FreeInstance(r);
+    }
     int before = n_errors_logged;
     fmi3Float64 nan = NAN;
     CHECK(fmi3SetFloat64(c, &vr_tau1, 1, &nan, 1) == fmi3Error);
