@@ -74,7 +74,7 @@ def test_without_distributed_names_the_extra(monkeypatch):
 def test_no_workers_ends_with_one_line_error(monkeypatch):
     # A cluster with no worker at all: the wait is bounded (here 1 s) and says what is wrong.
     monkeypatch.setenv("PENDULAB_DASK_NO_WORKER_TIMEOUT", "1")
-    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as c:
             with pytest.raises(RuntimeError, match=r"no Dask worker connected to .* for 1 s") as info:
                 pl.ensemble(pl.rigid(), _x0(4), 1.0, client=c, chunk_size=2)

@@ -116,3 +116,28 @@ def test_long_python_ensemble_stops_on_ctrl_c(tmp_path: Path, mode: str) -> None
     # No traceback from the process or its workers (EOFError, KeyboardInterrupt, BrokenPipe...).
     assert "Traceback" not in err and "Error" not in err, err
     assert latency < CEILING
+
+
+def test_long_lyapunov_estimate_stops_on_ctrl_c() -> None:
+    # A SIGINT 0.5 s into a 1e9 s estimate of a regular (small) oscillation, renormalised every 1e5 s
+    # (about 2e6 Taylor steps, seconds in C++): handled between two propagation slices instead.
+    import threading
+
+    import pendulab as pl
+    from pendulab.ensemble.lyapunov import largest_lyapunov
+
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals are delivered to the main thread")
+    largest_lyapunov(pl.rigid(), [2.0, 2.0, 0.0, 0.0], 1.0)  # compile outside the timed part
+    previous = signal.signal(signal.SIGALRM, lambda *a: signal.raise_signal(signal.SIGINT))
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        t0 = time.monotonic()
+        with pytest.raises(KeyboardInterrupt):
+            largest_lyapunov(pl.rigid(), [0.1, 0.1, 0.0, 0.0], 1e9, renorm_interval=1e5, max_steps=2**62)
+        latency = time.monotonic() - t0 - 0.5
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+    print(f"largest_lyapunov: SIGINT -> KeyboardInterrupt in {latency:.3f} s")
+    assert latency < CEILING
