@@ -29,6 +29,7 @@ from .batch import (
     ChunkStoppedError,
     ChunkTask,
     check_batch_size,
+    check_tolerance_floor,
     default_batch_size,
     run_chunk,
 )
@@ -110,7 +111,8 @@ def ensemble(
         Local workers (default ``os.cpu_count()``): forked processes for ensembles of 5,000 runs
         or more, threads below; ignored with ``client``.
     rtol, atol : float
-        Tolerances, ``rtol`` in (0, 1); heyoka's ``tol = min(rtol, atol)``.
+        Tolerances, ``rtol`` in (0, 1); heyoka's ``tol = min(rtol, atol)``, at least the
+        double-precision epsilon 2.2e-16 (a smaller one only lengthens the compilation).
     progress : callable or bool, optional
         ``progress(done, total)`` after each chunk (runs), or True for a tqdm bar.
     batch_size : int, optional
@@ -176,6 +178,7 @@ def ensemble(
         stats = {"method": method, "n_runs": n, "n_chunks": n, "threads": 1}
     else:
         heyoka_module()  # names the extra when heyoka is missing
+        check_tolerance_floor("rtol" if rt <= at else "atol", min(rt, at))
         S = default_batch_size() if S is None else S
         zero = tuple(int(i) for i in np.flatnonzero(np.all(P == 0.0, axis=0)))
         key = BatchKey(model.kind, zero, min(rt, at), plan, S)

@@ -454,6 +454,10 @@ def largest_lyapunov(
     if tau > T:
         raise ValueError(f"renorm_interval must be at most t_total = {T!r} s, got {renorm_interval!r} s")
     tol = relative_tolerance("rtol", rtol)
+    if method == "taylor":
+        from .batch import check_tolerance_floor
+
+        check_tolerance_floor("rtol", tol)
     if not isinstance(method, str) or method not in _RUNNERS:
         raise ValueError(f"method must be one of {list(LYAPUNOV_METHODS)}, got {method!r}")
     check_spring_lengths(model.kind, x, "x0")

@@ -68,6 +68,16 @@ def test_rtol_outside_unit_interval_is_refused_everywhere(rigid: pl.Model, rtol:
         largest_lyapunov(rigid, [2.0, 2.0, 0.0, 0.0], 1.0, rtol=rtol)
 
 
+def test_tolerance_below_double_epsilon_is_refused_before_compiling(rigid: pl.Model) -> None:
+    # rtol = 1e-100 used to compile a Taylor order of ~117 for 86 s (uninterruptible) for no extra digit.
+    with pytest.raises(ValueError, match=r"rtol must be at least 2.22e-16"):
+        pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, rtol=1e-100)
+    with pytest.raises(ValueError, match=r"atol must be at least 2.22e-16"):
+        pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, atol=1e-20)
+    with pytest.raises(ValueError, match=r"rtol must be at least 2.22e-16"):
+        largest_lyapunov(rigid, [2.0, 2.0, 0.0, 0.0], 1.0, rtol=1e-300)
+
+
 def test_cli_rtol_one_or_more_is_a_one_line_error(tmp_path, capsys) -> None:
     status = main(["ensemble", "flipmap", "--grid", "4", "--rtol", "100", "--out", str(tmp_path / "o"), "--no-progress"])
     err = capsys.readouterr().err.strip()
