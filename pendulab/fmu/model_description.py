@@ -25,7 +25,7 @@ from .codegen import (
     compiled_sources,
 )
 
-__all__ = ["model_description", "build_description", "UNITS"]
+__all__ = ["model_description", "build_description", "UNITS", "POSITIVE_MIN", "BELOW_ONE_MAX", "POSITIVE_STATES"]
 
 # unit -> SI base-unit exponents (FMI BaseUnit attributes) and optional display unit (name, factor)
 _DEG = 180.0 / math.pi
@@ -45,6 +45,13 @@ UNITS: dict[str, tuple[dict[str, int], tuple[str, float] | None]] = {
     "N.s/m": ({"kg": 1, "s": -1}, None),
     "N.m.s/rad": ({"kg": 1, "m": 2, "s": -1, "rad": -1}, None),
 }
+#: ``min`` of a variable that must be > 0: FMI has no exclusive bound; the smallest positive double
+#: (subnormal 2**-1074) makes ``value >= min`` the same as ``value > 0`` for every double.
+POSITIVE_MIN = "5e-324"
+#: ``max`` of a variable that must be < 1 (the solver tolerance): the largest double below 1.
+BELOW_ONE_MAX = repr(1.0 - 2.0**-53)
+#: States that must stay positive (spring lengths of the elastic model; the model is singular at r = 0).
+POSITIVE_STATES = frozenset({"r1", "r2"})
 _DERIVATIVE_UNIT = {"rad": "rad/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2"}
 _CATEGORIES = (
     ("logStatusError", "errors: bad calls, bad values, solver failures"),
@@ -85,6 +92,8 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
     for i, info in enumerate(model.state_info):
         disp = UNITS[info.unit][1]
         extra = {"displayUnit": disp[0]} if disp else {}
+        if info.name in POSITIVE_STATES:
+            extra["min"] = POSITIVE_MIN
         out.append(
             _Var(
                 info.name,
@@ -123,7 +132,7 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
         )
     for i, info in enumerate(model.param_info):
         tun = lay.p_tunable[i]
-        extra = {"min": "0.0"} if not info.positive else {}
+        extra = {"min": POSITIVE_MIN if info.positive else "0.0"}
         out.append(
             _Var(
                 info.name,
@@ -147,6 +156,8 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
             "tolerance when it defines one)",
             initial="exact",
             start=_fmt(DEFAULT_TOLERANCE),
+            min=POSITIVE_MIN,
+            max=BELOW_ONE_MAX,
         )
     )
     out.append(
@@ -259,6 +270,7 @@ def model_description(
         ("canGetAndSetFMUState" if v3 else "canGetAndSetFMUstate"): "true",
         ("canSerializeFMUState" if v3 else "canSerializeFMUstate"): "true",
         ("providesDirectionalDerivatives" if v3 else "providesDirectionalDerivative"): "true",
+        **({"providesAdjointDerivatives": "true"} if v3 else {}),
     }
     me = ET.SubElement(root, "ModelExchange", {"modelIdentifier": ident, **caps})
     cs = ET.SubElement(
