@@ -34,7 +34,7 @@ from .batch import (
     run_chunk,
 )
 from .events import Event, EventPlan, resolve_events
-from .pool import completed, ignore_sigint, shutdown_now
+from .pool import _sigint_blocked, completed, ignore_sigint, shutdown_now
 from .result import EnsembleResult
 
 __all__ = ["ensemble", "check_params", "check_x0", "MAX_RUNS", "DEFAULT_MAX_STEPS"]
@@ -468,7 +468,8 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
         if isinstance(pool, ThreadPoolExecutor):
             futures = {pool.submit(run_chunk, t, stop.is_set): t for t in tasks}
         else:
-            futures = {pool.submit(run_chunk, t): t for t in tasks}
+            with _sigint_blocked():  # workers are forked in the first submit; ignore_sigint unblocks it in them
+                futures = {pool.submit(run_chunk, t): t for t in tasks}
         for f in completed(futures):
             t = futures[f]
             exc = f.exception()
