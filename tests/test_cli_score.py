@@ -44,9 +44,10 @@ def test_bad_input_exits_2_with_one_line(argv, message, capsys):
     assert message in err and err.count("\n") == 1
 
 
-def test_ctrl_c_exits_130(monkeypatch, capsys):
+def test_ctrl_c_exits_130(monkeypatch, capsys, tmp_path):
     import pendulab.control.scorecard as sc
 
+    monkeypatch.chdir(tmp_path)  # the default output directory is ./pendulab-out/score/...
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
