@@ -1,4 +1,5 @@
 /* FMI 3.0 layer (Co-Simulation and Model Exchange) over the model core. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -320,16 +321,62 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                     const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
                                     fmi3Float64 sensitivity[], size_t nSensitivity) {
+    /* sensitivity = J' seed for J = d(unknowns)/d(knowns): CasADi's reverse mode (MODEL_ADJOINT, generated from the
+     * same graph as the directional derivatives) applied to the seed scattered onto all derivatives and outputs. */
+    enum { NR = MODEL_NX + MODEL_NY, NC = MODEL_NX + MODEL_NU };
     GET_INSTANCE("fmi3GetAdjointDerivative");
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    return unsupported(inst, "fmi3GetAdjointDerivative (providesAdjointDerivatives = false)");
+    CHECK_STATE(MS_INIT | MS_STEP | MS_EVENT | MS_CONT | MS_TERMINATED, "fmi3GetAdjointDerivative");
+    if (nSeed != nUnknowns || nSensitivity != nKnowns) {
+        core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: nSeed (%zu) must equal nUnknowns (%zu) and nSensitivity (%zu) "
+                  "nKnowns (%zu)", nSeed, nUnknowns, nSensitivity, nKnowns);
+        return fmi3Error;
+    }
+    if ((nUnknowns > 0 && (unknowns == NULL || seed == NULL)) || (nKnowns > 0 && (knowns == NULL || sensitivity == NULL))) {
+        core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: NULL array argument");
+        return fmi3Error;
+    }
+    if (nUnknowns > NR || nKnowns > NC) {
+        core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: too many unknowns (%zu) or knowns (%zu)", nUnknowns, nKnowns);
+        return fmi3Error;
+    }
+    double v[NR], w[NC];
+    int cols[NC];
+    for (int r = 0; r < NR; r++) v[r] = 0.0;
+    for (size_t i = 0; i < nUnknowns; i++) {
+        int k;
+        VarKind kind = core_classify(unknowns[i], &k);
+        if (kind != KIND_DERIV && kind != KIND_OUTPUT) {
+            core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: unknown %u is not a derivative or output", unknowns[i]);
+            return fmi3Error;
+        }
+        if (!isfinite(seed[i])) {
+            core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: seed %zu is not finite", i);
+            return fmi3Error;
+        }
+        v[kind == KIND_DERIV ? k : MODEL_NX + k] += seed[i]; /* a repeated unknown adds its seeds */
+    }
+    for (size_t j = 0; j < nKnowns; j++) {
+        int k;
+        VarKind kind = core_classify(knowns[j], &k);
+        if (kind != KIND_STATE && kind != KIND_INPUT) {
+            core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: known %u is not a state or input", knowns[j]);
+            return fmi3Error;
+        }
+        cols[j] = kind == KIND_STATE ? k : MODEL_NX + k;
+    }
+    inst->arg[0] = inst->d.x;
+    inst->arg[1] = inst->d.u;
+    inst->arg[2] = inst->d.p;
+    inst->arg[3] = v;
+    inst->res[0] = w;
+    int bad = MODEL_ADJOINT(inst->arg, inst->res, inst->iw, inst->w, 0) != 0;
+    for (int c = 0; c < NC && !bad; c++) bad = !isfinite(w[c]);
+    if (bad) {
+        core_logf(inst, ST_ERROR, "fmi3GetAdjointDerivative: adjoint evaluation failed");
+        return fmi3Error;
+    }
+    for (size_t j = 0; j < nKnowns; j++) sensitivity[j] = w[cols[j]];
+    return fmi3OK;
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
