@@ -64,7 +64,7 @@ def test_realai_calls_realai_score(monkeypatch, tmp_path, capsys):
         def to_dict(self):
             return {"task": "acrobot", "controller": "best", "success": True, "score": 0.5, "criteria": {"swingup_time": 1.0}}
 
-    def fake(task, controller="best", *, csv_path=None):
+    def fake(task, controller="best", *, csv_path=None, progress=None):
         calls.update(task=task, controller=controller, csv_path=csv_path)
         return Result()
 

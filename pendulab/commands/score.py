@@ -233,11 +233,20 @@ def _run_realai(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}"
     out.mkdir(parents=True, exist_ok=True)
     planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
+    steps = ProgressBar(f"RealAIGym run ({args.controller} on {task}, 5000 steps of 2 ms)", not args.no_progress)
+    last = [0]
     try:
         with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
-            result = realai_score(task, args.controller, csv_path=out / "realai.csv")
+
+            def run_progress(done: int, total: int) -> None:
+                planning.close()
+                steps.iterate(done - last[0], "step")
+                last[0] = done
+
+            result = realai_score(task, args.controller, csv_path=out / "realai.csv", progress=run_progress)
     finally:
         planning.close()
+        steps.close()
     summary = result.to_dict()
     if hasattr(result, "t"):
         from ..viz.scorecard import plot_realai

@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from ..controllers import TASK_CONTROLLERS, controller_for_task
@@ -47,7 +48,13 @@ __all__ = [
 CONTROLLER_NAMES: tuple[str, ...] = ("best", *TASK_CONTROLLERS)
 
 
-def realai_score(task: str, controller: str | SampledController = "best", *, csv_path: str | Path | None = None) -> RealAIResult:
+def realai_score(
+    task: str,
+    controller: str | SampledController = "best",
+    *,
+    csv_path: str | Path | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> RealAIResult:
     """Score a controller on the RealAIGym simulation leaderboard v2.
 
     Parameters
@@ -63,6 +70,8 @@ def realai_score(task: str, controller: str | SampledController = "best", *, csv
         model, run on the undamped leaderboard plant), or a controller object.
     csv_path : str or Path, optional
         Also write the run (t, theta1, theta2, omega1, omega2, tau1, tau2; absolute angles; every 2 ms).
+    progress : callable, optional
+        ``progress(done, total)`` in 2 ms steps of the leaderboard run.
 
     Returns
     -------
@@ -91,7 +100,7 @@ def realai_score(task: str, controller: str | SampledController = "best", *, csv
             raise ValueError(f"controller must be one of {list(CONTROLLER_NAMES)} or a SampledController, got {name!r}")
     else:
         ctrl, name = controller, type(controller).__name__
-    result = run(task, ctrl, name)
+    result = run(task, ctrl, name, progress=progress)
     if csv_path is not None:
         result.write_csv(csv_path)
     return result

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -249,7 +250,9 @@ def rk4_rollout(model: Model, x0: np.ndarray, policy: Any, n_steps: int, dt: flo
     return np.array(ts), np.array(xs), np.array(us, dtype=float).reshape(n_steps, len(INPUT_NAMES))
 
 
-def run(task: str, controller: SampledController, name: str = "custom") -> RealAIResult:
+def run(
+    task: str, controller: SampledController, name: str = "custom", *, progress: Callable[[int, int], None] | None = None
+) -> RealAIResult:
     """Run ``controller`` through the leaderboard simulation of ``task`` and score it.
 
     Parameters
@@ -262,6 +265,8 @@ def run(task: str, controller: SampledController, name: str = "custom") -> RealA
         clipped to +-6 N.m on the actuated joint, 0 on the passive one.
     name : str
         Controller name for the result.
+    progress : callable, optional
+        ``progress(done, total)`` in 2 ms steps, every 100 steps and at the end.
 
     Returns
     -------
@@ -292,9 +297,13 @@ def run(task: str, controller: SampledController, name: str = "custom") -> RealA
         nonlocal held
         if k % ratio == 0:
             held = np.clip(full_input(controller, controller(t, x)), -limit, limit)
+        if progress is not None and k % 100 == 0:
+            progress(k, N_STEPS)
         return held
 
     t, x, u = rk4_rollout(model, model.state(), policy, N_STEPS)
+    if progress is not None:
+        progress(N_STEPS, N_STEPS)
     if not np.all(np.isfinite(x)):
         raise ValueError(f"the leaderboard run of {name!r} on {task} produced a non-finite state")
     # The scored CSV keeps the shortest column: N_STEPS rows (t_k, x_k, u_k).
