@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import time
+import uuid
 from collections.abc import Callable
 from typing import Any
 
@@ -50,6 +51,30 @@ def _n_workers(client: Any, address: str) -> int:
         return len(client.nthreads())
     except Exception as exc:  # CommClosedError, OSError, TimeoutError: the scheduler is gone
         raise RuntimeError(f"ensemble: lost the Dask scheduler at {address} ({type(exc).__name__})") from None
+
+
+def _run_chunk_remote(task: ChunkTask) -> ChunkOut:
+    """:func:`run_chunk` on a Dask worker that stops between slices once the client cancelled the task.
+
+    Best effort: it reads the worker's task state (``cancelled`` or gone), which is Dask internals;
+    when that cannot be read the chunk simply runs to its end (budgets still apply).
+    """
+    try:
+        from distributed import get_worker
+        from distributed.worker import thread_state
+
+        worker, key = get_worker(), thread_state.key
+    except Exception:  # not on a worker, or another Dask version
+        return run_chunk(task)
+
+    def stop() -> bool:
+        try:
+            ts = worker.state.tasks.get(key)
+            return ts is None or ts.state in ("cancelled", "released", "forgotten")
+        except Exception:
+            return False
+
+    return run_chunk(task, stop)
 
 
 def run_on_dask(client: Any, tasks: list[ChunkTask], report: Callable[[int | None], None]) -> list[ChunkOut]:
@@ -98,7 +123,10 @@ def run_on_dask(client: Any, tasks: list[ChunkTask], report: Callable[[int | Non
     limit = _no_worker_timeout()
     futures: list[Any] = []
     try:
-        futures = [client.submit(run_chunk, t, pure=False, key=f"pendulab-ensemble-chunk-{t.index}-{id(tasks)}") for t in tasks]
+        # A fresh token per call: a key that repeats (id() of a freed list does) would make Dask hand back
+        # the finished result of an earlier ensemble instead of computing this one.
+        token = uuid.uuid4().hex
+        futures = [client.submit(_run_chunk_remote, t, pure=False, key=f"pendulab-ensemble-{token}-{t.index}") for t in tasks]
         index = {f.key: t for f, t in zip(futures, tasks, strict=True)}
         failed: list[tuple[int, str]] = []
         pending = set(futures)
