@@ -15,6 +15,8 @@ from ._common import ProgressBar
 __all__ = ["register", "run_flipmap", "DEFAULT_K"]
 
 _KINDS = ("rigid", "elastic")
+#: Default output directory, relative to the current directory (never into the repository's docs/).
+_OUT = "pendulab-out/ensemble-flipmap"
 #: Spring stiffness [N/m] of the elastic flip map (both springs); see docs/ensembles.md for the choice.
 DEFAULT_K = 1e4
 
@@ -39,7 +41,7 @@ def register(subparsers: Any) -> None:
     fm.add_argument("--model", default="rigid", metavar="KIND", help="rigid (default) | elastic")
     fm.add_argument("--grid", default="400", metavar="N", help="grid points per angle (default 400)")
     fm.add_argument("--t-max", default="10", metavar="T", help="horizon [s] (default 10)")
-    fm.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    fm.add_argument("--out", default=_OUT, metavar="DIR", help=f"output directory (default ./{_OUT})")
     fm.add_argument("--scheduler", default=None, metavar="ADDRESS", help="Dask scheduler address tcp://host:port")
     fm.add_argument("--k", default=None, metavar="K", help=f"elastic spring stiffness k1 = k2 [N/m] (default {DEFAULT_K:g})")
     fm.add_argument("--threads", default=None, metavar="N", help="local threads (default: all cores)")

@@ -145,13 +145,14 @@ def test_cli_rejects_bad_input(argv, needle, tmp_path, capsys) -> None:
     assert len(err.splitlines()) == 1 and needle in err
 
 
-def test_cli_help_and_missing_out(capsys) -> None:
+def test_cli_help_and_default_out(capsys, tmp_path, monkeypatch) -> None:
     with pytest.raises(SystemExit) as exc:
         main(["ensemble", "flipmap", "--help"])
     assert exc.value.code == 0 and "--t-max" in capsys.readouterr().out
-    with pytest.raises(SystemExit) as exc:
-        main(["ensemble", "flipmap", "--grid", "4"])
-    assert exc.value.code == 2
+    # Without --out the map goes to ./pendulab-out/ensemble-flipmap/, like every command's outputs.
+    monkeypatch.chdir(tmp_path)
+    assert main(["ensemble", "flipmap", "--grid", "4", "--t-max", "0.5", "--no-progress"]) == 0
+    assert (tmp_path / "pendulab-out" / "ensemble-flipmap" / "flipmap.npz").exists()
 
 
 def test_bad_arguments_raise_value_error() -> None:
