@@ -71,6 +71,6 @@ def test_realai_calls_realai_score(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(realai, "realai_score", fake, raising=False)
     status = main(["score", "--realai", "--task", "acrobot", "--controller", "best", "--out", str(tmp_path), "--json"])
     assert status == 0
-    assert calls == {"task": "acrobot", "controller": "best", "csv_path": tmp_path / "realai.csv"}
+    assert calls == {"task": "acrobot", "controller": "best", "csv_path": None}  # the command writes realai.csv itself
     assert json.loads(capsys.readouterr().out)["score"] == 0.5
     assert json.loads((tmp_path / "realai.json").read_text())["success"] is True

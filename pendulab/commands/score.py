@@ -150,12 +150,12 @@ def run_score(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"{args.controller}-{task.name}"
     settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats}
     completed = _resume(out / _RECORDS, settings) if args.resume else ()
-    out.mkdir(parents=True, exist_ok=True)
 
     def save(records: tuple, complete: bool = False) -> None:
         from dataclasses import asdict
 
         data = {**settings, "pendulab": __version__, "complete": complete, "records": [_finite(asdict(r)) for r in records]}
+        out.mkdir(parents=True, exist_ok=True)  # only once there is something to keep (bad input writes nothing)
         atomic_write_text(out / _RECORDS, json.dumps(data) + "\n")
 
     planning = ProgressBar(f"planning {args.controller} on {task.name} (IPOPT)", not args.no_progress)
@@ -231,7 +231,6 @@ def _run_realai(args: argparse.Namespace) -> int:
     if args.controller not in CONTROLLER_NAMES:
         raise CLIError(f"--controller {args.controller!r}: --realai expects one of {list(CONTROLLER_NAMES)}")
     out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}"
-    out.mkdir(parents=True, exist_ok=True)
     planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
     steps = ProgressBar(f"RealAIGym run ({args.controller} on {task}, 5000 steps of 2 ms)", not args.no_progress)
     last = [0]
@@ -243,11 +242,14 @@ def _run_realai(args: argparse.Namespace) -> int:
                 steps.iterate(done - last[0], "step")
                 last[0] = done
 
-            result = realai_score(task, args.controller, csv_path=out / "realai.csv", progress=run_progress)
+            result = realai_score(task, args.controller, progress=run_progress)
     finally:
         planning.close()
         steps.close()
     summary = result.to_dict()
+    out.mkdir(parents=True, exist_ok=True)
+    if hasattr(result, "write_csv"):
+        result.write_csv(out / "realai.csv")
     if hasattr(result, "t"):
         from ..viz.scorecard import plot_realai
 
