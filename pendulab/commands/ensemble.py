@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 from pathlib import Path
@@ -53,6 +54,7 @@ def register(subparsers: Any) -> None:
     fm.add_argument(
         "--resume", action="store_true", help="continue an interrupted run from DIR/flipmap_<kind>.partial.npz (same settings)"
     )
+    fm.add_argument("--json", action="store_true", help="print one JSON summary object on stdout (nothing else)")
     fm.add_argument("--no-progress", action="store_true", help="no progress bar")
     fm.set_defaults(func=run_flipmap)
 
@@ -158,6 +160,30 @@ def run_flipmap(args: argparse.Namespace) -> int:
         _close(fig)
     for p in partials:  # every map is in its .npz now
         p.unlink(missing_ok=True)
+    if args.json:
+        summary = {
+            "command": "ensemble flipmap",
+            "grid": grid,
+            "t_max_s": t_max,
+            "wall_time_s": time.perf_counter() - t0,
+            "files": [str(p) for p in written],
+            "maps": {
+                kind: {
+                    "n_points": int(m.t_flip.size),
+                    "n_integrated": int(m.n_simulated),
+                    "n_resumed": int(m.n_resumed),
+                    "n_skipped": int(m.skipped.sum()),
+                    "n_flipped": int(m.flipped.sum()),
+                    "energy_threshold_J": float(m.energy_threshold),
+                    "wall_time_s": float(m.wall_time),
+                    "params": m.params,
+                    "settings": m.settings,
+                }
+                for kind, m in maps.items()
+            },
+        }
+        print(json.dumps(summary))
+        return 0
     for kind, m in maps.items():
         n = m.t_flip.size
         resumed = f", {m.n_resumed} taken from the partial file" if m.n_resumed else ""

@@ -145,6 +145,18 @@ def test_cli_rejects_bad_input(argv, needle, tmp_path, capsys) -> None:
     assert len(err.splitlines()) == 1 and needle in err
 
 
+def test_cli_json_is_one_object_on_stdout(tmp_path, capsys) -> None:
+    import json
+
+    argv = ["ensemble", "flipmap", "--grid", "6", "--t-max", "1", "--out", str(tmp_path / "j"), "--no-progress", "--json"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    summary = json.loads(out)  # the whole of stdout is one JSON object
+    rigid = summary["maps"]["rigid"]
+    assert rigid["n_points"] == 36 and rigid["n_flipped"] <= 36 - rigid["n_skipped"]
+    assert rigid["settings"]["rtol"] == 1e-12 and summary["files"][0].endswith("flipmap.npz")
+
+
 def test_cli_help_and_default_out(capsys, tmp_path, monkeypatch) -> None:
     with pytest.raises(SystemExit) as exc:
         main(["ensemble", "flipmap", "--help"])
