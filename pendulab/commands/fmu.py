@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import zipfile
 from pathlib import Path
 
 from . import CLIError
@@ -23,13 +24,18 @@ def _parse_sets(items: list[str]) -> dict[str, float]:
     return out
 
 
+def _binary_folders(path: Path) -> list[str]:
+    with zipfile.ZipFile(path) as zf:
+        return sorted({n.split("/")[1] for n in zf.namelist() if n.startswith("binaries/")})
+
+
 def _export(args: argparse.Namespace) -> int:
     from ..fmu import export
     from ..model.model import make_model
 
     model = make_model(args.model, **_parse_sets(args.set or []))
     x0 = model.state(**_parse_sets(args.initial or [])) if args.initial else None
-    path = export(model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0)
+    path = export(model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0, platforms=args.platforms)
     if args.json:
         start = model.state() if x0 is None else x0
         summary = {
@@ -37,6 +43,7 @@ def _export(args: argparse.Namespace) -> int:
             "fmi_version": args.fmi_version,
             "model": args.model,
             "interfaces": ["CoSimulation", "ModelExchange"],
+            "platforms": _binary_folders(path),
             "params": {k: float(v) for k, v in zip(model.param_names, model.p, strict=True)},
             "start": {k: float(v) for k, v in zip(model.state_names, start, strict=True)},
             "bytes": path.stat().st_size,
@@ -79,6 +86,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     e.add_argument("--out", type=Path, required=True, help="output .fmu file")
     e.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")
+    e.add_argument(
+        "--platforms",
+        default=None,
+        metavar="LIST",
+        help="binaries to build, comma-separated, e.g. x86_64-linux,x86_64-windows,aarch64-linux (linux64, win64 "
+        'accepted); default: this machine; others are cross-compiled (pip install "pendulab[cross]")',
+    )
     e.add_argument("--json", action="store_true", help="print a JSON summary (path, parameters, start values) instead")
     e.set_defaults(func=_export)
 

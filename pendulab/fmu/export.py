@@ -13,9 +13,18 @@ import numpy as np
 
 from .._io import atomic_open
 from ..model.model import Model
-from ..native.build import CFLAGS, CompilerNotFoundError, compile_shared, find_compiler, shared_library_suffix
+from ..native.build import (
+    CFLAGS,
+    CompilerNotFoundError,
+    compile_shared,
+    compile_shared_with,
+    find_compiler,
+    shared_library_suffix,
+)
 from .codegen import compiled_sources, generate_sources, layout, token
+from .documentation import LICENSE_PATH, documentation_html, license_text
 from .model_description import build_description, model_description
+from .platforms import Platform, cross_compiler, exported_symbols, fmi_functions, host_platform, resolve_platforms
 
 # CFLAGS, CompilerNotFoundError and find_compiler live in pendulab.native.build (shared with the
 # native fast path) and are re-exported here, where they have always been importable.
@@ -85,6 +94,24 @@ def compile_sources(
     return compile_shared(src_dir, compiled_sources(fmi_version), out, cc=cc, extra_flags=extra_flags)
 
 
+def _cross_compile(target: Platform, src: Path, out_dir: Path, identifier: str, fmi_version: int) -> Path:
+    """Build the binary of ``target`` (not the host) with a cross compiler; stripped, warning flags as usual."""
+    out_dir.mkdir()
+    flags = [f for f in CFLAGS if not (f == "-fPIC" and target.suffix == ".dll")] + ["-s"]
+    return compile_shared_with(
+        cross_compiler(target), src, compiled_sources(fmi_version), out_dir / f"{identifier}{target.suffix}", flags=flags
+    )
+
+
+def _checked(binary: bytes, required: tuple[str, ...], where: str) -> bytes:
+    """``binary`` if it exports exactly the FMI functions ``required`` (read from the file), else RuntimeError."""
+    exported = set(exported_symbols(binary))
+    missing, extra = sorted(set(required) - exported), sorted(exported - set(required))
+    if missing or extra:
+        raise RuntimeError(f"the {where} binary exports the wrong functions: missing {missing[:5]}, unexpected {extra[:5]}")
+    return binary
+
+
 def export(
     model: Model,
     path: str | os.PathLike,
@@ -95,6 +122,7 @@ def export(
     stop_time: float = 10.0,
     step_size: float = 0.01,
     cc: str | None = None,
+    platforms: str | list[str] | tuple[str, ...] | None = None,
 ) -> Path:
     """Write an FMU of ``model`` with Co-Simulation and Model Exchange interfaces.
 
@@ -114,7 +142,13 @@ def export(
     stop_time, step_size : float
         ``DefaultExperiment`` stop time and communication step [s].
     cc : str, optional
-        C compiler; default ``$CC``, then ``cc``, ``gcc``, ``clang``.
+        C compiler of the host platform; default ``$CC``, then ``cc``, ``gcc``, ``clang``.
+    platforms : str or list of str, optional
+        Binaries to build, e.g. ``["x86_64-linux", "x86_64-windows", "aarch64-linux"]`` (FMI 3
+        tuples; ``linux64``, ``win64`` accepted; a comma-separated string too). Default: the host
+        only. Other platforms are cross-compiled (Debian's cross gcc on PATH, else Zig's C compiler
+        from ``pendulab[cross]``). FMI 2.0 defines no aarch64 folder. Every binary must export exactly
+        the FMI functions of the standard header (read from the file; checked here).
 
     Returns
     -------
@@ -129,8 +163,10 @@ def export(
         Bad ``fmi_version``, ``x0`` or experiment settings.
     CompilerNotFoundError (RuntimeError)
         No C compiler found.
+    MissingExtraError (ImportError)
+        A platform other than the host, and no cross compiler (``pip install "pendulab[cross]"``).
     RuntimeError
-        Compilation failed.
+        Compilation failed, or a binary does not export the FMI functions.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model (pendulab.rigid() or pendulab.elastic()), got {type(model).__name__}")
@@ -139,6 +175,7 @@ def export(
     for name, value in (("stop_time", stop_time), ("step_size", step_size)):
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a positive finite number [s], got {value!r}")
+    targets = None if platforms is None else resolve_platforms(platforms, fmi_version)
     path = Path(path)
     lay = layout(model, x0)
     sources = generate_sources(model, fmi_version, lay)
@@ -152,14 +189,22 @@ def export(
         files[f"sources/{name}"] = data
     if fmi_version == 3:
         files["sources/buildDescription.xml"] = build_description(lay)
+    files["documentation/index.html"] = documentation_html(model, lay, fmi_version, stop_time=stop_time, step_size=step_size)
+    files[LICENSE_PATH] = license_text()
+    required = fmi_functions(sources[f"fmi{fmi_version}Functions.h"].decode(), fmi_version)
     with tempfile.TemporaryDirectory() as tmp:
         src = Path(tmp) / "sources"
         src.mkdir()
         for name, data in sources.items():
             (src / name).write_bytes(data)
-        ext = shared_library_suffix()
-        lib = compile_sources(src, Path(tmp) / f"{lay.identifier}{ext}", fmi_version, cc=cc)
-        files[f"binaries/{binary_platform(fmi_version)}/{lib.name}"] = lib.read_bytes()
+        if targets is None or any(t.name == host_platform() for t in targets):
+            ext = shared_library_suffix()
+            lib = compile_sources(src, Path(tmp) / f"{lay.identifier}{ext}", fmi_version, cc=cc)
+            files[f"binaries/{binary_platform(fmi_version)}/{lib.name}"] = _checked(lib.read_bytes(), required, "host")
+        for target in targets or ():
+            if target.name != host_platform():
+                lib = _cross_compile(target, src, Path(tmp) / target.name, lay.identifier, fmi_version)
+                files[f"binaries/{target.folder(fmi_version)}/{lib.name}"] = _checked(lib.read_bytes(), required, target.name)
     # Atomic: an interrupted or failing export never leaves a truncated FMU where a good one was.
     with atomic_open(path, "wb") as fh, zipfile.ZipFile(fh, "w", zipfile.ZIP_DEFLATED) as zf:
         for name in sorted(files):

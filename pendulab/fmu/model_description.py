@@ -25,7 +25,7 @@ from .codegen import (
     compiled_sources,
 )
 
-__all__ = ["model_description", "build_description", "UNITS", "POSITIVE_MIN", "BELOW_ONE_MAX", "POSITIVE_STATES"]
+__all__ = ["model_description", "build_description", "UNITS", "POSITIVE_MIN", "BELOW_ONE_MAX", "POSITIVE_STATES", "variables"]
 
 # unit -> SI base-unit exponents (FMI BaseUnit attributes) and optional display unit (name, factor)
 _DEG = 180.0 / math.pi
@@ -190,6 +190,27 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
         )
     )
     return out
+
+
+def variables(model: Model, lay: ModelLayout, fmi_version: int) -> list:
+    """The FMU's variables in ``ModelVariables`` order (what ``modelDescription.xml`` and the documentation list).
+
+    Parameters
+    ----------
+    model : Model
+        The pendulum.
+    lay : ModelLayout
+        Value references and start values.
+    fmi_version : {2, 3}
+        FMI standard (FMI 3 lists ``time``).
+
+    Returns
+    -------
+    list
+        Objects with ``name``, ``vr``, ``causality``, ``variability``, ``description``, ``type``,
+        ``initial`` and ``attrs`` (unit, displayUnit, start, min, max, derivative as strings).
+    """
+    return _variables(model, lay, fmi_version)
 
 
 def _unit_definitions(parent: ET.Element, used: set[str]) -> None:

@@ -42,6 +42,7 @@ __all__ = [
     "shared_library_suffix",
     "cache_dir",
     "compile_shared",
+    "compile_shared_with",
     "build_cached",
     "source_digest",
     "CacheRebuildWarning",
@@ -179,6 +180,46 @@ def compile_shared(
     cmd = [compiler, *CFLAGS, *extra_flags, "-shared", "-I", str(src_dir), "-o", str(out)]
     cmd += [str(src_dir / name) for name in units] + ["-lm"]
     returncode, stderr = _run_compiler(cmd)
+    if returncode != 0:
+        raise RuntimeError(f"C compilation failed ({' '.join(cmd)}):\n{stderr.strip()}")
+    return out
+
+
+def compile_shared_with(
+    compiler: Sequence[str], src_dir: Path, units: Sequence[str], out: Path, *, flags: Sequence[str] = CFLAGS
+) -> Path:
+    """Compile ``units`` into the shared library ``out`` with a given compiler command (e.g. a cross compiler).
+
+    Parameters
+    ----------
+    compiler : sequence of str
+        Compiler command and its leading arguments, e.g. ``["x86_64-w64-mingw32-gcc"]`` or
+        ``[sys.executable, "-m", "ziglang", "cc", "-target", "aarch64-linux-gnu"]``.
+    src_dir : Path
+        Folder holding the sources and headers (also the include path).
+    units : sequence of str
+        Translation units, in build order.
+    out : Path
+        Library to write (any suffix: the target decides, e.g. ``.dll``).
+    flags : sequence of str
+        Compiler flags (default :data:`CFLAGS`).
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Raises
+    ------
+    RuntimeError
+        The compiler failed or does not exist (its messages included).
+    """
+    cmd = [*compiler, *flags, "-shared", "-I", str(src_dir), "-o", str(out)]
+    cmd += [str(src_dir / name) for name in units] + ["-lm"]
+    try:
+        returncode, stderr = _run_compiler(cmd)
+    except FileNotFoundError as exc:
+        raise RuntimeError(f"C compiler {compiler[0]!r} not found: {exc}") from exc
     if returncode != 0:
         raise RuntimeError(f"C compilation failed ({' '.join(cmd)}):\n{stderr.strip()}")
     return out
