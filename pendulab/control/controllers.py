@@ -22,6 +22,8 @@ if TYPE_CHECKING:
 __all__ = ["CONTROLLERS", "TASK_CONTROLLERS", "make_controller", "controller_for_task"]
 
 
+#: Most samples of a default ``tvlqr`` reference (one gain matrix per sample).
+MAX_REFERENCE_SAMPLES = 1_000_000
 #: Names accepted by :func:`make_controller`.
 CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr", "nmpc")
 
@@ -96,7 +98,13 @@ def make_controller(
         return energy_swingup(model, h, u_max=u_max), model.state(theta1=0.1)
     if name == "tvlqr":
         if reference is None:
-            reference = swingup_reference(model, h, round(positive_float("t_ref", t_ref) / h) * h, u_max=u_max)
+            n_ref = round(positive_float("t_ref", t_ref, "[s]") / h)
+            if n_ref > MAX_REFERENCE_SAMPLES:
+                raise ValueError(
+                    f"t_ref must be at most {MAX_REFERENCE_SAMPLES} samples of {h:g} s "
+                    f"(the TVLQR gains are one matrix per sample), got {t_ref!r}"
+                )
+            reference = swingup_reference(model, h, max(n_ref, 1) * h, u_max=u_max)
         tracker = tvlqr_tracker(model, *reference, h, u_max=u_max, actuation=actuation)
         return tracker, tracker.x_ref[0].copy()
     if name == "nmpc":

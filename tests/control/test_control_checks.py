@@ -63,6 +63,20 @@ def test_nmpc_sizes_are_bounded_before_planning(pendubot):
     assert NMPCOptions(r="1").r == 1.0 and isinstance(NMPCOptions(horizon=20.0).horizon, int)
 
 
+def test_plan_lengths_are_bounded_and_named():
+    import pendulab as pl
+    from pendulab.control.controllers import make_controller
+    from pendulab.control.nmpc import nmpc_swingup
+
+    # Both fail at once, naming the argument and the limit, instead of building a plan of 10^7 intervals.
+    with pytest.raises(ValueError, match=r"horizon must be at most 30 s"):
+        nmpc_swingup(pl.rigid(), horizon=1e6)
+    with pytest.raises(ValueError, match=r"t_ref must be at most 1000000 samples"):
+        make_controller("tvlqr", pl.rigid(), 0.01, t_ref=1e9)
+    with pytest.raises(TypeError, match="model must be a pendulab Model"):
+        make_controller("lqr", "rigid", 0.01)
+
+
 def test_nmpc_before_time_zero_is_a_value_error(pendubot):
     ctrl = nmpc_controller(pendubot.model, actuation="pendubot", u_max=6.0, horizon=5)
     x = np.array([np.pi, np.pi, 0.0, 0.0])

@@ -15,9 +15,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..._checks import positive_float
 from ...model.counterpart import rigid_counterpart
 from ...model.model import Model
 from ..lqr import actuation_name
+from ..swingup.transcription import MAX_INTERVALS
 from .controller import NMPCController, NMPCOptions, nmpc_controller
 
 if TYPE_CHECKING:
@@ -184,6 +186,12 @@ def nmpc_swingup(
 
     check_options(sample_time=sample_time, solver=solver, **options)  # before the (costly) plan
     if reference is None:
+        horizon = positive_float("horizon", horizon, "[s]")
+        if round(horizon / 0.03) > MAX_INTERVALS:
+            raise ValueError(
+                f"horizon must be at most {MAX_INTERVALS * 0.03:g} s (the plan has one interval per 30 ms, "
+                f"at most {MAX_INTERVALS}), got {horizon!r}"
+            )
         pb = SwingUpProblem(model=model, actuation=actuation_name(actuation), torque_limit=u_max, horizon=horizon, name="nmpc")
         res = plan_swingup(pb, N=max(20, round(horizon / 0.03)))
         reference, x0 = (res.t, res.x, res.u), model.rest_state()
