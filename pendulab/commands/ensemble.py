@@ -125,7 +125,7 @@ def run_flipmap(args: argparse.Namespace) -> int:
         relative_tolerance("--rtol", rtol)
     except ValueError as exc:
         raise CLIError(str(exc)) from None
-    threads = None if args.threads is None else _int("--threads", args.threads, 1, 4096)
+    threads = None if args.threads is None else _int("--threads", args.threads, 1, 256)
     if args.k is not None and args.model == "rigid" and not args.compare:
         raise CLIError("--k: only meaningful with --model elastic or --compare")
     k = DEFAULT_K if args.k is None else _positive("--k", args.k)

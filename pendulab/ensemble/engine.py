@@ -43,6 +43,8 @@ __all__ = ["ensemble", "check_params", "check_x0", "MAX_RUNS", "DEFAULT_MAX_STEP
 MAX_RUNS = 10**8
 #: Largest number of dense output points (runs x times) of one ensemble (10**9 x nx x 8 bytes).
 MAX_DENSE = 10**8
+#: Most local workers (threads or forked processes) of one ensemble.
+MAX_WORKERS = 256
 #: Default step budget of each run (as ``simulate``'s option ``max_steps``).
 DEFAULT_MAX_STEPS = 1_000_000
 
@@ -164,7 +166,11 @@ def ensemble(
         bounded_int("len(x0) * len(t_eval)", n * len(te), high=MAX_DENSE, why="memory of the dense output x (8 bytes per value)")
     plan = resolve_events(model, events)
     cs = _positive_int("chunk_size", chunk_size)
-    nthreads = (os.cpu_count() or 1) if threads is None else _positive_int("threads", threads)
+    nthreads = (
+        (os.cpu_count() or 1)
+        if threads is None
+        else bounded_int("threads", threads, high=MAX_WORKERS, why="local workers; each may be a forked process")
+    )
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method must be 'taylor' or a key of pendulab.METHODS {sorted(METHODS)}, got {method!r}")
     steps = bounded_int("max_steps", max_steps, low=1, high=2**31 - 1, why="the step budget of each run")

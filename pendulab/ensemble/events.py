@@ -17,10 +17,13 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._checks import bounded_int
 from ..model.model import Model
 
 __all__ = ["Event", "FLIP", "EventPlan", "resolve_events"]
 
+#: Most events of one ensemble.
+MAX_EVENTS = 64
 #: Name of the built-in flip event: ``|theta1|`` or ``|theta2|`` reaching pi (terminal).
 FLIP = "flip"
 
@@ -125,6 +128,7 @@ def resolve_events(model: Model, events: Sequence[Event | str] | None) -> EventP
         events = list(events)
     except TypeError as exc:
         raise ValueError(f"events must be a sequence of Event or 'flip', got {events!r}") from exc
+    bounded_int("number of events", len(events), low=0, high=MAX_EVENTS, why="each event is compiled into the integrator")
     sym = model.symbolic
     names: list[str] = []
     terminal: list[bool] = []

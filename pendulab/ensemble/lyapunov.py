@@ -93,7 +93,7 @@ LYAPUNOV_METHODS: tuple[str, ...] = ("taylor", "cvodes")
 #: log_growth hold 8 bytes per renormalisation each, and each one is a Python round trip.
 MAX_RENORM = 10_000_000
 #: Default step budget of one estimate (integrator steps, transient included; as ``simulate``'s ``max_steps``).
-DEFAULT_MAX_STEPS = 100_000_000
+DEFAULT_MAX_STEPS = 10_000_000
 #: Taylor steps per propagation slice: Ctrl-C and the budgets are checked between slices.
 _SLICE_STEPS = 2000
 #: Spring-length choices of the energy-matched initial states.
@@ -415,7 +415,7 @@ def largest_lyapunov(
         with ``seed`` (a generic direction has a component along the most unstable one).
     seed : int, default 0
         Seed of the default tangent vector.
-    max_steps : int, default 100 000 000
+    max_steps : int, default 10 000 000
         Step budget of the Taylor integration (transient included), checked every 2000 steps.
     max_wall_time : float, optional
         Wall-time budget [s], checked between propagation slices (Taylor) or intervals (CVODES).

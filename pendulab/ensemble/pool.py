@@ -27,8 +27,12 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
+from .._checks import bounded_int
+
 __all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed"]
 
+#: Most worker processes of one map.
+MAX_WORKERS = 256
 #: Seconds between two checks for Ctrl-C while waiting for workers.
 POLL_INTERVAL = 0.1
 
@@ -175,17 +179,18 @@ def map_runs(
     Raises
     ------
     ValueError
-        ``workers`` or ``chunks_per_worker`` below 1.
+        ``workers`` outside [1, 256] or ``chunks_per_worker`` outside [1, 10000].
     Exception
         Whatever ``fn`` raises (the first failure ends the map).
     """
     todo = list(items)
     total = len(todo)
-    n_workers = default_workers() if workers is None else int(workers)
-    if n_workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers!r}")
-    if chunks_per_worker < 1:
-        raise ValueError(f"chunks_per_worker must be >= 1, got {chunks_per_worker!r}")
+    n_workers = (
+        default_workers()
+        if workers is None
+        else bounded_int("workers", workers, high=MAX_WORKERS, why="each worker is a forked process")
+    )
+    chunks_per_worker = bounded_int("chunks_per_worker", chunks_per_worker, high=10_000, why="chunks are sent one by one")
     n_workers = min(n_workers, max(total, 1))
     if n_workers == 1 or total <= 1 or "fork" not in multiprocessing.get_all_start_methods():
         out: list[R] = []

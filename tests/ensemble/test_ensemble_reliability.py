@@ -107,6 +107,18 @@ def test_sizes_are_bounded_with_the_limit_named(rigid: pl.Model) -> None:
         pl.ensemble(rigid, np.zeros((2000, 4)), 1.0, t_eval=np.linspace(0, 1, 10**6))
 
 
+def test_worker_and_event_counts_are_bounded(rigid: pl.Model) -> None:
+    from pendulab.ensemble import Event, map_runs
+
+    # threads=10**6 on a big ensemble used to mean one forked process per chunk: hundreds of thousands.
+    with pytest.raises(ValueError, match=r"threads must be at most 256"):
+        pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, threads=10**6)
+    with pytest.raises(ValueError, match=r"workers must be at most 256"):
+        map_runs(abs, range(4), workers=10**6)
+    with pytest.raises(ValueError, match=r"number of events must be at most 64"):
+        pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, events=[Event(f"e{i}", "theta1", value=0.01 * i) for i in range(65)])
+
+
 # -- budgets ------------------------------------------------------------------------------
 def test_step_budget_fails_runs_with_a_message(rigid: pl.Model) -> None:
     # The reproducer that used to run for minutes: horizon 1e12 s.
