@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Category", "CATEGORIES", "RunRecord", "CategoryScore", "Scorecard", "score", "rerun", "categories_for",
-    "MAX_RUNS", "run_key", "record_from_dict",
+    "MAX_RUNS", "MAX_LEVELS", "run_key", "record_from_dict",
 ]  # fmt: skip
 
 
@@ -376,6 +376,7 @@ def _check_selection(task: Task, categories: Sequence[str] | None, levels: Mappi
             raise ValueError(f"levels given for {name!r}, which is not among the categories {names}")
         if len(values) == 0 or not all(math.isfinite(float(v)) for v in values):
             raise ValueError(f"levels of {name!r} must be a non-empty sequence of finite numbers, got {values!r}")
+        bounded_int(f"len(levels[{name!r}])", len(values), high=MAX_LEVELS, why="levels of one category (a sweep, not a grid)")
     if not names:
         raise ValueError("categories must name at least one category")
     return names
@@ -384,6 +385,8 @@ def _check_selection(task: Task, categories: Sequence[str] | None, levels: Mappi
 #: Largest number of runs per level of a stochastic category (a scorecard of 11 categories x 5 levels stays below
 #: ~3e5 episodes, hours on 2 cores; more runs do not make a success rate of a few significant digits more useful).
 MAX_RUNS = 5000
+#: Most levels of one category.
+MAX_LEVELS = 100
 #: Identity of a run within a scorecard (category, level index, run, seed): what ``completed`` records are matched by.
 RunKey = tuple[str, int, int, tuple[int, ...]]
 
@@ -507,8 +510,11 @@ def score(
     if categories is not None and (isinstance(categories, str) or not isinstance(categories, Sequence)):
         raise TypeError(f"categories must be a sequence of category names, got {type(categories).__name__}")
     t0 = time.perf_counter()
+    from .swingup.tasks import resolve_task
+
+    # Every selection is checked before the controller is designed (a tvlqr or nmpc plan takes seconds).
+    names = _check_selection(resolve_task(task), categories, levels)
     tk, cname, ctrl, x0 = _resolve(controller, task)
-    names = _check_selection(tk, categories, levels)
     plan: list[tuple[str, int, float, int, tuple[int, ...]]] = []
     for name in names:
         cat = CATEGORIES[name]
