@@ -32,19 +32,16 @@ import math
 import statistics
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
 from .._checks import is_interrupt
-from ..integrate import simulate, time_grid
-from ..integrate.trajectory import Trajectory
-from ..model.counterpart import rigid_counterpart
-from ..model.model import Model, elastic
-from ..model.quasistatic import quasi_static_lengths, quasi_static_state
+from ..model.model import elastic
 from ..scene import Scene
+from ..scene.levels import LEVELS, ModelLevel, levels_for, scene_signals
 from .workprecision import watch_interrupt
 
 __all__ = [
@@ -59,44 +56,8 @@ __all__ = [
     "TIE_RATIO",
 ]
 
-LEVELS: tuple[str, ...] = ("linearized", "rigid", "rigid+quasi-static", "elastic")
 #: Measured costs within this factor of the cheapest count as a tie (simpler model wins).
 TIE_RATIO = 1.5
-
-
-@dataclass(frozen=True)
-class ModelLevel:
-    """One level of the hierarchy: a way to compute the scene's trajectory.
-
-    Attributes
-    ----------
-    name : str
-        One of ``LEVELS``.
-    model : Model
-        The model it integrates (rigid for ``rigid`` and ``rigid+quasi-static``).
-    run : callable
-        ``run(scene) -> ndarray (N, nx)``: states in the scene model's state order.
-    """
-
-    name: str
-    model: Model
-    run: Callable[[Any], np.ndarray] = field(repr=False)
-
-    def simulate(self, scene: Scene) -> Trajectory:
-        """Trajectory of the scene with this level, in the scene model's signals.
-
-        Parameters
-        ----------
-        scene : Scene
-            The scene (model, start, horizon, output step, constant torque).
-
-        Returns
-        -------
-        Trajectory
-            States in the scene model's state order on the scene's output
-            grid, with the constant torques and the scene model's outputs.
-        """
-        return _as_trajectory(scene, self.run(scene), self.name)
 
 
 @dataclass(frozen=True)
@@ -206,165 +167,6 @@ class HierarchyReport:
         return "\n".join(lines)
 
 
-# -- levels -------------------------------------------------------------------
-def _angles_rates(model: Model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    names = model.state_names
-    th = x[..., [names.index("theta1"), names.index("theta2")]]
-    om = x[..., [names.index("omega1"), names.index("omega2")]]
-    return th, om
-
-
-def _nearest_equilibrium(model: Model, x0: np.ndarray) -> np.ndarray:
-    th, _ = _angles_rates(model, x0)
-    th_eq = np.pi * np.round(th / np.pi)
-    if model.kind == "elastic":
-        return quasi_static_state(model, th_eq)
-    return np.concatenate([th_eq, np.zeros(2)])
-
-
-def _zoh(A: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact discretization of dx' = A dx + b over dt: (e^{A dt}, int_0^dt e^{A s} ds b)."""
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) < 1e8:
-        # Diagonalizable (the usual case): cheaper than scipy's expm, whose BLAS
-        # threading costs ~10 ms per call on a loaded machine.
-        z = lam * dt
-        phi = np.where(np.abs(z) > 1e-8, np.expm1(z) / np.where(z == 0, 1, z), 1.0 + z / 2)
-        Vi = np.linalg.inv(V)
-        return np.real(V @ np.diag(np.exp(z)) @ Vi), np.real(V @ (phi * dt * (Vi @ b)))
-    from ..control.lqr import zoh
-
-    Ad, Bd = zoh(A, b[:, None], dt)
-    return Ad, Bd[:, 0]
-
-
-def _scene_input(scene: Scene) -> Any:
-    """The scene's torques for :func:`simulate`: defined in time when the scene has a sine (``Scene.input_spec``)."""
-    spec = getattr(scene, "input_spec", None)
-    return spec() if callable(spec) else scene.u
-
-
-def _run_linearized(scene: Scene) -> np.ndarray:
-    model = scene.model
-    if getattr(scene, "u_amplitude", None) is not None:
-        raise RuntimeError("the linearized level takes constant torques only; this scene has a sine input")
-    x_eq = _nearest_equilibrium(model, np.asarray(scene.x0))
-    u0 = np.zeros(model.nu)
-    A, B = (np.asarray(m) for m in model.functions["jac_rhs"](x_eq, u0, model.p))
-    f_eq = model.rhs(x_eq, u0)  # zero at an equilibrium; kept so a slight offset is exact
-    t = _grid(scene)
-    dt = float(t[1] - t[0])
-    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
-    Ad, bd = _zoh(A, B @ u + f_eq, dt)
-    nx = model.nx
-    X = np.empty((len(t), nx))
-    dx = np.asarray(scene.x0, dtype=float) - x_eq
-    for k in range(len(t)):
-        X[k] = dx
-        dx = Ad @ dx + bd
-    return X + x_eq
-
-
-def _run_rigid_states(scene: Scene) -> np.ndarray:
-    """The rigid counterpart's states (theta1, theta2, omega1, omega2) on the scene grid."""
-    th, om = _angles_rates(scene.model, np.asarray(scene.x0))
-    rm = rigid_counterpart(scene.model)
-    return simulate(
-        rm, np.concatenate([th, om]), scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, _scene_input(scene)
-    ).x
-
-
-def _embed(model: Model, th: np.ndarray, om: np.ndarray, r: np.ndarray | None) -> np.ndarray:
-    """Rigid (theta, omega) as states of ``model`` (springs at length r, v = 0)."""
-    if model.kind == "rigid":
-        return np.hstack([th, om])
-    if r is None:
-        r = np.tile([model.params.L1, model.params.L2], (th.shape[0], 1))
-    return np.hstack([th, r, om, np.zeros_like(r)])
-
-
-def _run_rigid(scene: Scene) -> np.ndarray:
-    X = _run_rigid_states(scene)
-    return _embed(scene.model, X[:, :2], X[:, 2:], None)
-
-
-def _run_rigid_qs(scene: Scene) -> np.ndarray:
-    X = _run_rigid_states(scene)
-    r = quasi_static_lengths(scene.model, X[:, :2], X[:, 2:], scene.u)
-    return _embed(scene.model, X[:, :2], X[:, 2:], r)
-
-
-def _run_full(scene: Scene) -> np.ndarray:
-    return simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, _scene_input(scene)).x
-
-
-def levels_for(model: Model) -> tuple[ModelLevel, ...]:
-    """The hierarchy for a scene model, cheapest first; the last level is the reference.
-
-    Parameters
-    ----------
-    model : Model
-        The scene's model.
-
-    Returns
-    -------
-    tuple of ModelLevel
-        Rigid model: ``linearized``, ``rigid`` (the reference). Elastic model:
-        ``linearized``, ``rigid``, ``rigid+quasi-static``, ``elastic``.
-    """
-    if model.kind == "rigid":
-        return (ModelLevel("linearized", model, _run_linearized), ModelLevel("rigid", model, _run_full))
-    rm = rigid_counterpart(model)
-    return (
-        ModelLevel("linearized", model, _run_linearized),
-        ModelLevel("rigid", rm, _run_rigid),
-        ModelLevel("rigid+quasi-static", rm, _run_rigid_qs),
-        ModelLevel("elastic", model, _run_full),
-    )
-
-
-# -- evaluation ---------------------------------------------------------------
-def _grid(scene: Scene) -> np.ndarray:
-    return time_grid(scene.t_final, scene.dt)
-
-
-def _signals(scene: Scene, X: np.ndarray) -> dict[str, np.ndarray]:
-    model = scene.model
-    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
-    Y = None
-    out: dict[str, np.ndarray] = {}
-    for name in scene.outputs:
-        group, i = model.signal_index(name)
-        if group == "state":
-            out[name] = X[:, i]
-        elif group == "input":
-            out[name] = np.full(X.shape[0], u[i])
-        else:
-            if Y is None:
-                Y = model.outputs(X, u)
-            out[name] = Y[:, i]
-    return out
-
-
-def _as_trajectory(scene: Scene, X: np.ndarray, level: str) -> Trajectory:
-    model = scene.model
-    u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
-    U = np.tile(u, (X.shape[0], 1))
-    return Trajectory(
-        t=_grid(scene),
-        x=X,
-        u=U,
-        y=model.outputs(X, U),
-        state_names=model.state_names,
-        input_names=model.input_names,
-        output_names=model.output_names,
-        method=f"{level} ({scene.method})",
-        success=True,
-        message=f"model level {level!r}",
-        stats={},
-    )
-
-
 def _timed(fn: Callable[[], np.ndarray], repeats: int) -> tuple[np.ndarray, float]:
     times, X = [], None
     for _ in range(repeats):
@@ -426,7 +228,7 @@ def _run_levels(
     X_ref, wall_ref = _timed(lambda: levels[-1].run(scene), repeats)  # a failing reference propagates
     if interrupted():  # a native solver swallowed a Ctrl-C (and retried): stop anyway
         raise KeyboardInterrupt
-    ref = _signals(scene, X_ref)
+    ref = scene_signals(scene, X_ref)
     results = []
     for lv in levels[:-1]:
         try:
@@ -437,7 +239,7 @@ def _run_levels(
             errors = dict.fromkeys(scene.outputs, math.inf)
             results.append(LevelResult(lv.name, math.inf, errors, math.nan, False, f"failed: {str(exc).splitlines()[0]}"))
             continue
-        sig = _signals(scene, X) if np.all(np.isfinite(X)) else None
+        sig = scene_signals(scene, X) if np.all(np.isfinite(X)) else None
         errors = {n: (float(np.max(np.abs(sig[n] - ref[n]))) if sig is not None else math.inf) for n in scene.outputs}
         err = max(errors.values())
         results.append(LevelResult(lv.name, err, errors, wall, err <= tol))

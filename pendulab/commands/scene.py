@@ -1,32 +1,60 @@
-"""``pendulab scene check FILE``: which model does a scene need?"""
+"""``pendulab scene check FILE``: which model does a scene need? Decided before running (a priori rule)."""
 
 from __future__ import annotations
 
 import argparse
 import json
 
+from . import CLIError
+
 __all__ = ["register"]
 
 
 def _check(args: argparse.Namespace) -> int:
-    from ..bench.hierarchy import check_scene
     from ..scene import load_scene
 
-    report = check_scene(load_scene(args.file), repeats=args.repeats, tolerance=args.tolerance)
-    print(json.dumps(report.to_dict(), indent=1) if args.json else report.table())
+    if args.repeats is not None and not args.measure:
+        raise CLIError("--repeats applies to --measure only (the a priori rule runs no level)")
+    if args.measure and args.verify:
+        raise CLIError("give --verify (run the chosen level and the reference) or --measure (run every level), not both")
+    scene = load_scene(args.file)
+    if args.measure:
+        from ..bench.hierarchy import check_scene
+
+        report = check_scene(scene, repeats=3 if args.repeats is None else args.repeats, tolerance=args.tolerance)
+        print(json.dumps(report.to_dict(), indent=1) if args.json else report.table())
+        return 0
+    from ..scene.choice import choose_model
+
+    choice = choose_model(scene, tolerance=args.tolerance, verify=args.verify)
+    print(json.dumps(choice.to_dict(), indent=1) if args.json else choice.table())
     return 0
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("scene", help="scene tools (model hierarchy check)", description=__doc__)
+    p = subparsers.add_parser("scene", help="scene tools (which model a scene needs)", description=__doc__)
     sub = p.add_subparsers(dest="scene_command", metavar="SCENE")
     sub.required = True
     c = sub.add_parser(
         "check",
-        help="run linearized / rigid / rigid+quasi-static / elastic models on a scene; name the cheapest within tolerance",
+        help="predict the error of linearized / rigid / rigid+quasi-static models on a scene without running the "
+        "reference; name the cheapest within tolerance and the horizon of validity",
+        description="Predict, without running the reference, each model level's error on the scene's outputs and "
+        "horizon, pick the cheapest within the scene's tolerance, and say up to when each level (and the reference "
+        "at the scene's rtol, on chaotic scenes) keeps the outputs within tolerance. See docs/model_choice.md.",
     )
     c.add_argument("file", help="scene TOML file or shipped scene name")
-    c.add_argument("--json", action="store_true", help="print the report as JSON")
-    c.add_argument("--repeats", type=int, default=3, help="timed runs per model (median; default 3)")
+    c.add_argument("--json", action="store_true", help="print the result as JSON")
     c.add_argument("--tolerance", type=float, default=None, help="override the scene's [outputs] tolerance")
+    c.add_argument(
+        "--verify",
+        action="store_true",
+        help="also run the chosen level and the reference; report predicted against measured error and horizon",
+    )
+    c.add_argument(
+        "--measure",
+        action="store_true",
+        help="a posteriori instead: run every level and the reference, timed, and pick on measured error and cost",
+    )
+    c.add_argument("--repeats", type=int, default=None, help="with --measure: timed runs per level (median; default 3)")
     c.set_defaults(func=_check)

@@ -35,8 +35,13 @@ def register(subparsers: Any) -> None:
         "--model",
         metavar="KIND",
         help="model with default parameters, at rest: rigid | elastic; or 'auto' with --scene: the cheapest model of "
-        "the hierarchy (linearized, rigid, rigid+quasi-static, elastic) within the scene's [outputs] tolerance "
-        "(pendulab scene check; its report goes to stderr)",
+        "the hierarchy (linearized, rigid, rigid+quasi-static, elastic) predicted within the scene's [outputs] "
+        "tolerance, decided before running (pendulab scene check; its table and horizon of validity go to stderr)",
+    )
+    src.add_argument(
+        "--verify",
+        action="store_true",
+        help="with --model auto: also run the reference and report the chosen level's predicted against measured error",
     )
     p.add_argument(
         "--set",
@@ -68,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError("--model auto needs --scene FILE|NAME (the scene states the outputs and tolerance to meet)")
     if not auto and (args.scene is None) == (args.model is None):
         raise CLIError("give exactly one of --scene FILE|NAME or --model rigid|elastic (or --scene with --model auto)")
+    if getattr(args, "verify", False) and not auto:
+        raise CLIError("--verify applies to --model auto only (it proves the a priori choice against the reference)")
     if args.model is not None and args.model not in (*_KINDS, "auto"):
         raise CLIError(f"--model {args.model!r}: expected one of {[*_KINDS, 'auto']}")
     settings = parse_settings(args.set)
@@ -87,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     given = {k: v for k, v in overrides.items() if v is not None}
     print(f"pendulab simulate: {scene.name} ({scene.model.kind}) ...", file=sys.stderr)
     if auto:
-        model, traj, extra = _simulate_auto(dataclasses.replace(scene, **given))
+        model, traj, extra = _simulate_auto(dataclasses.replace(scene, **given), verify=args.verify)
     else:
         model, traj, extra = scene.model, scene.simulate(**given), {}
     summary = summarize(scene.name, model, traj)
@@ -111,27 +118,37 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _simulate_auto(scene: Any) -> tuple[Any, Any, dict[str, Any]]:
-    """The cheapest model level within the scene's tolerance: the model run, its own trajectory, summary extras.
+def _simulate_auto(scene: Any, verify: bool = False) -> tuple[Any, Any, dict[str, Any]]:
+    """The cheapest model level predicted within the scene's tolerance: the model run, its own trajectory, summary extras.
 
+    The level is chosen a priori (:func:`pendulab.scene.choice.choose_model`: predicted errors, no reference run).
     A rigid level runs the rigid counterpart itself (its own states, solver and statistics; no spring rows);
     ``rigid+quasi-static`` adds the quasi-static spring stretch, labelled as such; the scene's own model level
-    runs the scene; ``linearized`` keeps the scene model's states (exact zero-order-hold steps of the linearization).
+    runs the scene; ``linearized`` keeps the scene model's states (the rule's own linear solution, reused).
+    ``verify`` also runs the reference and adds predicted against measured error to the summary.
     """
-    from ..bench.hierarchy import choose_model
     from ..integrate import simulate
-    from ..model.counterpart import rigid_state
+    from ..model.counterpart import rigid_counterpart, rigid_state
     from ..model.quasistatic import quasi_static_lengths
+    from ..scene.choice import choose_model
 
-    print("pendulab simulate: --model auto: running the model hierarchy ...", file=sys.stderr)
-    level, report = choose_model(scene)
-    print(report.table(), file=sys.stderr)
+    start = time.perf_counter()
+    choice = choose_model(scene, verify=verify)
+    print(choice.table(), file=sys.stderr)
     extra: dict[str, Any] = {
-        "model_level": level.name,
+        "model_level": choice.chosen,
         "scene_params": {k: float(v) for k, v in scene.model.params.resolved().items()},
+        "predicted_error": next(lv.error for lv in choice.levels if lv.name == choice.chosen),
+        "valid_until_s": choice.trusted_until,
+        "reference_horizon_s": choice.reference_horizon,
+        "needed_rtol": choice.needed_rtol,
+        "verdict": choice.verdict,
+        "rule_time_s": choice.rule_time,
     }
-    if level.name in ("rigid", "rigid+quasi-static") and scene.model.kind == "elastic":
-        rigid = level.model
+    if choice.verification is not None:
+        extra["verification"] = choice.verification.to_dict()
+    if choice.chosen in ("rigid", "rigid+quasi-static") and scene.model.kind == "elastic":
+        rigid = rigid_counterpart(scene.model)
         traj = simulate(
             rigid,
             rigid_state(scene.model, scene.x0),
@@ -142,17 +159,16 @@ def _simulate_auto(scene: Any) -> tuple[Any, Any, dict[str, Any]]:
             atol=scene.atol,
             u=scene.input_spec(),
         )
-        if level.name == "rigid+quasi-static":
+        if choice.chosen == "rigid+quasi-static":
             r = quasi_static_lengths(scene.model, traj.x[:, :2], traj.x[:, 2:], scene.u)  # as the hierarchy's level
             stretch = r - [scene.model.params.L1, scene.model.params.L2]
             extra["stretch_source"] = "quasi-static"
             extra["max_stretch_m"] = float(np.max(np.abs(stretch)))
         return rigid, traj, extra
-    if level.name != "linearized":  # the scene's own model: its own run, with the solver's statistics and inputs
+    if choice.chosen != "linearized":  # the scene's own model: its own run, with the solver's statistics and inputs
         return scene.model, scene.simulate(), extra
-    extra["method_note"] = "exact zero-order-hold steps of the linearization at the nearest equilibrium"
-    start = time.perf_counter()
-    traj = level.simulate(scene)
-    # The summary reports the chosen model's own run time (the hierarchy's trajectories carry no solver stats).
+    extra["method_note"] = "exact modal solution of the linearization at the nearest equilibrium"
+    traj = choice.simulate(scene)
+    # The summary reports the chosen model's own cost: the rule, whose linear solution is the level's run.
     traj = dataclasses.replace(traj, stats={**traj.stats, "wall_time": time.perf_counter() - start})
     return scene.model, traj, extra

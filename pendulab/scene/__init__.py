@@ -17,7 +17,20 @@ lists a group. Every scene of the project -- user scenes, benchmark cases,
 validation scenes and swing-up tasks -- is this one type.
 """
 
+from .choice import ModelChoice, choose_model
 from .core import GROUPS, SCENE_DIR, STARTS, Scene, default_scene, initial_state, list_scenes, scene_path
 from .reader import load_scene
 
-__all__ = ["Scene", "load_scene", "list_scenes", "default_scene", "scene_path", "initial_state", "SCENE_DIR", "STARTS", "GROUPS"]
+__all__ = [
+    "Scene",
+    "load_scene",
+    "choose_model",
+    "ModelChoice",
+    "list_scenes",
+    "default_scene",
+    "scene_path",
+    "initial_state",
+    "SCENE_DIR",
+    "STARTS",
+    "GROUPS",
+]

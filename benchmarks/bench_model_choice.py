@@ -1,0 +1,363 @@
+"""The a priori model rule (``pendulab.scene.choose_model``) against the measured hierarchy, on a family of scenes.
+
+    nice python benchmarks/bench_model_choice.py [--out DIR] [--resume] [--quick] [--no-progress]
+    nice python benchmarks/bench_model_choice.py --out benchmarks/results   # the recorded results
+
+Scenes: a structured family the constants were calibrated on (rigid and elastic, k = 1e2 ... 1e8 N/m,
+release angles 0.05 ... 2 rad, free, constant and sine torques, static / rest-length / quasi-static
+spring starts, chaotic scenes over 8-10 s) and ``--n-random`` scenes drawn with a fixed seed that the
+rule was not fitted on. Per scene: the rule's prediction (error and horizon of validity per level,
+the reference's predictability horizon), every level run and measured against the reference
+(``measure_levels``), on chaotic scenes the reference against a run at rtol * 1e-3, and the times of
+``--model auto`` (rule + chosen level; median of 3 when cheap), of the chosen level alone and of the
+reference. Every finished scene is recorded at once in ``OUT/model_choice_journal.json`` (atomic);
+``--resume`` continues. Writes ``OUT/model_choice.md`` and two figures (``model_choice_errors.png``,
+``model_choice_time.png``). Default OUT: ``./pendulab-out/bench-model-choice``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import platform
+import statistics
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+import pendulab as pl
+from pendulab._io import atomic_path, atomic_write_text
+from pendulab.analysis.model_error import validity_horizon
+from pendulab.bench.journal import Journal
+from pendulab.integrate import simulate, time_grid
+from pendulab.scene import Scene, initial_state
+from pendulab.scene.choice import choose_model, measure_levels
+from pendulab.scene.levels import scene_signals
+
+OUTPUTS = ("theta1", "theta2", "x2", "y2")
+STUDY = "model-choice"
+
+
+def _scene(name: str, kind: str, k: float, a1: float, a2: float, t_final: float, tol: float, **kw: Any) -> Scene:
+    model = pl.rigid() if kind == "rigid" else pl.elastic(k1=k, k2=k)
+    start = kw.get("start", "static") if kind == "elastic" else "static"
+    initial = {"theta1": a1, "theta2": a2}
+    u = kw.get("u")
+    amp = kw.get("u_amplitude")
+    return Scene(
+        name=name,
+        description="model-choice benchmark",
+        model=model,
+        initial=MappingProxyType(initial),
+        x0=initial_state(model, initial, start),
+        t_final=t_final,
+        dt=0.01,
+        method="cvodes",
+        rtol=kw.get("rtol", 1e-10),
+        atol=kw.get("rtol", 1e-10),
+        outputs=OUTPUTS,
+        tolerance=tol,
+        u=None if u is None else np.asarray(u, dtype=float),
+        start=start,
+        u_amplitude=None if amp is None else np.asarray(amp, dtype=float),
+        u_frequency=kw.get("u_frequency", 0.0),
+    )
+
+
+def family(n_random: int, seed: int, quick: bool) -> list[tuple[str, str, Scene]]:
+    """(key, group, scene): ``calibration`` scenes, then ``random`` ones (seeded, not fitted on)."""
+    out: list[tuple[str, str, Scene]] = []
+
+    def add(group: str, name: str, *args: Any, **kw: Any) -> None:
+        out.append((name, group, _scene(name, *args, **kw)))
+
+    cal = "calibration"
+    for a in (0.05, 0.5, 1.2):
+        add(cal, f"rigid a={a:g}", "rigid", 0, a, a, 5.0, 1e-3)
+    add(cal, "rigid chaotic a=2", "rigid", 0, 2.0, 2.0, 10.0, 1e-3, rtol=1e-8)
+    add(cal, "rigid torque a=0.3", "rigid", 0, 0.3, 0.3, 5.0, 1e-3, u=(0.5, 0.0))
+    add(cal, "rigid sine a=0.3", "rigid", 0, 0.3, 0.0, 5.0, 1e-3, u_amplitude=(0.5, 0.0), u_frequency=0.4)
+    ks = (1e2, 1e4, 1e6) if quick else (1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8)
+    for k in ks:
+        for a in (0.05, 0.5, 1.2):
+            add(cal, f"elastic k={k:.0e} a={a:g}", "elastic", k, a, a, 3.0, 1e-3)
+    for k in (1e3, 1e5) if quick else (1e3, 1e5, 1e7):
+        add(cal, f"elastic chaotic k={k:.0e} a=2", "elastic", k, 2.0, 2.0, 8.0, 1e-3, rtol=1e-8, start="quasi-static")
+    add(cal, "elastic sine k=1e4 a=0.3", "elastic", 1e4, 0.3, 0.3, 3.0, 1e-3, u_amplitude=(0.5, 0.0), u_frequency=0.4)
+    add(cal, "elastic torque k=1e6 a=0.5", "elastic", 1e6, 0.5, 0.5, 3.0, 1e-3, u=(0.5, 0.2))
+    add(cal, "elastic rest-length k=1e5 a=0.5", "elastic", 1e5, 0.5, 0.5, 3.0, 1e-3, start="rest-length")
+    rng = np.random.default_rng(seed)
+    for i in range(n_random):
+        kind = "rigid" if rng.random() < 0.25 else "elastic"
+        k = 10 ** rng.uniform(2, 8)
+        a1 = rng.uniform(0.02, 2.2)
+        a2 = a1 * rng.uniform(-1, 1.2)
+        t_final = float(np.round(rng.uniform(2, 6), 1))
+        tol = float(10 ** rng.uniform(-4, -1.5))
+        kw: dict[str, Any] = {"start": str(rng.choice(["static", "quasi-static", "rest-length"]))}
+        force = rng.random()
+        if force < 0.25:
+            kw["u"] = (rng.uniform(-1, 1), rng.uniform(-0.5, 0.5))
+        elif force < 0.45:
+            kw["u_amplitude"] = (rng.uniform(0.1, 1.0), 0.0)
+            kw["u_frequency"] = rng.uniform(0.2, 1.0)
+        if kind == "elastic" and k > 3e6 and kw["start"] == "rest-length":
+            kw["start"] = "static"  # a rest-length start of a 1e7 N/m spring rings at ~1e3 rad/s: minutes of reference
+        if a1 > 1.6:
+            kw["rtol"] = 1e-8
+        name = f"random {i:02d} {kind}" + (f" k={k:.1e}" if kind == "elastic" else "") + f" a={a1:.2f},{a2:.2f}"
+        add("random", name, kind, k, a1, a2, t_final, tol, **kw)
+    return out
+
+
+def _timed(fn: Any, budget: float = 1.0) -> tuple[Any, float]:
+    """(result, median wall time [s]): 3 runs when the first is under ``budget`` s, else 1."""
+    t0 = time.perf_counter()
+    res = fn()
+    times = [time.perf_counter() - t0]
+    if times[0] < budget:
+        for _ in range(2):
+            t0 = time.perf_counter()
+            res = fn()
+            times.append(time.perf_counter() - t0)
+    return res, statistics.median(times)
+
+
+def measure(scene: Scene) -> dict[str, Any]:
+    """One scene: prediction, measurement, times."""
+    choose_model(scene)  # warm-up (JIT of model functions, solver plugins)
+    choice, t_rule = _timed(lambda: choose_model(scene))
+    measured = measure_levels(scene)
+    level = choice.model_level(scene)
+    _, t_level = _timed(lambda: level.run(scene))
+    _, t_auto = _timed(lambda: choose_model(scene).simulate(scene))
+    ref_name = list(measured)[0]
+    entry: dict[str, Any] = {
+        "kind": scene.model.kind,
+        "k": float(getattr(scene.model.params, "k1", math.inf)),
+        "amplitude": float(scene.initial["theta1"]),
+        "t_final": scene.t_final,
+        "tolerance": scene.tolerance,
+        "forced": "sine" if scene.u_amplitude is not None else ("constant" if scene.u is not None else "free"),
+        "start": scene.start,
+        "chosen": choice.chosen,
+        "lyapunov": choice.lyapunov,
+        "predicted": {lv.name: {"error": lv.error, "horizon": lv.horizon} for lv in choice.levels},
+        "measured": measured,
+        "reference": ref_name,
+        "rule_time": t_rule,
+        "level_time": t_level,
+        "auto_time": t_auto,
+        "reference_time": measured[ref_name]["time"],
+        "predicted_reference_horizon": choice.reference_horizon,
+        "needed_rtol": choice.needed_rtol,
+    }
+    if choice.lyapunov > 0.3:  # chaotic: the reference's own horizon, against a 1000x tighter run
+        X = simulate(scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol, scene.atol, scene.input_spec()).x
+        Xt = simulate(
+            scene.model, scene.x0, scene.t_final, scene.dt, scene.method, scene.rtol * 1e-3, scene.atol * 1e-3, scene.input_spec()
+        ).x
+        a, b = scene_signals(scene, X), scene_signals(scene, Xt)
+        e = np.max(np.vstack([np.abs(a[n] - b[n]) for n in scene.outputs]), axis=0)
+        entry["measured_reference_horizon"] = validity_horizon(time_grid(scene.t_final, scene.dt), e, scene.tolerance)
+        entry["measured_reference_error"] = float(np.max(e))
+    return entry
+
+
+def _ratio_ok(p: float, m: float, t_final: float) -> bool:
+    p, m = min(p, t_final), min(m, t_final)
+    if p == m:
+        return True
+    lo, hi = min(p, m), max(p, m)
+    return lo > 0 and hi / lo <= 2.0
+
+
+def report(entries: dict[str, Any], groups: dict[str, str], out: Path, wall: float) -> str:
+    """Markdown summary and figures from the journal's entries."""
+    rows, within, over10, horizon_checks, savings = [], 0, [], [], []
+    t_auto = t_ref = 0.0
+    overheads = []
+    for key, e in entries.items():
+        err = e["measured"][e["chosen"]]["error"]
+        ok = err <= e["tolerance"]
+        within += ok
+        if err > 10 * e["tolerance"]:
+            over10.append(key)
+        t_auto += e["auto_time"]
+        t_ref += e["reference_time"]
+        overheads.append(e["auto_time"] / e["level_time"])
+        # Horizons on chaotic scenes: every cheaper level with a finite measured error, and the reference.
+        if e["lyapunov"] > 0.3:
+            for name, m in e["measured"].items():
+                if name == e["reference"] or not math.isfinite(m["error"]):
+                    continue
+                horizon_checks.append((key, name, e["predicted"][name]["horizon"], m["horizon"], e["t_final"]))
+            if "measured_reference_horizon" in e:
+                horizon_checks.append(
+                    (key, "reference", e["predicted_reference_horizon"], e["measured_reference_horizon"], e["t_final"])
+                )
+        # The cheapest level measured within tolerance (what a perfect rule would pick).
+        best = (
+            next(n for n, m in e["measured"].items() if n != e["reference"] and m["error"] <= e["tolerance"])
+            if any(n != e["reference"] and m["error"] <= e["tolerance"] for n, m in e["measured"].items())
+            else e["reference"]
+        )
+        cells = []
+        for name in ("linearized", "rigid", "rigid+quasi-static"):
+            if name in e["predicted"]:
+                cells.append(f"{e['predicted'][name]['error']:.1e} / {e['measured'][name]['error']:.1e}")
+            else:
+                cells.append("–")
+        rows.append(
+            f"| {key} | {groups[key]} | {e['tolerance']:.0e} | {e['lyapunov']:.2f} | "
+            + " | ".join(cells)
+            + f" | **{e['chosen']}** | {best} | {err:.1e} {'ok' if ok else 'OVER'} | "
+            f"{e['auto_time'] * 1e3:.1f} / {e['level_time'] * 1e3:.1f} / {e['reference_time'] * 1e3:.0f} |"
+        )
+    n = len(entries)
+    h_ok = sum(_ratio_ok(p, m, T) for _, _, p, m, T in horizon_checks)
+    lines = [
+        "# A priori model choice: predicted vs measured",
+        "",
+        f"Written by `benchmarks/bench_model_choice.py` on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC "
+        f"({platform.machine()}, Python {platform.python_version()}, {wall:.0f} s wall for this run; method in docs/model_choice.md).",
+        "",
+        "## Targets",
+        "",
+        "| target | measured | verdict |",
+        "|---|---|---|",
+        f"| chosen level within tolerance on >= 95 % of scenes | {within}/{n} = {100 * within / n:.1f} % | "
+        f"{'met' if within >= 0.95 * n else 'missed'} |",
+        f"| never a level > 10x over tolerance | {len(over10)} scene(s) {', '.join(over10)} | {'met' if not over10 else 'missed'} |",
+        f"| `--model auto` (rule + chosen level) <= 1.2x the chosen level's own run | median {statistics.median(overheads):.2f}x, "
+        f"max {max(overheads):.2f}x, <= 1.2x on {sum(o <= 1.2 for o in overheads)}/{n} | "
+        f"{'met' if max(overheads) <= 1.2 else 'missed on the scenes whose chosen run takes milliseconds'} |",
+        f"| >= 3x total time saved vs always the elastic reference | {t_ref:.2f} s / {t_auto:.2f} s = {t_ref / t_auto:.1f}x | "
+        f"{'met' if t_ref >= 3 * t_auto else 'missed'} |",
+        f"| horizon of validity within 2x of measured (chaotic scenes) | {h_ok}/{len(horizon_checks)} | "
+        f"{'met' if h_ok == len(horizon_checks) else 'missed on ' + str(len(horizon_checks) - h_ok)} |",
+        "",
+        "Calibration scenes: the constants of `pendulab/scene/choice.py` were set on them; random scenes "
+        f"(seed, not fitted on): within tolerance {sum(entries[k]['measured'][entries[k]['chosen']]['error'] <= entries[k]['tolerance'] for k in entries if groups[k] == 'random')}"
+        f"/{sum(groups[k] == 'random' for k in entries)}.",
+        "",
+        "## Scenes",
+        "",
+        "Errors: max abs over the grid and the outputs theta1, theta2 [rad], x2, y2 [m], against the scene's own model; "
+        "cells are predicted / measured. Times [ms]: `--model auto` (rule + chosen level) / chosen level alone / reference.",
+        "",
+        "| scene | group | tol | lambda_1 [1/s] | linearized | rigid | rigid+qs | chosen | best measured | chosen's error | times [ms] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+        *rows,
+        "",
+        "## Horizons of validity on chaotic scenes (predicted / measured [s], capped at the horizon)",
+        "",
+        "| scene | level | predicted | measured | horizon | within 2x |",
+        "|---|---|---|---|---|---|",
+        *[
+            f"| {k} | {name} | {p:.2f} | {m:.2f} | {T:g} | {'yes' if _ratio_ok(p, m, T) else 'NO'} |"
+            for k, name, p, m, T in horizon_checks
+        ],
+    ]
+    _figures(entries, out)
+    lines += ["", "Figures: `model_choice_errors.png`, `model_choice_time.png`."]
+    return "\n".join(lines) + "\n"
+
+
+def _figures(entries: dict[str, Any], out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 5.5), layout="constrained")
+    markers = {"linearized": "o", "rigid": "s", "rigid+quasi-static": "^"}
+    lo, hi = 1e-9, 1e3
+    for name, mk in markers.items():
+        p = [e["predicted"][name]["error"] for e in entries.values() if name in e["predicted"]]
+        m = [e["measured"][name]["error"] for e in entries.values() if name in e["measured"]]
+        pm = [(a, b) for a, b in zip(p, m, strict=True) if math.isfinite(a) and math.isfinite(b) and a > 0 and b > 0]
+        if pm:
+            a, b = np.clip(np.array(pm).T, lo, hi)
+            ax.loglog(b, a, mk, ms=5, alpha=0.75, label=name)
+    x = np.array([lo, hi])
+    ax.loglog(x, x, "k-", lw=0.8, label="predicted = measured")
+    ax.loglog(x, 10 * x, "k:", lw=0.8, label="10x")
+    ax.loglog(x, x / 10, "k:", lw=0.8)
+    ax.set_xlabel("measured max error of the level [rad or m]")
+    ax.set_ylabel("predicted max error (a priori) [rad or m]")
+    ax.set_title("A priori rule: predicted vs measured error per level")
+    ax.legend(fontsize=8)
+    with atomic_path(out / "model_choice_errors.png") as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
+
+    keys = sorted(entries, key=lambda k: entries[k]["reference_time"])
+    ref = np.array([entries[k]["reference_time"] for k in keys])
+    auto = np.array([entries[k]["auto_time"] for k in keys])
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.5), layout="constrained")
+    i = np.arange(len(keys))
+    a1.semilogy(i, ref * 1e3, "o", ms=4, label="always the elastic (scene's own) reference")
+    a1.semilogy(i, auto * 1e3, "s", ms=4, label="--model auto (rule + chosen level)")
+    a1.set_xlabel("scene (sorted by reference time)")
+    a1.set_ylabel("wall time per scene [ms]")
+    a1.legend(fontsize=8)
+    a1.set_title("Time per scene")
+    a2.plot(np.cumsum(ref), label="always the reference")
+    a2.plot(np.cumsum(auto), label="--model auto")
+    a2.set_xlabel("scenes run (sorted by reference time)")
+    a2.set_ylabel("cumulative wall time [s]")
+    a2.set_title(f"Total: {ref.sum():.2f} s vs {auto.sum():.2f} s ({ref.sum() / auto.sum():.1f}x saved)")
+    a2.legend(fontsize=8)
+    with atomic_path(out / "model_choice_time.png") as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="pendulab-out/bench-model-choice", help="output directory")
+    ap.add_argument("--resume", action="store_true", help="continue the journal of an interrupted run")
+    ap.add_argument("--quick", action="store_true", help="a smaller family (smoke run)")
+    ap.add_argument("--n-random", type=int, default=16, help="random scenes (default 16)")
+    ap.add_argument("--seed", type=int, default=2026, help="seed of the random scenes")
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    scenes = family(args.n_random, args.seed, args.quick)
+    config = {"quick": args.quick, "n_random": args.n_random, "seed": args.seed}
+    journal = Journal(out / "model_choice_journal.json", STUDY, config, resume=args.resume)
+    start = time.perf_counter()
+    from tqdm import tqdm
+
+    bar = tqdm(
+        total=len(scenes), initial=len(journal), desc="model choice", unit="scene", disable=args.no_progress, file=sys.stderr
+    )
+    try:
+        for key, _, scene in scenes:
+            if key in journal:
+                continue
+            bar.set_postfix_str(key)
+            journal.record(key, measure(scene))
+            bar.update()
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"interrupted: {len(journal)} scene(s) kept in {journal.path}; run again with --resume", file=sys.stderr)
+        return 130
+    bar.close()
+    groups = {k: g for k, g, _ in scenes}
+    entries = {k: journal.get(k) for k, _, _ in scenes}
+    text = report(entries, groups, out, time.perf_counter() - start)
+    atomic_write_text(out / "model_choice.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

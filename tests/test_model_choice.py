@@ -1,0 +1,203 @@
+"""The a priori model rule of scenes (pendulab.scene.choose_model): picks, predicted vs measured, horizons, bad input."""
+
+import dataclasses
+import json
+import math
+from types import MappingProxyType
+
+import numpy as np
+import pytest
+
+import pendulab as pl
+from pendulab.analysis.model_error import (
+    C_QUASI_STATIC,
+    C_RIGID,
+    error_growth,
+    frequency_split,
+    lyapunov_exponent,
+    mode_ratio_errors,
+    validity_horizon,
+)
+from pendulab.cli import main
+from pendulab.scene import Scene, initial_state, load_scene
+from pendulab.scene.choice import choose_model, measure_levels
+
+
+def _scene(kind="elastic", k=1e6, a=(0.5, 0.5), t_final=3.0, tol=1e-3, rtol=1e-10, **kw):
+    model = pl.rigid() if kind == "rigid" else pl.elastic(k1=k, k2=k)
+    initial = {"theta1": a[0], "theta2": a[1]}
+    return Scene(
+        name=f"{kind} k={k:g} a={a}",
+        description="test",
+        model=model,
+        initial=MappingProxyType(initial),
+        x0=initial_state(model, initial, kw.pop("start", "static")),
+        t_final=t_final,
+        dt=0.01,
+        method="cvodes",
+        rtol=rtol,
+        atol=rtol,
+        outputs=("theta1", "theta2", "x2", "y2"),
+        tolerance=tol,
+        **kw,
+    )
+
+
+# -- picks on clear cases -----------------------------------------------------------
+def test_stiff_moderate_amplitude_picks_a_rigid_level():
+    c = choose_model(_scene(k=1e7, a=(0.5, 0.5)))
+    # Springs stretch by ~2 um under the load: the rigid links are within 1e-3 rad / m, the swing is not linear.
+    assert c.chosen in ("rigid", "rigid+quasi-static"), c.table()
+    assert c.levels[0].name == "linearized" and not c.levels[0].within
+
+
+def test_soft_springs_pick_elastic():
+    c = choose_model(_scene(k=1e2, a=(0.5, 0.5)))
+    # Soft springs (static stretch 0.2 m) exchange energy with the swing: no cheaper model comes near 1e-3.
+    assert c.chosen == "elastic", c.table()
+    assert all(lv.error > 10 * c.tolerance for lv in c.levels[:-1])
+
+
+def test_small_amplitude_picks_linearized():
+    for kind in ("rigid", "elastic"):
+        c = choose_model(_scene(kind=kind, k=1e5, a=(0.03, 0.03)))
+        # 2-degree swings: the cubic terms the linearization drops are ~1e-5 rad over 3 s.
+        assert c.chosen == "linearized", c.table()
+
+
+def test_chaotic_long_horizon_has_a_short_validity_horizon():
+    c = choose_model(_scene(kind="rigid", a=(2.0, 2.0), t_final=20.0, tol=1e-6, rtol=1e-8))
+    # lambda_1 ~ 1.4 /s at this energy (docs/lyapunov.md); 1e-8 errors reach 1e-6 within a few seconds.
+    assert 1.0 < c.lyapunov < 2.0
+    assert c.reference_horizon < c.t_final / 2 and c.trusted_until <= c.reference_horizon
+    assert c.needed_rtol < 1e-14  # no double-precision tolerance holds 20 s at 1e-6
+    assert "chaotic" in c.verdict and "beyond double precision" in c.verdict
+
+
+# -- predicted against measured --------------------------------------------------------
+@pytest.mark.parametrize(
+    "scene",
+    [
+        _scene(kind="rigid", a=(0.05, 0.05)),
+        _scene(k=1e6, a=(0.5, 0.5)),
+        _scene(k=1e4, a=(0.05, 0.05)),
+        _scene(k=1e5, a=(0.7, -0.2), start="rest-length"),
+    ],
+    ids=["rigid-small", "stiff-moderate", "k1e4-small", "asymmetric-rest-length"],
+)
+def test_predicted_bounds_measured_within_a_factor(scene):
+    c = choose_model(scene)
+    measured = measure_levels(scene)
+    for lv in c.levels[:-1]:
+        m = measured[lv.name]["error"]
+        if "screened" in lv.note:  # a screen only says "hopeless": both far beyond the tolerance, same order
+            assert lv.error > 10 * c.tolerance and m > 10 * c.tolerance and 0.2 < lv.error / m < 10, (lv.name, lv.error, m)
+            continue
+        # The rule is calibrated to err on the safe side by 1-5x (docs/model_choice.md); 0.8 leaves rounding room.
+        assert 0.8 * m <= lv.error <= 10 * m, (lv.name, lv.error, m)
+    # The chosen level meets the tolerance on the full dynamics.
+    assert measured[c.chosen]["error"] <= c.tolerance
+
+
+def test_verify_reports_measured_error_of_the_chosen_level():
+    scene = _scene(k=1e6, a=(0.5, 0.5), t_final=2.0)
+    c = choose_model(scene, verify=True)
+    v = c.verification
+    assert v is not None and v.level == c.chosen
+    # Same levels, same integrator: the verification's measurement is the one measure_levels makes.
+    assert v.measured_error == pytest.approx(measure_levels(scene)[c.chosen]["error"], rel=1e-9)
+    assert v.within and v.measured_error <= v.predicted_error
+    assert "verify:" in c.table()
+
+
+def test_linearized_trajectory_is_the_rules_own_linear_solution():
+    scene = _scene(kind="rigid", a=(0.05, 0.05))
+    c = choose_model(scene)
+    assert c.chosen == "linearized"
+    traj = c.simulate(scene)
+    ref = scene.simulate()
+    # 3-degree swings over 3 s: the linear solution follows the rigid model to ~1e-4 rad (cubic terms).
+    assert np.max(np.abs(traj["theta1"] - ref["theta1"])) < 1e-3
+
+
+def test_reference_horizon_on_a_chaotic_scene_within_factor_two():
+    scene = _scene(kind="rigid", a=(2.0, 2.0), t_final=10.0, tol=1e-3, rtol=1e-8)
+    c = choose_model(scene, verify=True)
+    v = c.verification
+    assert v.reference_horizon is not None
+    p, m = min(c.reference_horizon, 10.0), min(v.reference_horizon, 10.0)
+    # The issue's target for the horizon of validity on chaotic scenes: within a factor of 2.
+    assert max(p, m) / min(p, m) <= 2.0, (p, m)
+
+
+# -- shared formulas -----------------------------------------------------------------
+def test_mode_ratio_errors_are_the_planning_rule():
+    pred = mode_ratio_errors(5.0, 500.0)
+    assert pred["rigid"] == pytest.approx(C_RIGID * 0.01) and pred["rigid+quasi-static"] == pytest.approx(C_QUASI_STATIC * 1e-4)
+
+
+def test_frequency_split_and_lyapunov_table():
+    m = pl.elastic(k1=1e4, k2=1e4)
+    A = np.asarray(m.functions["jac_rhs"](m.rest_state(), np.zeros(2), m.p)[0])
+    w_p, w_s = frequency_split(np.linalg.eigvals(A), "elastic")
+    # Pendular modes ~2.4 and ~5.8 rad/s, spring modes ~0.618 sqrt(k) = 62 rad/s (DESIGN.md).
+    assert 5.0 < w_p < 6.5 and 55 < w_s < 70
+    # The 12.25 J row reproduces the 300 s study's 1.351 /s for the rigid pendulum to its spread (0.1 /s).
+    assert lyapunov_exponent(41.68 / 58.86, math.sqrt(9.81), math.inf) == pytest.approx(1.351, abs=0.1)
+    assert lyapunov_exponent(0.05, math.sqrt(9.81)) == 0.0  # small swings are regular
+
+
+def test_validity_horizon_and_growth():
+    t = np.linspace(0, 10, 101)
+    assert validity_horizon(t, 1e-6 * np.exp(t), 1e-3) == pytest.approx(math.log(1e3), abs=0.01)
+    assert validity_horizon(t, np.zeros_like(t), 1e-3) == 10.0
+    assert validity_horizon(t, np.ones_like(t), 1e-3) == 0.0
+    g = error_growth(t, 2.0, 0.0)
+    assert g[-1] == pytest.approx(10.0)  # secular: phase_rate * t / 2
+
+
+# -- bad input -------------------------------------------------------------------------
+def test_bad_input():
+    scene = _scene()
+    with pytest.raises(TypeError, match="scene must be a pendulab Scene"):
+        choose_model("seed_paper")
+    with pytest.raises(ValueError, match="tolerance"):
+        choose_model(dataclasses.replace(scene, tolerance=None))
+    with pytest.raises(ValueError, match="tolerance must be a positive"):
+        choose_model(scene, tolerance=-1.0)
+    with pytest.raises(TypeError, match="verify"):
+        choose_model(scene, verify="yes")
+    with pytest.raises(ValueError, match="frequencies must be positive"):
+        mode_ratio_errors(0.0, 10.0)
+
+
+def test_cli_scene_check_json_and_errors(capsys):
+    assert main(["scene", "check", "stiff_moderate_amplitude", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["a_priori"] and data["chosen"] in ("rigid", "rigid+quasi-static")
+    assert [lv["name"] for lv in data["levels"]] == ["linearized", "rigid", "rigid+quasi-static", "elastic"]
+    assert data["verification"] is None and data["trusted_until_s"] == 5.0
+    assert main(["scene", "check", "stiff_moderate_amplitude", "--repeats", "2"]) == 2
+    assert "--repeats applies to --measure only" in capsys.readouterr().err
+    assert main(["simulate", "--scene", "elastic_stiff", "--verify", "--t-final", "0.2"]) == 2
+    assert "--verify applies to --model auto only" in capsys.readouterr().err
+
+
+def test_cli_simulate_auto_verify(tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    args = ["simulate", "--scene", "stiff_moderate_amplitude", "--model", "auto", "--verify", "--json", "--out", str(out)]
+    assert main([*args, "--t-final", "1"]) == 0
+    captured = capsys.readouterr()
+    summary = json.loads(captured.out)
+    assert summary["model_level"] in ("rigid", "rigid+quasi-static") and "verify:" in captured.err
+    v = summary["verification"]
+    # Predicted errors bound the measured one, which meets the scene's 1e-3 tolerance.
+    assert v["measured_error"] <= v["predicted_error"] and v["within_tolerance"]
+
+
+def test_shipped_scenes_choice_is_within_tolerance():
+    for name in ("stiff_small_amplitude", "elastic_stiff"):
+        scene = load_scene(name)
+        c = choose_model(scene, verify=True)
+        # The issue's target: the a priori choice meets the scene's tolerance on the full dynamics.
+        assert c.verification.within, c.table()
