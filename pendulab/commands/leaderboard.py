@@ -1,4 +1,8 @@
-"""The generator of ``docs/leaderboard.md`` (``pendulab score --leaderboard``): robustness scorecards and RealAIGym scores."""
+"""The leaderboard (``pendulab score --leaderboard``): robustness scorecards and RealAIGym scores of every controller.
+
+Written to ``./pendulab-out/leaderboard/leaderboard.md`` by default; the shipped ``docs/leaderboard.md`` is
+regenerated explicitly with ``--out docs/leaderboard.md`` from the repository root.
+"""
 
 from __future__ import annotations
 

@@ -33,8 +33,10 @@ def register(subparsers: Any) -> None:
             "Robustness scorecard: the controller runs the task under swept perturbations (model parameters, "
             "measurement and torque noise, torque response, delay, pushes; docs/scorecard.md) and succeeds when "
             "the end effector stays above 0.9 (L1 + L2) over the last second within the torque limit. Writes "
-            "DIR/scorecard.json, DIR/scorecard.png and DIR/scorecard.md. --realai scores the controller on "
-            "RealAIGym's simulation leaderboard instead; --leaderboard regenerates docs/leaderboard.md."
+            "DIR/records.json after every batch of runs (--resume continues from it), then DIR/scorecard.md, "
+            "DIR/scorecard.png and DIR/scorecard.json. --realai scores the controller on RealAIGym's simulation "
+            "leaderboard instead; --leaderboard writes the leaderboard of every controller on every task "
+            "(--out docs/leaderboard.md regenerates the shipped page)."
         ),
     )
     p.add_argument("--controller", default=None, metavar="NAME", help="lqr | tvlqr | swingup | nmpc (--realai: also best)")
