@@ -6,6 +6,8 @@ GetReal and DoStep are legal and continue the trajectory bit-identically.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from fmu_driver import Driver, started
@@ -84,3 +86,21 @@ def test_state_of_the_other_interface_is_refused(fmu_builds, capsys, version):
     assert cs.get("theta1")[0] == before[0]  # unchanged and usable
     cs.step(0.01)
     cs.close()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_free_with_the_state_instead_of_its_address_frees_it_without_a_crash(fmu_builds, capsys, version):
+    """fmusim 0.0.39 calls FreeFMUState(instance, state) after (de)serializing a state file, not (instance, &state)."""
+    import ctypes
+
+    built = fmu_builds[("rigid", version)]
+    d = started(built, {"theta1": 0.5})
+    state = d.get_state()
+    lib = ctypes.CDLL(str(next(Path(built.unzipdir, "binaries").glob("*/*.so"))))
+    free = getattr(lib, "fmi3FreeFMUState" if version == 3 else "fmi2FreeFMUstate")
+    free.argtypes, free.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
+    capsys.readouterr()
+    assert free(d.fmu.component, state) == 0  # OK: the state is freed (no leak, no crash)
+    assert "instead of a pointer to it" in capsys.readouterr().out
+    d.step(0.01)  # the instance is unaffected
+    d.close()

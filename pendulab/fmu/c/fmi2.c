@@ -220,6 +220,12 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         core_logf(inst, ST_ERROR, "fmi2FreeFMUstate: FMUstate is NULL");
         return fmi2Error;
     }
+    if (core_is_state_block(FMUstate)) { /* the importer passed the state, not its address: free it, never crash */
+        c2->cb.freeMemory(FMUstate);
+        core_logf(inst, ST_WARNING, "fmi2FreeFMUstate: got the FMU state itself instead of a pointer to it (importer "
+                  "bug); the state was freed, the importer's variable still holds the freed address");
+        return fmi2OK; /* the call did what it was meant to; importers abort on Warning (fmusim 0.0.39) */
+    }
     if (*FMUstate != NULL) c2->cb.freeMemory(*FMUstate);
     *FMUstate = NULL;
     return fmi2OK;

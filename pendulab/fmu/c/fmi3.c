@@ -504,6 +504,12 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
         core_logf(inst, ST_ERROR, "fmi3FreeFMUState: FMUState is NULL");
         return fmi3Error;
     }
+    if (core_is_state_block(FMUState)) { /* the importer passed the state, not its address: free it, never crash */
+        free(FMUState);
+        core_logf(inst, ST_WARNING, "fmi3FreeFMUState: got the FMU state itself instead of a pointer to it (importer "
+                  "bug); the state was freed, the importer's variable still holds the freed address");
+        return fmi3OK; /* the call did what it was meant to; importers abort on Warning (fmusim 0.0.39) */
+    }
     free(*FMUState);
     *FMUState = NULL;
     return fmi3OK;

@@ -567,6 +567,12 @@ CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, 
     return validate_data(inst, &tmp, fname);
 }
 
+int core_is_state_block(const void *p) {
+    unsigned long first;
+    memcpy(&first, p, sizeof(first)); /* p points to at least a pointer's worth of memory either way */
+    return first == MODEL_MAGIC;
+}
+
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname) {
     if (core_check_state_blob(inst, saved, sizeof(CoreData), fname) != ST_OK) return ST_ERROR;
     /* The instance resumes the life-cycle state stored with the FMU state, as the Reference FMUs do: a fresh

@@ -119,4 +119,10 @@ CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t 
 CoreStatus core_check_state_blob(Instance *inst, const void *blob, size_t size, const char *fname);
 CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname);
 
+/* 1 when the memory at p starts with this model's magic number, i.e. p is an FMU state itself and not the
+ * address of the importer's variable that holds one. FreeFMUState(instance, state) instead of
+ * FreeFMUState(instance, &state) is a known importer bug (fmusim 0.0.39 after (de)serializing a state
+ * file); the layers then free the state, log a warning and return OK instead of crashing. */
+int core_is_state_block(const void *p);
+
 #endif
