@@ -33,10 +33,11 @@ import numpy as np
 import pendulab as pl
 from pendulab._io import atomic_path, atomic_write_text
 from pendulab.analysis.model_error import validity_horizon
+from pendulab.bench.hierarchy import measure_levels
 from pendulab.bench.journal import Journal
 from pendulab.integrate import simulate, time_grid
 from pendulab.scene import Scene, initial_state
-from pendulab.scene.choice import choose_model, measure_levels
+from pendulab.scene.choice import choose_model
 from pendulab.scene.levels import scene_signals
 
 OUTPUTS = ("theta1", "theta2", "x2", "y2")
@@ -147,7 +148,9 @@ def measure(scene: Scene) -> dict[str, Any]:
         "start": scene.start,
         "chosen": choice.chosen,
         "lyapunov": choice.lyapunov,
-        "predicted": {lv.name: {"error": lv.error, "horizon": lv.horizon} for lv in choice.levels},
+        "predicted": {
+            lv.name: {"error": lv.error, "horizon": lv.horizon, "screened": "screened" in lv.note} for lv in choice.levels
+        },
         "measured": measured,
         "reference": ref_name,
         "rule_time": t_rule,
@@ -169,9 +172,14 @@ def measure(scene: Scene) -> dict[str, Any]:
     return entry
 
 
+#: Horizons both shorter than this [s] agree: the level is off from the start (not limited by chaos).
+FROM_START = 0.1
+
+
 def _ratio_ok(p: float, m: float, t_final: float) -> bool:
+    """Predicted and measured horizons agree within 2x (both capped at the scene's horizon)."""
     p, m = min(p, t_final), min(m, t_final)
-    if p == m:
+    if p == m or (p <= FROM_START and m <= FROM_START):
         return True
     lo, hi = min(p, m), max(p, m)
     return lo > 0 and hi / lo <= 2.0
@@ -179,7 +187,8 @@ def _ratio_ok(p: float, m: float, t_final: float) -> bool:
 
 def report(entries: dict[str, Any], groups: dict[str, str], out: Path, wall: float) -> str:
     """Markdown summary and figures from the journal's entries."""
-    rows, within, over10, horizon_checks, savings = [], 0, [], [], []
+    rows, within, over10, horizon_checks = [], 0, [], []
+    more_expensive = 0
     t_auto = t_ref = 0.0
     overheads = []
     for key, e in entries.items():
@@ -202,11 +211,9 @@ def report(entries: dict[str, Any], groups: dict[str, str], out: Path, wall: flo
                     (key, "reference", e["predicted_reference_horizon"], e["measured_reference_horizon"], e["t_final"])
                 )
         # The cheapest level measured within tolerance (what a perfect rule would pick).
-        best = (
-            next(n for n, m in e["measured"].items() if n != e["reference"] and m["error"] <= e["tolerance"])
-            if any(n != e["reference"] and m["error"] <= e["tolerance"] for n, m in e["measured"].items())
-            else e["reference"]
-        )
+        order = [n for n in ("linearized", "rigid", "rigid+quasi-static") if n in e["measured"]] + [e["reference"]]
+        best = next(n for n in order if e["measured"][n]["error"] <= e["tolerance"])
+        more_expensive += order.index(e["chosen"]) > order.index(best)
         cells = []
         for name in ("linearized", "rigid", "rigid+quasi-static"):
             if name in e["predicted"]:
@@ -221,11 +228,16 @@ def report(entries: dict[str, Any], groups: dict[str, str], out: Path, wall: flo
         )
     n = len(entries)
     h_ok = sum(_ratio_ok(p, m, T) for _, _, p, m, T in horizon_checks)
+    rnd = [k for k in entries if groups[k] == "random"]
+    rnd_ok = sum(entries[k]["measured"][entries[k]["chosen"]]["error"] <= entries[k]["tolerance"] for k in rnd)
+    over_txt = ", ".join(over10) if over10 else "none"
+    cheap = sum(o <= 1.2 for o in overheads)
     lines = [
         "# A priori model choice: predicted vs measured",
         "",
         f"Written by `benchmarks/bench_model_choice.py` on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC "
-        f"({platform.machine()}, Python {platform.python_version()}, {wall:.0f} s wall for this run; method in docs/model_choice.md).",
+        f"({platform.machine()}, Python {platform.python_version()}, {wall:.0f} s wall for this run; "
+        "method in docs/model_choice.md).",
         "",
         "## Targets",
         "",
@@ -233,29 +245,33 @@ def report(entries: dict[str, Any], groups: dict[str, str], out: Path, wall: flo
         "|---|---|---|",
         f"| chosen level within tolerance on >= 95 % of scenes | {within}/{n} = {100 * within / n:.1f} % | "
         f"{'met' if within >= 0.95 * n else 'missed'} |",
-        f"| never a level > 10x over tolerance | {len(over10)} scene(s) {', '.join(over10)} | {'met' if not over10 else 'missed'} |",
-        f"| `--model auto` (rule + chosen level) <= 1.2x the chosen level's own run | median {statistics.median(overheads):.2f}x, "
-        f"max {max(overheads):.2f}x, <= 1.2x on {sum(o <= 1.2 for o in overheads)}/{n} | "
-        f"{'met' if max(overheads) <= 1.2 else 'missed on the scenes whose chosen run takes milliseconds'} |",
+        f"| never a level > 10x over tolerance | {len(over10)} scene(s): {over_txt} | {'met' if not over10 else 'missed'} |",
+        f"| `--model auto` (rule + chosen level) <= 1.2x the chosen level's own run | median {statistics.median(overheads):.2f}x,"
+        f" max {max(overheads):.2f}x; <= 1.2x on {cheap}/{n} | "
+        f"{'met' if cheap == n else 'missed where the chosen run takes ~1-5 ms (the rule costs ~0.2-1 ms)'} |",
         f"| >= 3x total time saved vs always the elastic reference | {t_ref:.2f} s / {t_auto:.2f} s = {t_ref / t_auto:.1f}x | "
         f"{'met' if t_ref >= 3 * t_auto else 'missed'} |",
         f"| horizon of validity within 2x of measured (chaotic scenes) | {h_ok}/{len(horizon_checks)} | "
         f"{'met' if h_ok == len(horizon_checks) else 'missed on ' + str(len(horizon_checks) - h_ok)} |",
         "",
-        "Calibration scenes: the constants of `pendulab/scene/choice.py` were set on them; random scenes "
-        f"(seed, not fitted on): within tolerance {sum(entries[k]['measured'][entries[k]['chosen']]['error'] <= entries[k]['tolerance'] for k in entries if groups[k] == 'random')}"
-        f"/{sum(groups[k] == 'random' for k in entries)}.",
+        f"Random scenes (never fitted on): {rnd_ok}/{len(rnd)} within tolerance. The rule chose a more expensive level "
+        f"than the cheapest measured within tolerance on {more_expensive}/{n} scenes (safe, costs time).",
         "",
         "## Scenes",
         "",
         "Errors: max abs over the grid and the outputs theta1, theta2 [rad], x2, y2 [m], against the scene's own model; "
         "cells are predicted / measured. Times [ms]: `--model auto` (rule + chosen level) / chosen level alone / reference.",
         "",
-        "| scene | group | tol | lambda_1 [1/s] | linearized | rigid | rigid+qs | chosen | best measured | chosen's error | times [ms] |",
+        "| scene | group | tol | lambda_1 [1/s] | linearized | rigid | rigid+qs | chosen | best measured | chosen's error"
+        " | times [ms] |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
         "## Horizons of validity on chaotic scenes (predicted / measured [s], capped at the horizon)",
+        "",
+        f"Every level with a finite error on the scenes with predicted lambda_1 > 0.3 /s, and the reference at the "
+        f"scene's rtol against a run at rtol * 1e-3. Horizons both below {FROM_START:g} s agree (the level is off "
+        "from the start, whatever the chaos).",
         "",
         "| scene | level | predicted | measured | horizon | within 2x |",
         "|---|---|---|---|---|---|",
@@ -279,19 +295,24 @@ def _figures(entries: dict[str, Any], out: Path) -> None:
     markers = {"linearized": "o", "rigid": "s", "rigid+quasi-static": "^"}
     lo, hi = 1e-9, 1e3
     for name, mk in markers.items():
-        p = [e["predicted"][name]["error"] for e in entries.values() if name in e["predicted"]]
-        m = [e["measured"][name]["error"] for e in entries.values() if name in e["measured"]]
-        pm = [(a, b) for a, b in zip(p, m, strict=True) if math.isfinite(a) and math.isfinite(b) and a > 0 and b > 0]
-        if pm:
-            a, b = np.clip(np.array(pm).T, lo, hi)
-            ax.loglog(b, a, mk, ms=5, alpha=0.75, label=name)
+        for screened in (False, True):
+            pm = [
+                (e["predicted"][name]["error"], e["measured"][name]["error"])
+                for e in entries.values()
+                if name in e["predicted"] and e["predicted"][name].get("screened", False) == screened
+            ]
+            pm = [(a, b) for a, b in pm if math.isfinite(a) and math.isfinite(b) and a > 0 and b > 0]
+            if pm:
+                a, b = np.clip(np.array(pm).T, lo, hi)
+                label = f"{name} (amplitude screen only)" if screened else name
+                ax.loglog(b, a, "x" if screened else mk, ms=5, alpha=0.75, label=label, color="grey" if screened else None)
     x = np.array([lo, hi])
     ax.loglog(x, x, "k-", lw=0.8, label="predicted = measured")
     ax.loglog(x, 10 * x, "k:", lw=0.8, label="10x")
     ax.loglog(x, x / 10, "k:", lw=0.8)
-    ax.set_xlabel("measured max error of the level [rad or m]")
-    ax.set_ylabel("predicted max error (a priori) [rad or m]")
-    ax.set_title("A priori rule: predicted vs measured error per level")
+    ax.set_xlabel("measured max error vs the scene's own model [rad or m]")
+    ax.set_ylabel("predicted max error, a priori [rad or m]")
+    ax.set_title(f"A priori rule, {len(entries)} scenes (errors clipped to 1e-9 ... 1e3)", fontsize=10)
     ax.legend(fontsize=8)
     with atomic_path(out / "model_choice_errors.png") as tmp:
         fig.savefig(tmp, dpi=120, format="png")
@@ -324,8 +345,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="pendulab-out/bench-model-choice", help="output directory")
     ap.add_argument("--resume", action="store_true", help="continue the journal of an interrupted run")
     ap.add_argument("--quick", action="store_true", help="a smaller family (smoke run)")
-    ap.add_argument("--n-random", type=int, default=16, help="random scenes (default 16)")
-    ap.add_argument("--seed", type=int, default=2026, help="seed of the random scenes")
+    ap.add_argument("--n-random", type=int, default=24, help="random scenes (default 24)")
+    ap.add_argument("--seed", type=int, default=2027, help="seed of the random scenes (2026 was used to calibrate)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
     out = Path(args.out)

@@ -18,9 +18,10 @@ from pendulab.analysis.model_error import (
     mode_ratio_errors,
     validity_horizon,
 )
+from pendulab.bench.hierarchy import measure_levels
 from pendulab.cli import main
 from pendulab.scene import Scene, initial_state, load_scene
-from pendulab.scene.choice import choose_model, measure_levels
+from pendulab.scene.choice import choose_model
 
 
 def _scene(kind="elastic", k=1e6, a=(0.5, 0.5), t_final=3.0, tol=1e-3, rtol=1e-10, **kw):

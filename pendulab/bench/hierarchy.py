@@ -1,4 +1,9 @@
-"""Model no more than a scene needs: a hierarchy of models checked on a scene.
+"""Model no more than a scene needs, measured: every level of the hierarchy run on a scene (a posteriori).
+
+The a priori rule (:func:`pendulab.scene.choose_model`) predicts each level's error without
+running the reference; this module runs them all and measures, so it is the rule's calibration
+and test benchmark (:func:`measure_levels`, ``benchmarks/bench_model_choice.py``) and the
+``pendulab scene check --measure`` / ``pendulab bench hierarchy`` study.
 
 Levels, cheapest first (all built from the scene's own model functions):
 
@@ -38,9 +43,12 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import is_interrupt
+from .._checks import is_interrupt, positive_float
+from ..analysis.model_error import validity_horizon
+from ..integrate import time_grid
 from ..model.model import elastic
 from ..scene import Scene
+from ..scene.choice import error_curve
 from ..scene.levels import LEVELS, ModelLevel, levels_for, scene_signals
 from .workprecision import watch_interrupt
 
@@ -49,6 +57,7 @@ __all__ = [
     "HierarchyReport",
     "ModelLevel",
     "check_scene",
+    "measure_levels",
     "choose_model",
     "levels_for",
     "stiffness_amplitude_study",
@@ -274,6 +283,48 @@ def choose_model(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, Hierarc
     report = check_scene(scene, repeats=repeats)
     level = next(lv for lv in levels_for(scene.model) if lv.name == report.chosen)
     return level, report
+
+
+def measure_levels(scene: Scene, *, tolerance: float | None = None) -> dict[str, dict[str, float]]:
+    """Run every level and the reference; measured error and horizon of validity per level.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+    tolerance : float, optional
+        Accepted error (default the scene's).
+
+    Returns
+    -------
+    dict of str to dict
+        Per level: ``error`` (max abs output error against the reference, inf when the level
+        failed), ``horizon`` [s] (first time the error exceeds the tolerance) and ``time`` [s]
+        (wall time of one run).
+
+    Raises
+    ------
+    ValueError
+        No positive tolerance.
+    """
+    tol = positive_float("tolerance", scene.tolerance if tolerance is None else tolerance)
+    t = time_grid(scene.t_final, scene.dt)
+    levels = levels_for(scene.model)
+    t0 = time.perf_counter()
+    X_ref = levels[-1].run(scene)
+    out = {levels[-1].name: {"error": 0.0, "horizon": float(scene.t_final), "time": time.perf_counter() - t0}}
+    ref = scene_signals(scene, X_ref)
+    for lv in levels[:-1]:
+        t0 = time.perf_counter()
+        try:
+            X = lv.run(scene)
+        except RuntimeError:
+            out[lv.name] = {"error": math.inf, "horizon": 0.0, "time": math.nan}
+            continue
+        wall = time.perf_counter() - t0
+        e = error_curve(scene, X, ref)
+        out[lv.name] = {"error": float(np.max(e)), "horizon": validity_horizon(t, e, tol), "time": wall}
+    return out
 
 
 # -- stiffness x amplitude study ----------------------------------------------
