@@ -28,7 +28,9 @@ from .commands import CLIError
 __all__ = ["main", "COMMAND_MODULES", "CLIError"]
 
 #: Modules under ``pendulab.commands`` that each register one top-level command.
-COMMAND_MODULES: tuple[str, ...] = ("simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup", "ensemble", "score")
+COMMAND_MODULES: tuple[str, ...] = (
+    "simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup", "ensemble", "score", "ssp",
+)  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,4 +1,4 @@
-"""``pendulab fmu export|validate``: write an FMU of the rigid or elastic pendulum; check it with fmpy."""
+"""``pendulab fmu export|validate|export-controller``: write an FMU of the pendulum or of a controller; check one with fmpy."""
 
 from __future__ import annotations
 
@@ -74,8 +74,49 @@ def _validate(args: argparse.Namespace) -> int:
     return 0 if report.passed else 1
 
 
+def _export_controller(args: argparse.Namespace) -> int:
+    from ..fmu.controller_export import design_controller, export_controller
+
+    if args.task is not None and (args.kind is not None or args.u_max is not None):
+        raise CLIError("--task sets the model and the torque limit; --kind and --u-max do not apply with it")
+    if args.sample_time is not None and not (args.sample_time > 0 and args.sample_time < float("inf")):
+        raise CLIError(f"--sample-time must be a positive period [s], got {args.sample_time!r}")
+    try:
+        ctrl, x0, model = design_controller(
+            args.controller, args.task, kind=args.kind or "rigid", sample_time=args.sample_time,
+            u_max=20.0 if args.u_max is None else args.u_max,
+        )  # fmt: skip
+    except (ValueError, FileNotFoundError) as exc:
+        raise CLIError(f"--controller {args.controller}: {exc}") from None
+    out = args.out or Path("pendulab-out") / "fmu" / f"{args.controller}_controller_fmi{args.fmi_version}.fmu"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    path = export_controller(ctrl, out, args.fmi_version, timestamp=not args.no_timestamp)
+    summary = {
+        "fmu": str(path),
+        "fmi_version": args.fmi_version,
+        "controller": args.controller,
+        "task": getattr(args, "task", None),
+        "model": model.kind,
+        "interfaces": ["CoSimulation"],
+        "inputs": list(model.state_names),
+        "outputs": list(ctrl.input_names),
+        "sample_time": float(ctrl.sample_time),
+        "start": {k: float(v) for k, v in zip(model.state_names, x0, strict=True)},
+        "bytes": path.stat().st_size,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(
+            f"wrote {path} (FMI {args.fmi_version}.0 Co-Simulation, {args.controller} controller for the {model.kind} "
+            f"pendulum: inputs {', '.join(model.state_names)}; outputs {', '.join(ctrl.input_names)}; "
+            f"sample_time {ctrl.sample_time:g} s)"
+        )
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("fmu", help="export an FMU (FMI 2/3, CS + ME) or validate one with fmpy")
+    p = subparsers.add_parser("fmu", help="export an FMU (FMI 2/3, CS + ME) or a controller FMU, or validate one with fmpy")
     sub = p.add_subparsers(dest="fmu_command", metavar="ACTION")
     sub.required = True
 
@@ -95,6 +136,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     e.add_argument("--json", action="store_true", help="print a JSON summary (path, parameters, start values) instead")
     e.set_defaults(func=_export)
+
+    c = sub.add_parser(
+        "export-controller",
+        help="write a controller (lqr, tvlqr, swingup) as a Co-Simulation FMU (generated C, no Python inside)",
+        description="Design a pendulab controller and write it as an FMI 2/3 Co-Simulation FMU: the measured state as "
+        "inputs, the torques as outputs, the sample time as a parameter (sample-and-hold as pendulab's sampled "
+        "controllers). The NMPC is not exportable (its solver is not generated as self-contained C; docs/fmu.md).",
+    )
+    c.add_argument("--controller", choices=("lqr", "tvlqr", "swingup", "nmpc"), required=True, help="nmpc: explains why not")
+    c.add_argument("--task", help="swing-up task (model, actuation, torque limit, sample time; tvlqr tracks its optimized plan)")
+    c.add_argument("--kind", choices=("rigid", "elastic"), default=None, help="model without --task (default rigid)")
+    c.add_argument("--sample-time", type=float, help="controller sample time [s] (default: the task's dt, else 0.01)")
+    c.add_argument("--u-max", type=float, default=None, help="torque limit [N.m] without --task (default 20)")
+    c.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
+    c.add_argument(
+        "--out", type=Path, default=None, help="output .fmu (default ./pendulab-out/fmu/<controller>_controller_fmi<V>.fmu)"
+    )
+    c.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")
+    c.add_argument("--json", action="store_true", help="print a JSON summary instead")
+    c.set_defaults(func=_export_controller)
 
     v = sub.add_parser(
         "validate",
