@@ -139,10 +139,6 @@ def _load_task(name: str) -> Any:
         raise CLIError(f"--task: {exc}") from None
 
 
-#: Most communication steps of one run (each step is a row of the result, and an NMPC solve per sample).
-MAX_COMM_STEPS = 1_000_000
-
-
 class _Counted:
     """A sampled controller that reports each call to a progress bar (same protocol, same outputs)."""
 
@@ -181,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
     from ..control.swingup.iterations import observe
     from ..control.tracking import load_reference_csv
     from ..cosim import cosim, inspect_fmu
+    from ..cosim.master import MAX_COMM_STEPS
     from ..cosim.plots import animate_cosim, plot_cosim
     from ._common import ProgressBar
 

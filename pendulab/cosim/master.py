@@ -55,8 +55,18 @@ def _check_controller(controller: SampledController, info: FmuInfo, comm_step: f
     return m
 
 
+#: Most communication steps of one run: each step is a row of the result and a controller call (an NMPC solve),
+#: so a typo in t_final cannot allocate gigabytes or run for days.
+MAX_COMM_STEPS = 1_000_000
+
+
 def _n_steps(t_final: float, comm_step: float) -> int:
     ratio = t_final / comm_step
+    if ratio > MAX_COMM_STEPS + 0.5:
+        raise ValueError(
+            f"t_final / comm_step = {t_final:g} s / {comm_step:g} s is {ratio:.3g} communication steps; at most {MAX_COMM_STEPS} "
+            "(each step is a row of the result and a controller call)"
+        )
     n = round(ratio)
     if n < 1 or abs(ratio - n) > 1e-9 * ratio:
         raise ValueError(f"t_final ({t_final:g} s) must be a whole number of communication steps ({comm_step:g} s)")

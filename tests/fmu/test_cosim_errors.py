@@ -108,6 +108,13 @@ def test_inconsistent_steps(rigid_setup):
         cosim(fmu, ctrl, 0.01, -1.0, x0=x0)
 
 
+def test_horizon_is_bounded_before_anything_is_allocated(rigid_setup, spy_free):
+    """1e11 communication steps would allocate terabytes of result rows: refused with the limit and its reason."""
+    fmu, _, ctrl, x0 = rigid_setup
+    with pytest.raises(ValueError, match=r"1e\+11 communication steps; at most 1000000 \(each step is a row"):
+        cosim(fmu, ctrl, 0.01, 1e9, x0=x0)
+
+
 def test_bad_start_values_and_params(rigid_setup, spy_free):
     fmu, _, ctrl, _ = rigid_setup
     with pytest.raises(ValueError, match=r"x0 must be finite with shape \(4,\)"):
