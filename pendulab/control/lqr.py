@@ -60,7 +60,7 @@ class LQRDesign:
     dt : float or None
         Sample time [s] of a discrete design (``None``: continuous).
     closed_loop_eigenvalues : ndarray of complex, shape (nx,)
-        Of A - B K [1/s] (continuous) or of the ZOH-sampled loop (discrete, |z| < 1 is stable).
+        Of A - B K [1/s] (continuous) or of the ZOH-sampled loop (discrete, abs(z) < 1 is stable).
     uncontrollable_eigenvalues : ndarray of complex
         Modes the inputs cannot move (empty when controllable).
     equilibrium : str
@@ -202,7 +202,7 @@ def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
 
 
 def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact zero-order-hold discretization: ``Ad = e^{A dt}``, ``Bd = int_0^dt e^{As} ds B``.
+    """Exact zero-order-hold discretization of (A, B): ``Ad = expm(A dt)`` and ``Bd = (int_0^dt expm(A s) ds) B``.
 
     Parameters
     ----------

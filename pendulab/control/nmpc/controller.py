@@ -82,7 +82,7 @@ class NMPCOptions:
     r : float or None
         Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
     velocity_limit : float or None
-        Soft bound on |omega1|, |omega2| [rad/s] (slack-penalized).
+        Soft bound on abs(omega1), abs(omega2) [rad/s] (slack-penalized).
     slack_weight : float
         Weight on the slack of the soft bounds.
     slack_tol : float

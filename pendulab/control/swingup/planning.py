@@ -117,7 +117,7 @@ class PlanningDecision:
     chosen : str
         Level the rule starts from (one of :data:`LEVELS`; always ``rigid`` for a rigid model).
     pendular_frequency : float
-        Highest pendular |lambda| at hanging and upright [rad/s].
+        Highest pendular abs(lambda) at hanging and upright [rad/s].
     spring_frequency : float
         Lowest spring-mode frequency at hanging and upright [rad/s] (inf for a rigid model).
     predicted : dict of str to float
@@ -185,7 +185,7 @@ class Plan:
 
 
 def _frequencies(model: Model) -> tuple[float, float]:
-    """Highest pendular |lambda| and lowest spring frequency [rad/s] at hanging and upright."""
+    """Highest pendular abs(lambda) and lowest spring frequency [rad/s] at hanging and upright."""
     pend, spring = 0.0, math.inf
     for at in ("down-down", "up-up"):
         for md in modes(model, at):

@@ -38,9 +38,9 @@ class SwingUpProblem:
         Which joint torques are available: pendubot = tau1 (shoulder) only,
         acrobot = tau2 (elbow) only, full = both. Passive torques are zero.
     torque_limit : float
-        Bound |tau| <= torque_limit on each actuated joint [N.m].
+        Bound abs(tau) <= torque_limit on each actuated joint [N.m].
     velocity_limit : float or None
-        Optional bound |omega_i| <= velocity_limit on both link rates [rad/s].
+        Optional bound abs(omega_i) <= velocity_limit on both link rates [rad/s].
     stretch_limits : (float, float) or None
         Elastic model only: bounds (min, max) on the spring stretch r - L [m]
         (min < 0 < max). None: the springs are unbounded.
@@ -56,7 +56,7 @@ class SwingUpProblem:
     horizon_bounds : (float, float)
         Bounds on a free horizon [s].
     objective : {"effort", "time", "mix"}
-        ``effort``: minimise the integral of |tau|^2 [N^2.m^2.s];
+        ``effort``: minimise the integral of tau^2 [N^2.m^2.s];
         ``time``: minimise T (needs a free horizon; a 1e-3 effort term keeps
         the bang-bang optimum regular); ``mix``: time_weight * T + effort.
     time_weight : float
