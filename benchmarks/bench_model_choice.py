@@ -2,6 +2,7 @@
 
     nice python benchmarks/bench_model_choice.py [--out DIR] [--resume] [--quick] [--no-progress]
     nice python benchmarks/bench_model_choice.py --out benchmarks/results   # the recorded results
+    nice python benchmarks/bench_model_choice.py --lyapunov-table          # remeasure LYAPUNOV_TABLE (~1 min)
 
 Scenes: a structured family the constants were calibrated on (rigid and elastic, k = 1e2 ... 1e8 N/m,
 release angles 0.05 ... 2 rad, free, constant and sine torques, static / rest-length / quasi-static
@@ -35,10 +36,11 @@ from pendulab._io import atomic_path, atomic_write_text
 from pendulab.analysis.model_error import validity_horizon
 from pendulab.bench.hierarchy import measure_levels
 from pendulab.bench.journal import Journal
+from pendulab.bench.workprecision import watch_interrupt
 from pendulab.integrate import simulate, time_grid
 from pendulab.scene import Scene, initial_state
 from pendulab.scene.choice import choose_model
-from pendulab.scene.levels import scene_signals
+from pendulab.scene.levels import levels_for, scene_signals
 
 OUTPUTS = ("theta1", "theta2", "x2", "y2")
 STUDY = "model-choice"
@@ -138,6 +140,8 @@ def measure(scene: Scene) -> dict[str, Any]:
     _, t_level = _timed(lambda: level.run(scene))
     _, t_auto = _timed(lambda: choose_model(scene).simulate(scene))
     ref_name = list(measured)[0]
+    reference = next(lv for lv in levels_for(scene.model) if lv.name == ref_name)
+    _, t_ref = _timed(lambda: reference.run(scene))  # warm, as the others (measure_levels' run was the first)
     entry: dict[str, Any] = {
         "kind": scene.model.kind,
         "k": float(getattr(scene.model.params, "k1", math.inf)),
@@ -156,7 +160,7 @@ def measure(scene: Scene) -> dict[str, Any]:
         "rule_time": t_rule,
         "level_time": t_level,
         "auto_time": t_auto,
-        "reference_time": measured[ref_name]["time"],
+        "reference_time": t_ref,
         "predicted_reference_horizon": choice.reference_horizon,
         "needed_rtol": choice.needed_rtol,
     }
@@ -340,6 +344,26 @@ def _figures(entries: dict[str, Any], out: Path) -> None:
     plt.close(fig)
 
 
+def lyapunov_table(n_ic: int = 10, seed: int = 7) -> list[tuple[float, float, float]]:
+    """Rows (energy fraction, lambda_1 [1/s], lambda_1 / sqrt(g / L)) of the rigid unit pendulum, as in LYAPUNOV_TABLE.
+
+    ``n_ic`` random equal-energy starts per row (``energy_matched_states``, ``seed``), 5 s transient, 60 s
+    averaging, renormalised every 0.5 s (heyoka Taylor); the mean over starts.
+    """
+    from pendulab.ensemble.lyapunov import energy_matched_states, largest_lyapunov
+
+    r = pl.rigid()
+    e_rest = float(r.energy(r.rest_state()))
+    d_v = 2 * (2 * 9.81 + 9.81)  # V_upright - V_rest [J] of the unit pendulum
+    rows = []
+    for e_above in (12.0, 16.0, 20.0, 25.0, 30.0, 41.68, 60.0, 90.0, 150.0):
+        starts = energy_matched_states([r], e_rest + e_above, n_ic, seed=seed)[0]
+        lam = float(np.mean([largest_lyapunov(r, x, 60.0, renorm_interval=0.5, t_transient=5.0).value for x in starts]))
+        rows.append((e_above / d_v, lam, lam / math.sqrt(9.81)))
+        print(f"eps_E = {e_above / d_v:.3f}: lambda_1 = {lam:.3f} /s = {lam / math.sqrt(9.81):.3f} sqrt(g/L)", flush=True)
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="pendulab-out/bench-model-choice", help="output directory")
@@ -348,7 +372,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-random", type=int, default=24, help="random scenes (default 24)")
     ap.add_argument("--seed", type=int, default=2027, help="seed of the random scenes (2026 was used to calibrate)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
+    ap.add_argument("--lyapunov-table", action="store_true", help="remeasure the Lyapunov-vs-energy table and exit")
     args = ap.parse_args(argv)
+    if args.lyapunov_table:
+        lyapunov_table()
+        return 0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     scenes = family(args.n_random, args.seed, args.quick)
@@ -361,12 +389,16 @@ def main(argv: list[str] | None = None) -> int:
         total=len(scenes), initial=len(journal), desc="model choice", unit="scene", disable=args.no_progress, file=sys.stderr
     )
     try:
-        for key, _, scene in scenes:
-            if key in journal:
-                continue
-            bar.set_postfix_str(key)
-            journal.record(key, measure(scene))
-            bar.update()
+        with watch_interrupt() as interrupted:
+            for key, _, scene in scenes:
+                if key in journal:
+                    continue
+                bar.set_postfix_str(key)
+                entry = measure(scene)
+                if interrupted():  # a native solver swallowed the Ctrl-C: this scene's numbers are not to be kept
+                    raise KeyboardInterrupt
+                journal.record(key, entry)
+                bar.update()
     except KeyboardInterrupt:
         bar.close()
         print(f"interrupted: {len(journal)} scene(s) kept in {journal.path}; run again with --resume", file=sys.stderr)

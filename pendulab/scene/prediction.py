@@ -164,7 +164,7 @@ def _output_gains(scene: Scene, f: _Features) -> dict[str, tuple[float, float]]:
         elif name in ("x1", "y1"):
             gains[name] = (L1, 1)
         elif name in ("x2", "y2"):
-            gains[name] = (L1 + L2, 2)
+            gains[name] = (math.hypot(L1, L2), 2)  # the two angle errors are not in phase (calibrated)
         elif name in ("r1", "stretch1"):
             gains[name] = (0.0, 3)
         elif name in ("r2", "stretch2"):

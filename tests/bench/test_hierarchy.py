@@ -62,3 +62,37 @@ def test_scene_check_measure_cli_json(capsys):
 def test_scene_check_bad_file(capsys):
     assert main(["scene", "check", "no_such_scene_xyz"]) == 2
     assert "no_such_scene_xyz" in capsys.readouterr().err
+
+
+def _bench_module():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_model_choice.py"
+    spec = importlib.util.spec_from_file_location("bench_model_choice", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_model_choice_benchmark_family_covers_the_issue():
+    fam = _bench_module().family(24, 2027, quick=False)
+    scenes = [s for _, _, s in fam]
+    ks = [s.model.params.k1 for s in scenes if s.model.kind == "elastic"]
+    # Issue 24: >= 40 scenes, rigid and elastic, k from 1e2 to 1e8 N/m, forced and free, random ones not fitted on.
+    assert len(fam) >= 40 and {s.model.kind for s in scenes} == {"rigid", "elastic"}
+    assert min(ks) <= 1e2 and max(ks) >= 1e8
+    assert any(s.u_amplitude is not None for s in scenes) and any(s.u is not None for s in scenes)
+    assert sum(g == "random" for _, g, _ in fam) >= 16
+    assert max(float(s.initial["theta1"]) for s in scenes) >= 2.0 and min(float(s.initial["theta1"]) for s in scenes) <= 0.05
+
+
+def test_measure_levels_gives_error_and_horizon():
+    from pendulab.bench.hierarchy import measure_levels
+
+    sc = load("stiff_small_amplitude")
+    m = measure_levels(sc)
+    assert list(m) == ["elastic", "linearized", "rigid", "rigid+quasi-static"]
+    assert m["elastic"]["error"] == 0.0
+    # 3-degree swings with 1e6 N/m springs: every cheaper level is within the scene's 1e-3 over the whole 5 s.
+    assert all(m[n]["error"] <= sc.tolerance and m[n]["horizon"] == sc.t_final for n in ("linearized", "rigid"))
