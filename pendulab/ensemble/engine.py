@@ -165,7 +165,7 @@ def ensemble(
     if te is not None:
         bounded_int("len(x0) * len(t_eval)", n * len(te), high=MAX_DENSE, why="memory of the dense output x (8 bytes per value)")
     plan = resolve_events(model, events)
-    cs = _positive_int("chunk_size", chunk_size)
+    cs = bounded_int("chunk_size", chunk_size, high=MAX_RUNS, why="runs per chunk")
     nthreads = (
         (os.cpu_count() or 1)
         if threads is None
@@ -179,40 +179,42 @@ def ensemble(
     report = _progress(progress, n)
     start = time.perf_counter()
     deadline = None if wall is None else time.time() + wall
-    if method != "taylor":
-        out = _fallback(model, X0, P, tf, plan, method, te, rt, at, report, steps, wall)
-        stats = {"method": method, "n_runs": n, "n_chunks": n, "threads": 1}
-    else:
-        heyoka_module()  # names the extra when heyoka is missing
-        check_tolerance_floor("rtol" if rt <= at else "atol", min(rt, at))
-        S = default_batch_size() if S is None else S
-        zero = tuple(int(i) for i in np.flatnonzero(np.all(P == 0.0, axis=0)))
-        key = BatchKey(model.kind, zero, min(rt, at), plan, S)
-        if client is not None:
-            from .cluster import run_on_dask
-
-            size = cs
-            tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
-            outs = run_on_dask(client, tasks, report)
-            workers = "dask"
+    try:
+        if method != "taylor":
+            out = _fallback(model, X0, P, tf, plan, method, te, rt, at, report, steps, wall)
+            stats = {"method": method, "n_runs": n, "n_chunks": n, "threads": 1}
         else:
-            size = local_chunk_size(n, cs, S, nthreads)
-            tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
-            outs = _run_local(tasks, nthreads, report)
-            workers = nthreads
-        out = _assemble(outs, n, len(plan.names))
-        stats = {
-            "method": "taylor",
-            "n_runs": n,
-            "n_chunks": len(tasks),
-            "chunk_size": size,
-            "threads": workers,
-            "batch_size": S,
-            "tol": min(rt, at),
-            "n_steps": int(sum(o.n_steps for o in outs)),
-        }
+            heyoka_module()  # names the extra when heyoka is missing
+            check_tolerance_floor("rtol" if rt <= at else "atol", min(rt, at))
+            S = default_batch_size() if S is None else S
+            zero = tuple(int(i) for i in np.flatnonzero(np.all(P == 0.0, axis=0)))
+            key = BatchKey(model.kind, zero, min(rt, at), plan, S)
+            if client is not None:
+                from .cluster import run_on_dask
+
+                size = cs
+                tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
+                outs = run_on_dask(client, tasks, report)
+                workers = "dask"
+            else:
+                size = local_chunk_size(n, cs, S, nthreads)
+                tasks = _tasks(key, X0, P, tf, te, size, steps, deadline)
+                outs = _run_local(tasks, nthreads, report)
+                workers = nthreads
+            out = _assemble(outs, n, len(plan.names))
+            stats = {
+                "method": "taylor",
+                "n_runs": n,
+                "n_chunks": len(tasks),
+                "chunk_size": size,
+                "threads": workers,
+                "batch_size": S,
+                "tol": min(rt, at),
+                "n_steps": int(sum(o.n_steps for o in outs)),
+            }
+    finally:
+        report(None)  # closes a progress bar also after Ctrl-C or an error
     stats.update(rtol=rt, atol=at, max_steps=steps, max_wall_time=wall)
-    report(None)
     stats["wall_time"] = time.perf_counter() - start
     x_final, t_end, status, message, ev_times, term_ev, X = out
     names = plan.names
@@ -361,12 +363,6 @@ def _check_t_eval(t_eval: Any, tf: float) -> np.ndarray | None:
     if te.size == 0 or not np.all(np.isfinite(te)) or np.any(np.diff(te) <= 0) or te[0] < 0 or te[-1] > tf:
         raise ValueError(f"t_eval must be non-empty, finite, strictly increasing and within [0, t_final={tf}], got {t_eval!r}")
     return te
-
-
-def _positive_int(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an int >= 1, got {value!r}")
-    return int(value)
 
 
 def _progress(progress: Any, total: int) -> Callable[[int | None], None]:
