@@ -34,6 +34,7 @@ __all__ = [
     "adjoint_function",
     "adjoint_c_source",
     "compiled_sources",
+    "event_indicator_names",
     "external_symbols",
     "generate_sources",
     "identifier_for",
@@ -57,6 +58,27 @@ SOLVER_NAMES: tuple[str, ...] = ("dopri5", "rodas4")
 VR_TIME, VR_X, VR_DX, VR_U, VR_Y, VR_P = 0, 100, 200, 300, 400, 500
 VR_TOL, VR_HMAX, VR_SOLVER = 900, 901, 902
 DEFAULT_TOLERANCE = 1e-8
+#: Event indicators (value references VR_Z + i): spring margins of the elastic model, r_i - SPRING_LIMIT * L_i.
+#: The model is singular at r = 0; when a margin reaches 0 the FMU stops (ME: terminateSimulation at the
+#: event, CS: the step ends at the last sub-step before the limit with Discard / terminateSimulation).
+VR_Z = 1000
+SPRING_LIMIT = 0.01
+
+
+def event_indicator_names(kind: str) -> tuple[str, ...]:
+    """Names of the FMU's event-indicator variables (``spring_margin1``, ``spring_margin2`` for the elastic model).
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
+
+    Returns
+    -------
+    tuple of str
+        Empty for the rigid model (it has no events).
+    """
+    return ("spring_margin1", "spring_margin2") if kind == "elastic" else ()
 
 
 @dataclass(frozen=True)
@@ -308,6 +330,8 @@ typedef int (*casadi_fn)(const casadi_real **arg, casadi_real **res, casadi_int 
 #define MODEL_NU {lay.nu}
 #define MODEL_NY {lay.ny}
 #define MODEL_NP {lay.np}
+#define MODEL_NZ {len(event_indicator_names(lay.kind))}
+#define MODEL_SPRING_LIMIT {SPRING_LIMIT!r}
 
 #define MODEL_VR_TIME {VR_TIME}
 #define MODEL_VR_X {VR_X}
@@ -318,6 +342,7 @@ typedef int (*casadi_fn)(const casadi_real **arg, casadi_real **res, casadi_int 
 #define MODEL_VR_TOL {VR_TOL}
 #define MODEL_VR_HMAX {VR_HMAX}
 #define MODEL_VR_SOLVER {VR_SOLVER}
+#define MODEL_VR_Z {VR_Z}
 
 #define MODEL_X_START {_c_array(lay.x_start)}
 #define MODEL_P_DEFAULT {_c_array(lay.p_default)}

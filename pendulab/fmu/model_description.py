@@ -17,12 +17,15 @@ from ..model.model import Model
 from .codegen import (
     DEFAULT_TOLERANCE,
     SOLVER_NAMES,
+    SPRING_LIMIT,
+    VR_Z,
     VR_HMAX,
     VR_SOLVER,
     VR_TIME,
     VR_TOL,
     ModelLayout,
     compiled_sources,
+    event_indicator_names,
 )
 
 __all__ = ["model_description", "build_description", "UNITS", "POSITIVE_MIN", "BELOW_ONE_MAX", "POSITIVE_STATES", "variables"]
@@ -129,6 +132,19 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
     for i, info in enumerate(model.output_info):
         out.append(
             _Var(info.name, lay.vr("y", i), "output", "continuous", info.description, initial="calculated", unit=info.unit)
+        )
+    for i, name in enumerate(event_indicator_names(lay.kind)):
+        out.append(
+            _Var(
+                name,
+                VR_Z + i,
+                "local",
+                "continuous",
+                f"event indicator: r{i + 1} - {SPRING_LIMIT!r} L{i + 1} (the model is singular at r = 0; the FMU stops "
+                "when it reaches 0)",
+                initial="calculated",
+                unit="m",
+            )
         )
     for i, info in enumerate(model.param_info):
         tun = lay.p_tunable[i]
@@ -284,7 +300,7 @@ def model_description(
             "generationTool": f"pendulab {__version__}",
             **({"generationDateAndTime": timestamp} if timestamp else {}),
             "variableNamingConvention": "structured",
-            **({} if v3 else {"numberOfEventIndicators": "0"}),
+            **({} if v3 else {"numberOfEventIndicators": str(len(event_indicator_names(lay.kind)))}),
         },
     )
     caps = {
@@ -347,6 +363,8 @@ def model_description(
             for vr, row in rows:
                 deps = _dependencies(lay, row, with_params=tag == "InitialUnknown")
                 ET.SubElement(ms, tag, valueReference=str(vr), dependencies=" ".join(map(str, deps)))
+        for i, _ in enumerate(event_indicator_names(lay.kind)):  # spring margin i depends on the state r_i
+            ET.SubElement(ms, "EventIndicator", valueReference=str(VR_Z + i), dependencies=str(lay.vr("x", 2 + i)))
     else:
         for tag, rows in (("Outputs", outputs), ("Derivatives", derivs), ("InitialUnknowns", outputs + derivs)):
             group = ET.SubElement(ms, tag)

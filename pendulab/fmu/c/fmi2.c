@@ -303,7 +303,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
         return fmi2Error;
     }
     eventInfo->newDiscreteStatesNeeded = fmi2False;
-    eventInfo->terminateSimulation = fmi2False;
+    eventInfo->terminateSimulation = core_spring_event(inst, "fmi2NewDiscreteStates") ? fmi2True : fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
     eventInfo->valuesOfContinuousStatesChanged = fmi2False;
     eventInfo->nextEventTimeDefined = fmi2False;
@@ -330,7 +330,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
         return fmi2Error;
     }
     *enterEventMode = fmi2False;
-    *terminateSimulation = fmi2False;
+    *terminateSimulation = core_spring_event(inst, "fmi2CompletedIntegratorStep") ? fmi2True : fmi2False;
     return fmi2OK;
 }
 
@@ -361,14 +361,9 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
     GET_INSTANCE("fmi2GetEventIndicators");
-    (void)eventIndicators;
     ME_ONLY("fmi2GetEventIndicators");
     CHECK_STATE(MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED | MS_ERROR, "fmi2GetEventIndicators");
-    if (ni != 0) {
-        core_logf(inst, ST_ERROR, "fmi2GetEventIndicators: the model has no event indicators, got ni = %zu", ni);
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return (fmi2Status)core_event_indicators(inst, eventIndicators, ni, "fmi2GetEventIndicators");
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
@@ -471,7 +466,10 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     GET_INSTANCE("fmi2GetBooleanStatus");
-    (void)s;
+    if (s == fmi2Terminated && value != NULL && inst->is_cosim) { /* after a Discard: did the FMU end the run? */
+        *value = inst->terminate_requested ? fmi2True : fmi2False;
+        return fmi2OK;
+    }
     return no_status(inst, "fmi2GetBooleanStatus", value);
 }
 

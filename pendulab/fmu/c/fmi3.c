@@ -13,6 +13,7 @@ typedef char fmi3_int32_is_int[sizeof(int) == sizeof(fmi3Int32) ? 1 : -1];
 typedef struct {
     Instance core;
     fmi3LogMessageCallback logMessage;
+    int early_return_allowed; /* Co-Simulation: the importer accepts a step that ends before its end point */
 } Fmi3Instance;
 
 static void fmi3_log(Instance *inst, CoreStatus status, const char *category, const char *message) {
@@ -104,7 +105,6 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
     (void)resourcePath;
     (void)visible;
-    (void)earlyReturnAllowed; /* never returns early */
     (void)requiredIntermediateVariables;
     (void)nRequiredIntermediateVariables;
     (void)intermediateUpdate;
@@ -112,10 +112,13 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         /* the model has no events (hasEventMode is false): refuse rather than ignore the request */
         if (logMessage != NULL)
             logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                       "fmi3InstantiateCoSimulation: eventModeUsed is not supported (the model has no events)");
+                       "fmi3InstantiateCoSimulation: eventModeUsed is not supported (hasEventMode = false)");
         return NULL;
     }
-    return instantiate(instanceName, instantiationToken, loggingOn, instanceEnvironment, logMessage, 1);
+    Fmi3Instance *c = (Fmi3Instance *)instantiate(instanceName, instantiationToken, loggingOn, instanceEnvironment,
+                                                  logMessage, 1);
+    if (c != NULL) c->early_return_allowed = earlyReturnAllowed ? 1 : 0; /* used only when a spring reaches its limit */
+    return c;
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
@@ -577,7 +580,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     ME_ONLY("fmi3UpdateDiscreteStates");
     CHECK_STATE(MS_EVENT, "fmi3UpdateDiscreteStates");
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
-    if (terminateSimulation) *terminateSimulation = fmi3False;
+    if (terminateSimulation)
+        *terminateSimulation = core_spring_event(inst, "fmi3UpdateDiscreteStates") ? fmi3True : fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
     if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = fmi3False;
     if (nextEventTimeDefined) *nextEventTimeDefined = fmi3False;
@@ -604,7 +608,7 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
         return fmi3Error;
     }
     *enterEventMode = fmi3False;
-    *terminateSimulation = fmi3False;
+    *terminateSimulation = core_spring_event(inst, "fmi3CompletedIntegratorStep") ? fmi3True : fmi3False;
     return fmi3OK;
 }
 
@@ -636,13 +640,9 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
     GET_INSTANCE("fmi3GetEventIndicators");
-    (void)eventIndicators;
     ME_ONLY("fmi3GetEventIndicators");
-    if (nEventIndicators != 0) {
-        core_logf(inst, ST_ERROR, "fmi3GetEventIndicators: the model has no event indicators, got n = %zu", nEventIndicators);
-        return fmi3Error;
-    }
-    return fmi3OK;
+    CHECK_STATE(MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED | MS_ERROR, "fmi3GetEventIndicators");
+    return (fmi3Status)core_event_indicators(inst, eventIndicators, nEventIndicators, "fmi3GetEventIndicators");
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
@@ -676,7 +676,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventI
         core_logf(inst, ST_ERROR, "fmi3GetNumberOfEventIndicators: NULL argument");
         return fmi3Error;
     }
-    *nEventIndicators = 0;
+    *nEventIndicators = MODEL_NZ;
     return fmi3OK;
 }
 
@@ -721,8 +721,13 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     }
     CoreStatus s = core_do_step(inst, currentCommunicationPoint, communicationStepSize);
     *eventHandlingNeeded = fmi3False;
-    *terminateSimulation = fmi3False;
+    *terminateSimulation = inst->terminate_requested ? fmi3True : fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = inst->d.time;
-    return (fmi3Status)s;
+    if (s == ST_DISCARD && inst->terminate_requested && c3->early_return_allowed) {
+        /* a spring reached its limit: the step ended early at lastSuccessfulTime, and the FMU asks to stop */
+        *earlyReturn = fmi3True;
+        return fmi3OK;
+    }
+    return (fmi3Status)s; /* without early return: Discard, terminateSimulation, lastSuccessfulTime */
 }

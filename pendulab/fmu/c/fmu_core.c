@@ -27,6 +27,7 @@ static const char *const P_NAMES[MODEL_NP] = MODEL_P_NAMES;
 #define MODEL_NR 0
 #endif
 #endif
+#define MODEL_P_L 2 /* parameters m1, m2, L1, L2, ...: the rest lengths L1, L2 are at 2, 3 */
 
 void core_defaults(Instance *inst) {
     CoreData *d = &inst->d;
@@ -39,6 +40,7 @@ void core_defaults(Instance *inst) {
     d->tolerance = MODEL_TOL_DEFAULT;
     d->max_step = MODEL_HMAX_DEFAULT;
     d->solver = MODEL_SOLVER_DEFAULT;
+    inst->terminate_requested = 0;
 }
 
 static void vlog(Instance *inst, CoreStatus status, const char *category, const char *fmt, va_list ap) {
@@ -95,6 +97,7 @@ VarKind core_classify(unsigned int vr, int *index) {
     RANGE(MODEL_VR_U, MODEL_NU, KIND_INPUT)
     RANGE(MODEL_VR_Y, MODEL_NY, KIND_OUTPUT)
     RANGE(MODEL_VR_P, MODEL_NP, KIND_PARAM)
+    RANGE(MODEL_VR_Z, MODEL_NZ, KIND_INDICATOR)
 #undef RANGE
     if (vr == MODEL_VR_TOL) return KIND_TOL;
     if (vr == MODEL_VR_HMAX) return KIND_HMAX;
@@ -125,6 +128,37 @@ static int bad_spring_length(const double *x) {
     for (int i = 0; i < MODEL_NR; i++)
         if (!(x[MODEL_R_INDEX + i] > 0.0)) return MODEL_R_INDEX + i;
     return -1;
+}
+
+/* Spring margin i (event indicator): r_i - MODEL_SPRING_LIMIT * L_i. */
+static double spring_margin(const CoreData *d, const double *x, int i) {
+    return x[MODEL_R_INDEX + i] - MODEL_SPRING_LIMIT * d->p[MODEL_P_L + i];
+}
+
+/* Index (0-based) of the first spring at or below its limit at x, or -1 (NaN counts as reached). */
+static int spring_at_limit(const CoreData *d, const double *x) {
+    for (int i = 0; i < MODEL_NR; i++)
+        if (!(spring_margin(d, x, i) > 0.0)) return i;
+    return -1;
+}
+
+CoreStatus core_event_indicators(Instance *inst, double *z, size_t n, const char *fname) {
+    if (n != MODEL_NZ || (n > 0 && z == NULL)) {
+        core_logf(inst, ST_ERROR, "%s: the model has %d event indicators, got n = %zu%s", fname, MODEL_NZ, n,
+                  z == NULL && n > 0 ? " and a NULL array" : "");
+        return ST_ERROR;
+    }
+    for (int i = 0; i < MODEL_NZ && i < MODEL_NR; i++) z[i] = spring_margin(&inst->d, inst->d.x, i);
+    return ST_OK;
+}
+
+int core_spring_event(Instance *inst, const char *fname) {
+    int i = spring_at_limit(&inst->d, inst->d.x);
+    if (i < 0) return 0;
+    core_logf(inst, ST_WARNING, "%s: spring %d reached %g m = %g x L%d at t = %.17g (the model is singular at r = 0): "
+              "terminate the simulation", fname, i + 1, inst->d.x[MODEL_R_INDEX + i], MODEL_SPRING_LIMIT, i + 1,
+              inst->d.time);
+    return 1;
 }
 
 /* The one rule for a state vector, wherever it comes from (setters, ME states, FMU states, the solver). */
@@ -218,6 +252,7 @@ CoreStatus core_get_real(Instance *inst, const char *fname, const unsigned int *
         case KIND_PARAM: value[i] = inst->d.p[k]; break;
         case KIND_TOL: value[i] = inst->d.tolerance; break;
         case KIND_HMAX: value[i] = inst->d.max_step; break;
+        case KIND_INDICATOR: value[i] = spring_margin(&inst->d, inst->d.x, k < MODEL_NR ? k : 0); break;
         default:
             core_logf(inst, ST_ERROR, "%s: unknown value reference %u for a real variable", fname, vr[i]);
             return ST_ERROR;
@@ -388,6 +423,11 @@ CoreStatus core_do_step(Instance *inst, double current, double h) {
                   "got %g at point %g", h, current);
         return ST_ERROR;
     }
+    if (inst->terminate_requested) {
+        core_logf(inst, ST_DISCARD, "DoStep: the simulation was ended at t = %.17g (a spring reached its limit); "
+                  "call Terminate, or restore an earlier FMU state", d->time);
+        return ST_DISCARD;
+    }
     if (fabs(current - d->time) > TIME_RTOL * fmax(1.0, fabs(d->time))) {
         core_logf(inst, ST_ERROR, "DoStep: communication point %.17g does not match the FMU time %.17g", current, d->time);
         return ST_ERROR;
@@ -419,8 +459,33 @@ CoreStatus core_do_step(Instance *inst, double current, double h) {
         core_debugf(inst, "DoStep: step %g below the solver resolution at t = %.17g: Euler step", h, t);
         return ST_OK;
     }
+    const CoreData before = *d; /* the start of the step, for locating a spring limit */
     int rc = ode_integrate(&d->ode, rhs_cb, jac_cb, inst, &t, d->x, t_end);
     d->time = t;
+    if (MODEL_NR > 0 && (rc != ODE_OK || spring_at_limit(d, d->x) >= 0)) {
+        /* Locate the limit: redo the step in CORE_EVENT_SUBSTEPS equal sub-steps from its start and stop at the
+         * last one with every spring above its limit. A failure without a spring at its limit stays a failure. */
+        *d = before;
+        double t0 = before.time;
+        for (int k = 1; k <= CORE_EVENT_SUBSTEPS; k++) {
+            double tk = k == CORE_EVENT_SUBSTEPS ? t_end : t0 + (t_end - t0) * k / CORE_EVENT_SUBSTEPS;
+            CoreData keep = *d;
+            t = d->time;
+            rc = ode_integrate(&d->ode, rhs_cb, jac_cb, inst, &t, d->x, tk);
+            d->time = t;
+            int spring = spring_at_limit(d, d->x);
+            if (spring >= 0) {
+                double r = d->x[MODEL_R_INDEX + spring], t_hit = t;
+                *d = keep;
+                inst->terminate_requested = 1;
+                core_logf(inst, ST_DISCARD, "DoStep: spring %d reached %g m (limit %g x L%d) between t = %.17g and "
+                          "%.17g (the model is singular at r = 0): the FMU stops at t = %.17g; terminate the "
+                          "simulation", spring + 1, r, MODEL_SPRING_LIMIT, spring + 1, keep.time, t_hit, keep.time);
+                return ST_DISCARD;
+            }
+            if (rc != ODE_OK) break;
+        }
+    }
     if (rc != ODE_OK) {
         d->machine = MS_ERROR; /* bad arguments leave the instance usable; a solver failure does not */
         core_logf(inst, ST_ERROR, "DoStep: %s solver failed at t = %.17g (target %.17g): %s%s",
@@ -589,5 +654,6 @@ CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname
         return ST_ERROR;
     }
     memcpy(&inst->d, saved, sizeof(CoreData)); /* the blob may be unaligned (a deserialized byte buffer) */
+    inst->terminate_requested = 0;
     return ST_OK;
 }

@@ -41,7 +41,7 @@ typedef enum {
 
 #define MS_ANY (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_EVENT | MS_CONT | MS_TERMINATED | MS_ERROR)
 
-typedef enum { KIND_NONE, KIND_TIME, KIND_STATE, KIND_DERIV, KIND_INPUT, KIND_OUTPUT, KIND_PARAM, KIND_TOL, KIND_HMAX, KIND_SOLVER } VarKind;
+typedef enum { KIND_NONE, KIND_TIME, KIND_STATE, KIND_DERIV, KIND_INPUT, KIND_OUTPUT, KIND_PARAM, KIND_TOL, KIND_HMAX, KIND_SOLVER, KIND_INDICATOR } VarKind;
 
 /* Everything that defines the continuation of a simulation: copied verbatim for FMU states. */
 typedef struct {
@@ -65,6 +65,7 @@ typedef struct Instance {
     CoreData d;
     int is_cosim;
     int logging_on;
+    int terminate_requested; /* a spring reached its limit in DoStep: the FMU asked the master to stop */
     core_log_fn log;
     void *env;             /* importer's environment pointer */
     const void *callbacks; /* FMI 2: the fmi2CallbackFunctions pointer */
@@ -106,6 +107,17 @@ CoreStatus core_do_step(Instance *inst, double current, double h);
 CoreStatus core_derivatives(Instance *inst, double *xdot);
 CoreStatus core_set_states(Instance *inst, const double *x, size_t n);
 CoreStatus core_set_time(Instance *inst, double t);
+
+/* Events (the elastic model; the rigid model has none): MODEL_NZ event indicators, the spring margins
+ * z_i = r_i - MODEL_SPRING_LIMIT * L_i. The model is singular at r = 0, so a margin reaching 0 ends the
+ * simulation: Model Exchange requests terminateSimulation at the event (NewDiscreteStates /
+ * UpdateDiscreteStates, CompletedIntegratorStep); Co-Simulation ends the step at the last of
+ * CORE_EVENT_SUBSTEPS equal sub-steps before the limit and returns ST_DISCARD with
+ * inst->terminate_requested set (FMI 2: Discard + fmi2Terminated status; FMI 3: terminateSimulation). */
+#define CORE_EVENT_SUBSTEPS 64
+CoreStatus core_event_indicators(Instance *inst, double *z, size_t n, const char *fname);
+/* 1 (with a log line) when a spring margin is <= 0 at the current state, else 0. */
+int core_spring_event(Instance *inst, const char *fname);
 CoreStatus core_directional(Instance *inst, const unsigned int *unknown, size_t n_unknown, const unsigned int *known,
                             size_t n_known, const double *seed, double *sensitivity);
 

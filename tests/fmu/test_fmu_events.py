@@ -1,0 +1,122 @@
+"""Events where the physics has them: a spring length approaching zero (elastic model).
+
+Event indicators z_i = r_i - 0.01 L_i (ME: the importer locates the crossing, the FMU asks to terminate);
+CS: the step ends at the last of 64 sub-steps before the limit with Discard / terminateSimulation, never a
+failed step. The rigid model has no event indicators.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.fmi1 import FMICallException
+
+import pendulab as pl
+from pendulab.fmu import export
+
+SOFT = {"k1": 50.0, "k2": 50.0}
+H = 0.01  # communication step [s]
+
+
+@pytest.fixture(scope="module")
+def collapse(tmp_path_factory):
+    """FMUs (FMI 2, 3) of a soft elastic pendulum started with spring 1 compressing fast, and the native crossing time."""
+    model = pl.elastic(**SOFT)
+    x0 = model.state(theta1=0.0, v1=-10.0)
+    root = tmp_path_factory.mktemp("events")
+    fmus = {v: export(model, root / f"soft{v}.fmu", v, timestamp=False, x0=x0) for v in (2, 3)}
+    ref = pl.simulate(model, x0, 0.178, dt=1e-5, rtol=1e-12, atol=1e-12)  # r1 reaches 0.01 m at ~0.1792 s
+    tail = pl.simulate(model, ref.x[-1], 0.0015, dt=1e-6, rtol=1e-12, atol=1e-12)
+    r1 = tail["r1"]
+    k = int(np.argmax(r1 <= 0.01 * model.params.L1))
+    assert k > 0
+    t_star = 0.178 + np.interp(0.01, [r1[k], r1[k - 1]], [tail.t[k], tail.t[k - 1]])
+    return fmus, t_star
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_model_exchange_stops_at_the_spring_limit(collapse, version, capsys):
+    fmus, t_star = collapse
+    res = simulate_fmu(fmus[version], fmi_type="ModelExchange", stop_time=1.0, output_interval=H, relative_tolerance=1e-10,
+                       output=["r1", "spring_margin1"])  # fmt: skip
+    assert "spring 1 reached" in capsys.readouterr().out  # the FMU says why it asks to terminate
+    assert res["time"][-1] < 0.2  # stopped long before the stop time, instead of failing
+    if version == 3:  # fmpy records the event point for FMI 3: the importer's root finder located it
+        assert abs(res["time"][-1] - t_star) < 1e-6  # CVode root finding at rtol 1e-10
+        assert abs(res["spring_margin1"][-1]) < 1e-9
+
+
+def test_co_simulation_fmi2_ends_the_step_with_discard_and_terminated(collapse, capsys):
+    fmus, t_star = collapse
+    res = simulate_fmu(fmus[2], fmi_type="CoSimulation", stop_time=1.0, output_interval=H, output=["r1", "spring_margin1"])
+    assert "the FMU stops at t =" in capsys.readouterr().out
+    t_end = res["time"][-1]
+    # located to one of 64 sub-steps of the communication step, at the last one before the limit
+    assert t_star - H / 64 - 1e-9 <= t_end <= t_star
+    assert 0.0 < res["spring_margin1"][-1] < 0.01
+
+
+def test_co_simulation_fmi3_returns_early_or_discards(collapse, capsys):
+    fmus, t_star = collapse
+    res = simulate_fmu(fmus[3], fmi_type="CoSimulation", stop_time=1.0, output_interval=H, early_return_allowed=True,
+                       output=["r1", "spring_margin1"])  # fmt: skip
+    t_end = res["time"][-1]
+    assert t_star - H / 64 - 1e-9 <= t_end <= t_star  # early return at the last sub-step before the limit
+    assert res["spring_margin1"][-1] > 0.0
+    # without early return the step is discarded (terminateSimulation), and the FMU stays stopped
+    with pytest.raises(FMICallException, match="discard"):
+        simulate_fmu(fmus[3], fmi_type="CoSimulation", stop_time=1.0, output_interval=H)
+    assert "spring 1 reached" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_after_the_stop_steps_are_refused_until_an_earlier_state_is_restored(collapse, version, tmp_path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave, fmi2Terminated
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu = collapse[0][version]
+    md = read_model_description(str(fmu))
+    cls = FMU3Slave if version == 3 else FMU2Slave
+    s = cls(guid=md.guid, unzipDirectory=extract(str(fmu), str(tmp_path)), modelIdentifier="pendulab_elastic", instanceName="e")
+    s.instantiate()
+    if version == 3:
+        s.enterInitializationMode(tolerance=1e-10, startTime=0.0)
+    else:
+        s.setupExperiment(tolerance=1e-10, startTime=0.0)
+        s.enterInitializationMode()
+    s.exitInitializationMode()
+    early = s.getFMUState() if version == 3 else s.getFMUstate()
+    t = 0.0
+    with pytest.raises(FMICallException, match="discard"):
+        for _ in range(100):
+            s.doStep(t, H)
+            t += H
+    if version == 2:
+        assert s.getBooleanStatus(fmi2Terminated)
+    with pytest.raises(FMICallException, match="discard"):  # stays stopped: no step into the singularity
+        s.doStep(t, H)
+    (s.setFMUState if version == 3 else s.setFMUstate)(early)  # restart from before the event
+    s.doStep(0.0, H)
+    s.terminate()
+    s.freeInstance()
+
+
+def test_indicators_are_the_spring_margins_and_the_rigid_model_has_none(fmu_builds):
+    from fmu_driver import started
+
+    for version in (2, 3):
+        assert len(fmu_builds[("rigid", 3)].md.eventIndicators) == 0 and len(fmu_builds[("elastic", 3)].md.eventIndicators) == 2
+        assert fmu_builds[("rigid", 2)].md.numberOfEventIndicators == 0
+        assert fmu_builds[("elastic", 2)].md.numberOfEventIndicators == 2
+        d = started(fmu_builds[("elastic", version)], {"theta1": 0.4, "r1": 0.8, "r2": 1.3}, interface="ME")
+        np.testing.assert_array_equal(d.get("spring_margin1", "spring_margin2"), [0.8 - 0.01, 1.3 - 0.01])  # L = 1 m
+        import ctypes
+
+        z = (ctypes.c_double * 2)()
+        d.fmu.getEventIndicators(z, 2)
+        np.testing.assert_array_equal(list(z), [0.8 - 0.01, 1.3 - 0.01])
+        with pytest.raises(FMICallException):  # the wrong count is an error, not a buffer overrun
+            d.fmu.getEventIndicators(z, 3)
+        d.close()
