@@ -13,7 +13,7 @@ import html
 
 from .._version import __version__
 from ..model.model import Model
-from .codegen import SOLVER_NAMES, ModelLayout
+from .codegen import SOLVER_NAMES, SPRING_LIMIT, ModelLayout
 from .model_description import variables
 
 __all__ = ["LICENSE_PATH", "documentation_html", "license_text"]
@@ -142,8 +142,15 @@ def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop
         "<li>Spring lengths <code>r1</code>, <code>r2</code> must stay &gt; 0 (the model is singular at r = 0): "
         "setters, <code>SetContinuousStates</code>, restored FMU states and each solver result are checked; "
         "a violation is <code>Error</code> with a log line.</li>"
+        "<li>Events: the event indicators <code>spring_margin1</code>, <code>spring_margin2</code> "
+        f"(r<sub>i</sub> &minus; {SPRING_LIMIT:g}&nbsp;L<sub>i</sub>) reach 0 when a spring is compressed to "
+        f"{100 * SPRING_LIMIT:g} % of its rest length. Model Exchange: the importer locates the crossing and the "
+        "FMU requests <code>terminateSimulation</code> in event mode. Co-Simulation: the step ends at the last of "
+        "64 equal sub-steps before the limit; FMI 2 returns <code>Discard</code> with the "
+        "<code>fmi2Terminated</code> status, FMI 3 returns early (when allowed, else <code>Discard</code>) with "
+        "<code>terminateSimulation</code>.</li>"
         if elastic
-        else ""
+        else "<li>The rigid model has no events (no event indicators).</li>"
     )
     page = f"""<!DOCTYPE html>
 <html lang="en">

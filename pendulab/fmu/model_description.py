@@ -313,7 +313,13 @@ def model_description(
     cs = ET.SubElement(
         root,
         "CoSimulation",
-        {"modelIdentifier": ident, "canHandleVariableCommunicationStepSize": "true", **caps},
+        {
+            "modelIdentifier": ident,
+            "canHandleVariableCommunicationStepSize": "true",
+            # a spring reaching its limit ends the step early when the importer allows early return
+            **({"mightReturnEarlyFromDoStep": "true"} if v3 and event_indicator_names(lay.kind) else {}),
+            **caps,
+        },
     )
     if not v3:
         for el in (me, cs):
