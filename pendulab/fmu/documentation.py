@@ -124,7 +124,7 @@ def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop
                     var.vr,
                     var.causality,
                     var.variability,
-                    var.type if var.type != "Real" else ("Float64" if fmi_version == 3 else "Real"),
+                    {"Real": "Float64", "Integer": "Int32"}.get(var.type, var.type) if fmi_version == 3 else var.type,
                     a.get("unit"),
                     a.get("start"),
                     a.get("min"),
