@@ -138,7 +138,7 @@ def _simulate_auto(scene: Any, verify: bool = False) -> tuple[Any, Any, dict[str
     extra: dict[str, Any] = {
         "model_level": choice.chosen,
         "scene_params": {k: float(v) for k, v in scene.model.params.resolved().items()},
-        "predicted_error": next(lv.error for lv in choice.levels if lv.name == choice.chosen),
+        "predicted_error": choice.to_dict()["levels"][[lv.name for lv in choice.levels].index(choice.chosen)]["predicted_error"],
         "valid_until_s": choice.trusted_until,
         "reference_horizon_s": choice.reference_horizon,
         "needed_rtol": choice.needed_rtol,

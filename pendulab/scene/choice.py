@@ -145,14 +145,14 @@ class Verification:
         """
         return {
             "level": self.level,
-            "predicted_error": self.predicted_error,
-            "measured_error": self.measured_error,
+            "predicted_error": _finite(self.predicted_error),
+            "measured_error": _finite(self.measured_error),
             "predicted_horizon_s": self.predicted_horizon,
             "measured_horizon_s": self.measured_horizon,
             "within_tolerance": self.within,
             "level_time_s": self.level_time,
             "reference_time_s": self.reference_time,
-            "reference_error": self.reference_error,
+            "reference_error": _finite(self.reference_error),
             "reference_horizon_s": self.reference_horizon,
         }
 
@@ -274,18 +274,18 @@ class ModelChoice:
             "levels": [
                 {
                     "name": lv.name,
-                    "predicted_error": lv.error,
+                    "predicted_error": _finite(lv.error),
                     "horizon_s": lv.horizon,
                     "within_tolerance": lv.within,
                     "note": lv.note,
                 }
                 for lv in self.levels
             ],
-            "lyapunov_per_s": self.lyapunov,
+            "lyapunov_per_s": _finite(self.lyapunov),
             "energy_fraction": self.energy_fraction,
             "frequency_ratio": self.frequency_ratio if math.isfinite(self.frequency_ratio) else None,
             "reference_horizon_s": self.reference_horizon,
-            "needed_rtol": self.needed_rtol,
+            "needed_rtol": _finite(self.needed_rtol),
             "trusted_until_s": self.trusted_until,
             "verdict": self.verdict,
             "rule_time_s": self.rule_time,
@@ -442,6 +442,11 @@ def choose_model(
     if not verify:
         return choice
     return _verified(scene, choice)
+
+
+def _finite(x: float | None) -> float | None:
+    """``x``, or None when it is not finite (strict JSON has no NaN / Infinity)."""
+    return None if x is None or not math.isfinite(x) else float(x)
 
 
 def _prediction(name: str, t: np.ndarray, e: np.ndarray, tol: float, note: str) -> LevelPrediction:
