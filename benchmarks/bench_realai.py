@@ -25,10 +25,9 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from pendulab.control.realai import CONTROLLER_NAMES, PUBLISHED, realai_score
-from pendulab.control.realai.criteria import CRITERIA, HEIGHT_FRACTION
 from pendulab.control.realai.design import default_guess, save_plan, sweep, tracker_for_plan
-from pendulab.control.realai.simulate import run
+from pendulab.control.realai.spec import HEIGHT_FRACTION
+from pendulab.evaluate.realai import CONTROLLER_NAMES, CRITERIA, PUBLISHED, realai_score, run
 
 #: Continuation per task: (swing-up time t_up, plan end t_end) [s] of each solve; the first starts from the
 #: task's effort-optimal swing-up, each next one from the previous plan. The best closed-loop score is kept.

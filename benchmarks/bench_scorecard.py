@@ -8,7 +8,7 @@ Target (issue 13): the scorecard of one controller on one task, all categories, 
 
 Reported:
 
-* wall time of the whole scorecard (``pendulab.control.score``, ``workers`` processes), median of ``repeats``;
+* wall time of the whole scorecard (``pendulab.evaluate.score``, ``workers`` processes), median of ``repeats``;
   and the CPU time of one closed-loop episode in this process, so that a result measured on a loaded machine can
   be extrapolated: ``runs x CPU per episode / workers``;
 * per episode (10 s, nominal): the scorecard's fixed-step RK4 plant (one compiled sample map per controller
@@ -32,9 +32,9 @@ import numpy as np
 import pendulab as pl
 from pendulab.control.controllers import controller_for_task
 from pendulab.control.feedback import as_feedback
-from pendulab.control.perturb import run_episode
-from pendulab.control.scorecard import score
 from pendulab.control.swingup.tasks import load_task
+from pendulab.evaluate.perturb import run_perturbed_episode
+from pendulab.evaluate.scorecard import score
 
 
 def _cpu(fn, repeats: int) -> float:
@@ -59,13 +59,13 @@ def main(argv: list[str] | None = None) -> int:
     load0 = os.getloadavg()
     task = load_task(args.task)
     ctrl, x0 = controller_for_task(args.controller, task)
-    run_episode(ctrl, task, x0)  # warm-up: JIT-compiles the plant's sample map
+    run_perturbed_episode(ctrl, task, x0)  # warm-up: JIT-compiles the plant's sample map
 
-    ep_cpu = _cpu(lambda: run_episode(ctrl, task, x0), args.repeats * 3)
+    ep_cpu = _cpu(lambda: run_perturbed_episode(ctrl, task, x0), args.repeats * 3)
     peer = lambda: pl.simulate(task.model, x0, task.t_final, dt=ctrl.sample_time, u=as_feedback(ctrl, task.model))  # noqa: E731
     peer_cpu = _cpu(peer, args.repeats)
     ref = pl.simulate(task.model, x0, 2.0, dt=ctrl.sample_time, u=as_feedback(ctrl, task.model), rtol=1e-11, atol=1e-11)
-    err = float(np.max(np.abs(run_episode(ctrl, task, x0, t_final=2.0).x - ref.x)))
+    err = float(np.max(np.abs(run_perturbed_episode(ctrl, task, x0, t_final=2.0).x - ref.x)))
 
     walls, cpus, cards = [], [], []
     for k in range(args.repeats):

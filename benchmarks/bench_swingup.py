@@ -138,7 +138,7 @@ def rule_table(ks: tuple[float, ...] = (1e3, 2.5e4, 1e5, 1e6, 1e7, 1e9)) -> list
     The rigid counterpart does not depend on k: one rigid plan (refined to 5e-4), lifted for every k.
     """
     import pendulab as pl
-    from pendulab.control.swingup.guess import lift_plan, rigid_counterpart
+    from pendulab.control.swingup.guess import lift_plan, rigid_counterpart_problem
     from pendulab.control.swingup.planning import elastic_error, planning_rule, solve_objective
 
     rows = [
@@ -149,7 +149,7 @@ def rule_table(ks: tuple[float, ...] = (1e3, 2.5e4, 1e5, 1e6, 1e7, 1e9)) -> list
     task = load_task("pendubot_elastic")
     m0 = task.model
     base = {n: getattr(m0.params, n) for n in m0.param_names if n not in ("k1", "k2")}
-    rigid = solve_objective(rigid_counterpart(task.problem), "radau", task.N, task.degree, "auto", 5e-4, True)
+    rigid = solve_objective(rigid_counterpart_problem(task.problem), "radau", task.N, task.degree, "auto", 5e-4, True)
     for k in tqdm(ks, desc="rule", file=sys.stderr):
         m = pl.elastic(**base, k1=k, k2=k)
         d = planning_rule(m, 1e-3)

@@ -28,13 +28,14 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("scene", "scenes"),
     ("ensemble",),
     ("control",),
+    ("evaluate",),
     ("viz",),
     ("fmu",),
     ("cosim",),
     ("gym",),
     ("bench",),
     ("commands",),
-    ("cli", "__main__"),
+    ("cli", "__main__", "_aliases"),
 )
 LAYER_OF = {name: i for i, names in enumerate(LAYERS) for name in names}
 

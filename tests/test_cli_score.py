@@ -45,7 +45,7 @@ def test_bad_input_exits_2_with_one_line(argv, message, capsys):
 
 
 def test_ctrl_c_exits_130(monkeypatch, capsys, tmp_path):
-    import pendulab.control.scorecard as sc
+    import pendulab.evaluate as sc
 
     monkeypatch.chdir(tmp_path)  # the default output directory is ./pendulab-out/score/...
     def interrupted(*args, **kwargs):
@@ -57,7 +57,7 @@ def test_ctrl_c_exits_130(monkeypatch, capsys, tmp_path):
 
 
 def test_realai_calls_realai_score(monkeypatch, tmp_path, capsys):
-    realai = pytest.importorskip("pendulab.control.realai")
+    realai = pytest.importorskip("pendulab.evaluate.realai")
     calls = {}
 
     class Result:

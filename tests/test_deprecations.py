@@ -50,3 +50,74 @@ def test_method_rk_is_rk4():
     new = pl.simulate(model, [1.0, 0.5, 0.0, 0.0], 0.5, dt=0.05, method="rk4", max_step=0.01)
     assert old.method == "rk4"
     np.testing.assert_array_equal(old.x, new.x)
+
+
+def test_control_tasks_restored_as_alias_module():
+    tasks = importlib.import_module("pendulab.control.tasks")
+    from pendulab.control.swingup.tasks import load_task
+
+    with pytest.warns(DeprecationWarning, match="pendulab.control.swingup.tasks.load_task"):
+        assert tasks.load_task is load_task
+    with pytest.raises(AttributeError):
+        _ = tasks.nope
+
+
+def test_evaluation_moved_to_evaluate_package():
+    import pendulab.control
+    import pendulab.evaluate
+
+    with pytest.warns(DeprecationWarning, match="pendulab.evaluate.score"):
+        assert pendulab.control.score is pendulab.evaluate.score
+    scorecard = importlib.import_module("pendulab.control.scorecard")
+    with pytest.warns(DeprecationWarning, match="pendulab.evaluate.scorecard.rerun"):
+        assert scorecard.rerun is pendulab.evaluate.rerun
+    perturb = importlib.import_module("pendulab.control.perturb")
+    with pytest.warns(DeprecationWarning, match="run_perturbed_episode"):
+        assert perturb.run_episode is pendulab.evaluate.run_perturbed_episode
+    criteria = importlib.import_module("pendulab.control.realai.criteria")
+    from pendulab.evaluate.realai.criteria import score_v2
+
+    with pytest.warns(DeprecationWarning, match="score_v2"):
+        assert criteria.score is score_v2
+    with pytest.warns(DeprecationWarning, match="pendulab.evaluate.realai.realai_score"):
+        assert pendulab.control.realai.realai_score is pendulab.evaluate.realai_score
+
+
+def test_one_name_per_concept_old_names_warn():
+    """The six names that meant two things each: the renamed side keeps its old name for one release."""
+    from pendulab.bench.fmu_methods import fmu_bench_runner
+    from pendulab.control.realai.design import LeaderboardPlan
+    from pendulab.control.swingup.errors import PlanTrajectory
+    from pendulab.control.swingup.guess import rigid_counterpart_problem
+    from pendulab.control.swingup.solve import solve_transcription
+    from pendulab.integrate.compiled import compiled_unavailable_reason
+    from pendulab.integrate.taylor.availability import taylor_unavailable_reason
+
+    cases = [
+        ("pendulab.control.realai.design", "Plan", LeaderboardPlan),
+        ("pendulab.control.swingup.errors", "Plan", PlanTrajectory),
+        ("pendulab.control.swingup.guess", "rigid_counterpart", rigid_counterpart_problem),
+        ("pendulab.control.swingup.solve", "swing_up", solve_transcription),
+        ("pendulab.bench.fmu_methods", "fmu_runner", fmu_bench_runner),
+        ("pendulab.integrate.compiled", "unavailable_reason", compiled_unavailable_reason),
+        ("pendulab.integrate.taylor.availability", "unavailable_reason", taylor_unavailable_reason),
+    ]
+    for module, old, new in cases:
+        with pytest.warns(DeprecationWarning, match=new.__name__):
+            assert getattr(importlib.import_module(module), old) is new
+
+
+def test_no_package_reaches_up_with_importlib():
+    """Old names are served by pendulab._aliases (above every layer): no package loads another one dynamically."""
+    import re
+    from pathlib import Path
+
+    pkg = Path(pl.__file__).parent
+    reaching = []
+    for path in pkg.rglob("*.py"):
+        rel = path.relative_to(pkg)
+        for target in re.findall(r"import_module\(f?\"pendulab\.(\w+)", path.read_text()):
+            if target != rel.parts[0]:
+                reaching.append(rel.as_posix())
+    # The CLI's command dispatch and the alias table are the only dynamic imports across packages.
+    assert sorted(set(reaching)) == ["cli.py"]

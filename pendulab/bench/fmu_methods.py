@@ -41,7 +41,7 @@ from ..integrate.trajectory import Trajectory
 from ..model.model import Model
 from .methods import BenchMethod
 
-__all__ = ["FMU_SOLVERS", "fmu_runner", "fmu_bench_methods"]
+__all__ = ["FMU_SOLVERS", "fmu_bench_runner", "fmu_bench_methods"]
 
 #: Method name -> value of the FMU's ``solver`` parameter.
 FMU_SOLVERS: dict[str, int] = {"fmu-dopri5": 0, "fmu-rodas4": 1}
@@ -66,7 +66,7 @@ def _unpacked_fmu(model: Model) -> tuple[str, Any]:
     return _cache[model.kind]
 
 
-def fmu_runner(solver: int) -> Callable[[Model, np.ndarray, float, float, float], Trajectory]:
+def fmu_bench_runner(solver: int) -> Callable[[Model, np.ndarray, float, float, float], Trajectory]:
     """Runner ``run(model, x0, t_final, dt, tol) -> Trajectory`` for the FMU's embedded ``solver``.
 
     Parameters
@@ -152,4 +152,4 @@ def fmu_bench_methods(settings: tuple[float, ...], quick: tuple[float, ...]) -> 
     list of BenchMethod
         ``fmu-dopri5`` and ``fmu-rodas4``.
     """
-    return [BenchMethod(name, "tol", settings, quick, fmu_runner(solver), "fmu") for name, solver in FMU_SOLVERS.items()]
+    return [BenchMethod(name, "tol", settings, quick, fmu_bench_runner(solver), "fmu") for name, solver in FMU_SOLVERS.items()]

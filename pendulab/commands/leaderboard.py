@@ -59,9 +59,9 @@ def write_leaderboard(
         (not available yet, an optimization that does not solve) gets a cell
         saying so instead of a score.
     """
-    from ..control.scorecard import CATEGORIES, score
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task
+    from ..evaluate import CATEGORIES, score
     from ._common import ProgressBar
 
     out = DEFAULT_PATH if path is None else Path(path)
@@ -140,7 +140,7 @@ def _nominal(card: Any) -> str:
 
 
 def _realai_section() -> list[str]:
-    from ..control.realai import PUBLISHED, realai_score
+    from ..evaluate.realai import PUBLISHED, realai_score
 
     lines = ["## RealAIGym simulation leaderboard (v2 score)", ""]
     lines += ["Definitions, and the score-designed swing-up: docs/realai.md.", ""]

@@ -110,7 +110,7 @@ def run_score(args: argparse.Namespace) -> int:
     CLIError
         Missing, bad or inapplicable options, unknown task, controller or category.
     """
-    from ..control.scorecard import MAX_RUNS
+    from ..evaluate.scorecard import MAX_RUNS
 
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     runs = _int("--runs", args.runs, 1, MAX_RUNS, "runs per level of each stochastic category", 20)
@@ -131,9 +131,9 @@ def run_score(args: argparse.Namespace) -> int:
         )
         return _run_realai(args)
     from ..control.controllers import TASK_CONTROLLERS
-    from ..control.scorecard import CATEGORIES, score
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task, task_names
+    from ..evaluate import CATEGORIES, score
 
     if args.controller not in TASK_CONTROLLERS:
         raise CLIError(f"--controller {args.controller!r}: expected one of {list(TASK_CONTROLLERS)}")
@@ -203,7 +203,7 @@ def _finite(d: dict[str, Any]) -> dict[str, Any]:
 
 def _resume(path: Path, settings: dict[str, Any]) -> tuple:
     """Records of an earlier run with the same settings (none when there is no file yet)."""
-    from ..control.scorecard import record_from_dict
+    from ..evaluate.card import record_from_dict
 
     if not path.is_file():
         print(f"--resume: no {path}; starting a new scorecard", file=sys.stderr)
@@ -228,7 +228,7 @@ def _run_realai(args: argparse.Namespace) -> int:
     task = short_name(args.task)
     if task not in ("pendubot", "acrobot"):
         raise CLIError(f"--task {args.task!r}: --realai expects pendubot or acrobot (or swingup_pendubot, swingup_acrobot)")
-    from ..control.realai import CONTROLLER_NAMES, realai_score
+    from ..evaluate.realai import CONTROLLER_NAMES, realai_score
 
     if args.controller not in CONTROLLER_NAMES:
         raise CLIError(f"--controller {args.controller!r}: --realai expects one of {list(CONTROLLER_NAMES)}")

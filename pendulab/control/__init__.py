@@ -1,4 +1,4 @@
-"""Control: python-control bridge, controllability, LQR, sampled controllers, tracking and swing-up.
+"""Control design: python-control bridge, controllability, LQR, sampled controllers, tracking, swing-up and NMPC.
 
 One definition per concept: :mod:`.lqr` holds the LQR design (continuous or
 discrete), the TVLQR Riccati recursion, the ZOH discretization and the angle
@@ -7,8 +7,9 @@ wrapping; :mod:`.feedback` holds the controller protocol
 feedback, energy swing-up, the TVLQR tracker); :mod:`.tracking` designs the
 TVLQR gains; :mod:`.controllers` names them for the CLI; :mod:`.swingup`
 solves swing-up optimal control; :mod:`.nmpc` is receding-horizon control on
-the same model; :mod:`.scorecard` (with :mod:`.perturb`) scores a controller's
-robustness; :mod:`.realai` scores swing-ups on RealAIGym's leaderboard.
+the same model; :mod:`.realai` designs a swing-up for RealAIGym's leaderboard
+score. Evaluating controllers (robustness scorecard, leaderboard runs) is the
+layer above: :mod:`pendulab.evaluate`.
 
 Inside this package ``import control as ct`` is python-control (absolute
 imports); never add a top-level module named ``control``.
@@ -30,10 +31,7 @@ from .feedback import (
 )
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
 from .nmpc import NMPCController, NMPCOptions, nmpc_controller, nmpc_for_task
-from .perturb import Perturbation
-from .realai import RealAIResult, realai_score
-from .scorecard import CATEGORIES, Scorecard, rerun, score
-from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, swing_up
+from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, solve_transcription, swing_up
 from .swingup.episode import SuccessRate, closed_loop_success_rate
 from .swingup.errors import ErrorEstimate, estimate_error, estimate_error_arrays
 from .swingup.guess import Guess, energy_guess, linear_guess
@@ -49,16 +47,12 @@ from .tracking import (
 )
 
 __all__ = [
-    "CATEGORIES",
     "CONTROLLERS",
     "TASK_CONTROLLERS",
     "ErrorEstimate",
     "NMPCController",
     "NMPCOptions",
-    "Perturbation",
     "PlanningDecision",
-    "RealAIResult",
-    "Scorecard",
     "SuccessRate",
     "closed_loop_success_rate",
     "controller_for_task",
@@ -68,9 +62,6 @@ __all__ = [
     "nmpc_for_task",
     "plan",
     "planning_rule",
-    "realai_score",
-    "rerun",
-    "score",
     "GUESSES",
     "OBJECTIVES",
     "TRANSCRIPTIONS",
@@ -106,6 +97,7 @@ __all__ = [
     "region_of_attraction",
     "resample_reference",
     "simulate_balance",
+    "solve_transcription",
     "swing_up",
     "swingup_reference",
     "tvlqr",

@@ -131,8 +131,8 @@ def controller_for_task(
     name : {"lqr", "tvlqr", "swingup", "nmpc"}
         ``lqr``: discrete LQR balance about upright (no swing-up: from hanging it
         is expected to fail; it is the baseline); ``tvlqr``: TVLQR along the
-        task's optimized swing-up (:func:`pendulab.control.swingup.solve.swing_up`),
-        handing over to LQR balance; ``swingup``: energy pumping with the
+        task's plan (:meth:`~pendulab.control.swingup.tasks.Task.plan`, computed
+        once per task), handing over to LQR balance; ``swingup``: energy pumping with the
         task's driven torques, then LQR balance; ``nmpc``: tracking NMPC of the
         task's optimized swing-up, then regulation upright
         (:func:`pendulab.control.nmpc.nmpc_for_task`).
@@ -154,14 +154,13 @@ def controller_for_task(
     Raises
     ------
     ValueError
-        Unknown ``name``, a non-positive ``sample_time``, or a swing-up the
-        trajectory optimizer could not solve (``tvlqr``).
+        Unknown ``name``, a non-positive ``sample_time``, or a task whose
+        plan failed (``tvlqr``).
     TypeError
         ``name`` is not a string, ``task`` neither a Task nor a name.
     FileNotFoundError
         Unknown task name.
     """
-    from .swingup.solve import swing_up
     from .swingup.tasks import resolve_task
 
     if not isinstance(name, str):
@@ -178,9 +177,9 @@ def controller_for_task(
     if name == "lqr":
         ctrl: SampledController = balance_controller(model, h, design="discrete", actuation=pb.actuation, u_max=pb.torque_limit)
     elif name == "tvlqr":
-        res = swing_up(pb, task.method, task.N, degree=task.degree)
+        res = task.plan().result
         if not res.success:
-            raise ValueError(f"tvlqr: the swing-up of task {task.name!r} did not solve: {res.message}")
+            raise ValueError(f"tvlqr: the swing-up plan of task {task.name!r} did not solve: {res.message}")
         ctrl = tvlqr(res, dt=h)
     elif name == "swingup":
         ctrl = energy_swingup(model, h, u_max=pb.torque_limit, actuation=pb.actuation)

@@ -24,7 +24,7 @@ import numpy as np
 
 from .._checks import relative_tolerance
 from ..integrate.taylor import compiled_integrator, structure_key
-from ..integrate.taylor.availability import heyoka_module, unavailable_reason
+from ..integrate.taylor.availability import heyoka_module, taylor_unavailable_reason
 from ..model.model import ACTUATIONS, Model, make_model
 from ..native.build import cache_dir, cached_artifact, compiler_unavailable_reason, source_digest
 from ..native.library import native_library
@@ -62,13 +62,13 @@ def resolve_integrator(integrator: str) -> str:
         raise ValueError(f"integrator must be one of {list(INTEGRATORS)}, got {integrator!r}")
     if integrator != "auto":
         return integrator
-    if unavailable_reason() is None:
+    if taylor_unavailable_reason() is None:
         return "taylor"
     reason = compiler_unavailable_reason()
     if reason is None:
         return "compiled-dopri5"
     raise RuntimeError(
-        f"the native backend needs heyoka ({unavailable_reason()}) or a C compiler ({reason}); install one of them"
+        f"the native backend needs heyoka ({taylor_unavailable_reason()}) or a C compiler ({reason}); install one of them"
     )
 
 

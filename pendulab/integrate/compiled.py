@@ -35,7 +35,7 @@ from ..native.build import compiler_unavailable_reason
 from ..native.library import ERROR_CODES, GridResult, native_library
 from .registry import MethodSpec, RunRequest, RunResult
 
-__all__ = ["METHOD_SPECS", "run_compiled", "unavailable_reason", "DEFAULT_MAX_STEPS", "MIN_RTOL"]
+__all__ = ["METHOD_SPECS", "run_compiled", "compiled_unavailable_reason", "DEFAULT_MAX_STEPS", "MIN_RTOL"]
 
 #: Default budget of step attempts over one run (``options={"max_steps": ...}``).
 DEFAULT_MAX_STEPS = 1_000_000
@@ -45,7 +45,7 @@ MIN_RTOL = 100 * float(np.finfo(float).eps)
 _OPTIONS: Mapping[str, type] = {"max_steps": int}
 
 
-def unavailable_reason() -> str | None:
+def compiled_unavailable_reason() -> str | None:
     """Why the compiled methods cannot build their library here (None when a C compiler is found).
 
     Returns
@@ -157,7 +157,7 @@ def run_compiled(req: RunRequest) -> RunResult:
 
 
 def _spec(name: str, solver: str, fallback: str, description: str) -> MethodSpec:
-    settings = {"solver": solver, "fallback": fallback, "available": unavailable_reason}
+    settings = {"solver": solver, "fallback": fallback, "available": compiled_unavailable_reason}
     return MethodSpec(name, "compiled", description, run_compiled, False, settings)
 
 

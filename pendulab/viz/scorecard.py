@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..control.scorecard import Scorecard  # noqa: E402
+from ..evaluate.card import Scorecard  # noqa: E402
 from .save import save_figure  # noqa: E402
 
 __all__ = ["plot_scorecard", "plot_realai"]
@@ -66,7 +66,7 @@ def plot_realai(result: Any, path: str | Path) -> Path:
     Parameters
     ----------
     result : RealAIResult
-        A run of :func:`pendulab.control.realai.realai_score`.
+        A run of :func:`pendulab.evaluate.realai.realai_score`.
     path : str or Path
         Output image (e.g. ``realai.png``).
 
@@ -75,7 +75,8 @@ def plot_realai(result: Any, path: str | Path) -> Path:
     Path
         The written file.
     """
-    from ..control.realai import TORQUE_LIMIT, leaderboard_model, to_relative
+    from ..control.realai.spec import TORQUE_LIMIT, leaderboard_model
+    from ..evaluate.realai.criteria import to_relative
 
     t, x, u = result.t, result.x, result.u
     model = leaderboard_model(result.task)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pendulab.bench.cases import CASES
-from pendulab.bench.fmu_methods import fmu_runner
+from pendulab.bench.fmu_methods import fmu_bench_runner
 from pendulab.bench.reference import load_reference
 from pendulab.bench.workprecision import BENCH_METHODS, run_work_precision
 from pendulab.integrate import SimulationError
@@ -36,19 +36,19 @@ def test_fmu_solvers_quick_rigid_chaotic_2s():
 def test_fmu_rodas4_steps_over_stiff_springs_after_quasi_static_start():
     case = CASES["elastic_stiff_1e6_qs"]
     ref = load_reference(case)
-    traj = fmu_runner(1)(case.model, case.x0, case.t_final, case.dt, 1e-7)
+    traj = fmu_bench_runner(1)(case.model, case.x0, case.t_final, case.dt, 1e-7)
     assert traj.method == "fmu:rodas4" and traj.x.shape == ref.x.shape
     # L-stable rodas4 at 1e-7 on k = 1e6 N/m: measured 3.6e-7 over the grid; 1e-5 leaves room for platform noise.
     assert np.max(np.abs(traj.x - ref.x)) < 1e-5
     np.testing.assert_allclose(traj.t, ref.t, rtol=0, atol=1e-12)  # one doStep per output point of the case grid
 
 
-def test_fmu_runner_rejects_unknown_solver_and_reports_failures():
+def test_fmu_bench_runner_rejects_unknown_solver_and_reports_failures():
     with pytest.raises(ValueError, match="solver must be one of"):
-        fmu_runner(2)
+        fmu_bench_runner(2)
     case = CASES["rigid_chaotic_2s"]
     # A NaN start value is refused by the FMU (Error status): reported as a SimulationError naming the method.
     x0 = case.x0.copy()
     x0[0] = math.nan
     with pytest.raises(SimulationError, match="fmu:dopri5"):
-        fmu_runner(0)(case.model, x0, case.t_final, case.dt, 1e-6)
+        fmu_bench_runner(0)(case.model, x0, case.t_final, case.dt, 1e-6)

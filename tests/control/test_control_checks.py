@@ -10,10 +10,10 @@ import pytest
 from pendulab.cli import main
 from pendulab.control.controllers import controller_for_task
 from pendulab.control.nmpc import NMPCOptions, nmpc_controller, nmpc_for_task
-from pendulab.control.scorecard import score
 from pendulab.control.swingup.iterations import iteration_hook
-from pendulab.control.swingup.solve import swing_up
+from pendulab.control.swingup.solve import solve_transcription as swing_up
 from pendulab.control.swingup.tasks import load_task, resolve_task
+from pendulab.evaluate.scorecard import score
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """NMPC for a swing-up task or a model: plan the swing-up offline, then track it and balance with one NMPC.
 
-The plan is the optimal swing-up of :func:`pendulab.control.swingup.solve.swing_up`
+The plan is the optimal swing-up of :func:`pendulab.control.swingup.swing_up`
 on the task's rigid model, or on the rigid counterpart of an elastic one (a few
 seconds instead of minutes, and it always solves; the NMPC lifts it to
 quasi-static spring lengths: see :mod:`.controller`), with the task's actuation,
@@ -64,7 +64,7 @@ def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int = 100
         Swing-up problem (its start and goal are replaced by the planning model's
         hanging rest and upright states when the model is elastic).
     method : str
-        Transcription of :func:`pendulab.control.swingup.solve.swing_up`.
+        Transcription of :func:`pendulab.control.swingup.swing_up`.
     N : int
         Intervals.
     degree : int
@@ -80,7 +80,7 @@ def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int = 100
     ValueError
         The trajectory optimizer did not solve the swing-up.
     """
-    from ..swingup.solve import swing_up
+    from ..swingup.planning import swing_up
 
     plan = rigid_counterpart(problem.model)
     if plan is not problem.model:

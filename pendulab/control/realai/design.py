@@ -35,13 +35,12 @@ import numpy as np
 
 from ...model.model import Model
 from ..tracking import TVLQRTracker, tvlqr_tracker
-from .criteria import HEIGHT_FRACTION, NORMS
-from .simulate import DT, N_STEPS, TASKS, TORQUE_LIMIT, _check_task, leaderboard_model, leaderboard_task
+from .spec import DT, HEIGHT_FRACTION, N_STEPS, NORMS, TASKS, TORQUE_LIMIT, check_task, leaderboard_model, leaderboard_task
 
 __all__ = [
     "SUBSTEPS",
     "PLAN_DIR",
-    "Plan",
+    "LeaderboardPlan",
     "design_plan",
     "load_plan",
     "save_plan",
@@ -64,7 +63,7 @@ _MARGIN = 0.01  # m above the success line on nodes after t_up (the line is chec
 
 
 @dataclass(frozen=True)
-class Plan:
+class LeaderboardPlan:
     """An optimized swing-up on the 2 ms grid.
 
     Attributes
@@ -129,7 +128,7 @@ def design_plan(
     *,
     u_bound: float = 5.5,
     max_iter: int = 3000,
-) -> Plan:
+) -> LeaderboardPlan:
     """Optimize a swing-up for the v2 score with the swing-up time fixed at ``t_up``.
 
     Parameters
@@ -150,7 +149,7 @@ def design_plan(
 
     Returns
     -------
-    Plan
+    LeaderboardPlan
         The optimized plan on the 2 ms grid.
 
     Raises
@@ -159,7 +158,7 @@ def design_plan(
         Unknown task, times not ``0 < t_up < t_end`` on the 10 ms grid, a guess
         of the wrong shape, or an NLP that IPOPT did not solve.
     """
-    _check_task(task)
+    check_task(task)
     H = SUBSTEPS * DT
     N = int(round(t_end / H))
     if not (0 < t_up < t_end) or abs(N * H - t_end) > 1e-9:
@@ -221,7 +220,9 @@ def design_plan(
     return _refine(task, model, joint, xn, un, t_up, float(sol["f"]))
 
 
-def _refine(task: str, model: Model, joint: int, xn: np.ndarray, un: np.ndarray, t_up: float, objective: float) -> Plan:
+def _refine(
+    task: str, model: Model, joint: int, xn: np.ndarray, un: np.ndarray, t_up: float, objective: float
+) -> LeaderboardPlan:
     """The 2 ms reference of node values: each interval's substeps from its own start node."""
     N = len(un) - 1
     _, _, sub = _interval(model, joint).map(N)(xn[:N].T, un[:N][None, :], un[1:][None, :])
@@ -231,15 +232,15 @@ def _refine(task: str, model: Model, joint: int, xn: np.ndarray, un: np.ndarray,
     ua = np.concatenate([un[k] + s * (un[k + 1] - un[k]) for k in range(N)] + [[un[-1]]])
     u = np.zeros((len(ua), 2))
     u[:, joint] = ua
-    return Plan(task, np.arange(len(ua)) * DT, x, u, float(t_up), objective)
+    return LeaderboardPlan(task, np.arange(len(ua)) * DT, x, u, float(t_up), objective)
 
 
-def save_plan(plan: Plan, path: str | Path | None = None) -> Path:
+def save_plan(plan: LeaderboardPlan, path: str | Path | None = None) -> Path:
     """Store a plan as ``.npz`` (default ``plans/<task>.npz`` in the package).
 
     Parameters
     ----------
-    plan : Plan
+    plan : LeaderboardPlan
         The plan.
     path : str or Path, optional
         Target file.
@@ -255,7 +256,7 @@ def save_plan(plan: Plan, path: str | Path | None = None) -> Path:
     return p
 
 
-def load_plan(task: str, path: str | Path | None = None) -> Plan:
+def load_plan(task: str, path: str | Path | None = None) -> LeaderboardPlan:
     """Load a stored plan (default: the shipped ``plans/<task>.npz``).
 
     Parameters
@@ -267,7 +268,7 @@ def load_plan(task: str, path: str | Path | None = None) -> Plan:
 
     Returns
     -------
-    Plan
+    LeaderboardPlan
         The stored plan.
 
     Raises
@@ -277,22 +278,22 @@ def load_plan(task: str, path: str | Path | None = None) -> Plan:
     FileNotFoundError
         No plan file (regenerate with ``python benchmarks/bench_realai.py --regenerate``).
     """
-    _check_task(task)
+    check_task(task)
     p = Path(path) if path is not None else PLAN_DIR / f"{task}.npz"
     if not p.is_file():
         raise FileNotFoundError(f"no RealAI plan at {str(p)!r}; run `python benchmarks/bench_realai.py --regenerate`")
     with np.load(p) as d:
         if str(d["task"]) != task:
             raise ValueError(f"plan file {str(p)!r} holds a {str(d['task'])!r} plan, not {task!r}")
-        return Plan(task, d["t"], d["x"], d["u"], float(d["t_up"]), float(d["objective"]))
+        return LeaderboardPlan(task, d["t"], d["x"], d["u"], float(d["t_up"]), float(d["objective"]))
 
 
-def tracker_for_plan(plan: Plan) -> TVLQRTracker:
+def tracker_for_plan(plan: LeaderboardPlan) -> TVLQRTracker:
     """TVLQR at 2 ms along a plan, then discrete LQR balance; saturated at 6 N.m.
 
     Parameters
     ----------
-    plan : Plan
+    plan : LeaderboardPlan
         The reference.
 
     Returns
@@ -332,10 +333,10 @@ def best_controller(task: str) -> TVLQRTracker:
 def sweep(
     task: str,
     steps: Iterable[tuple[float, float]],
-    evaluate: Callable[[Plan], float],
+    evaluate: Callable[[LeaderboardPlan], float],
     guess: tuple[np.ndarray, np.ndarray] | None = None,
     progress: Callable[[list[tuple[float, float]]], Iterable[tuple[float, float]]] = iter,
-) -> tuple[Plan, float]:
+) -> tuple[LeaderboardPlan, float]:
     """Continuation over ``(t_up, t_end)`` pairs: each solve starts from the previous plan; keep the best score.
 
     A guess shorter than the next plan is extended by holding its last node
@@ -356,7 +357,7 @@ def sweep(
 
     Returns
     -------
-    plan : Plan
+    plan : LeaderboardPlan
         The best plan.
     score : float
         Its score.
@@ -366,7 +367,7 @@ def sweep(
     ValueError
         No step gave a solved NLP.
     """
-    best: tuple[Plan, float] | None = None
+    best: tuple[LeaderboardPlan, float] | None = None
     for t_up, t_end in progress(list(steps)):
         if guess is not None:
             n = int(round(t_end / (SUBSTEPS * DT))) + 1
@@ -387,7 +388,7 @@ def sweep(
 
 
 def default_guess(task: str, t_end: float) -> tuple[np.ndarray, np.ndarray]:
-    """Node guess from the task's effort-optimal swing-up (:func:`pendulab.control.swingup.swing_up`), upright after it.
+    """Node guess from the task's effort-optimal plan (:meth:`~pendulab.control.swingup.tasks.Task.plan`), upright after it.
 
     Parameters
     ----------
@@ -408,10 +409,7 @@ def default_guess(task: str, t_end: float) -> tuple[np.ndarray, np.ndarray]:
     ValueError
         The swing-up did not solve.
     """
-    from ..swingup.solve import swing_up
-
-    tk = leaderboard_task(task)
-    res = swing_up(tk.problem, tk.method, tk.N, degree=tk.degree)
+    res = leaderboard_task(task).plan().result
     if not res.success:
         raise ValueError(f"the shipped swing-up of {task} did not solve: {res.message}")
     tn = np.arange(int(round(t_end / (SUBSTEPS * DT))) + 1) * SUBSTEPS * DT

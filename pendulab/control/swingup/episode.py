@@ -23,7 +23,7 @@ from .check import HeightCheck, ReplayReport, height_success, replay
 from .errors import ErrorEstimate
 from .guess import Guess
 from .iterations import wall_time_budget
-from .planning import Plan, _solved, plan
+from .planning import Plan, is_solved, plan
 from .solve import SwingUpResult
 from .tasks import Task, resolve_task
 from .transcription import INTERVALS_WHY, MAX_INTERVALS
@@ -255,7 +255,7 @@ def run_episode(
     res = pl_.result
     start = task.problem.start if x0 is None else task.model.check_state(x0, "x0")
     # Without refinement a converged plan that misses the tolerance is still tracked (and reported as failed).
-    if not (res.success or (not refine and _solved(res))):
+    if not (res.success or (not refine and is_solved(res))):
         return Episode(task, res, None, None, None, None, start, pl_)
     if stage is not None and do_replay:
         stage("replaying the plan open loop")

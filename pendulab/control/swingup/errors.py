@@ -53,7 +53,7 @@ SCALE_FLOOR = 1e-3
 SCALES: tuple[str, ...] = ("state", "bob-speed")
 
 
-class Plan(Protocol):
+class PlanTrajectory(Protocol):
     """What :func:`estimate_error` reads from a plan (a :class:`~pendulab.control.swingup.solve.SwingUpResult`).
 
     Attributes
@@ -146,7 +146,7 @@ class ErrorEstimate:
 
 
 def estimate_error(
-    result: Plan,
+    result: PlanTrajectory,
     *,
     tolerance: float = 1e-3,
     model: Model | None = None,
@@ -162,7 +162,7 @@ def estimate_error(
 
     Parameters
     ----------
-    result : SwingUpResult or Plan
+    result : SwingUpResult or PlanTrajectory
         The plan (its grid ``t``, states ``x``, held torques ``u``).
     tolerance : float
         Relative tolerance of the pass/fail verdict (dimensionless, > 0).

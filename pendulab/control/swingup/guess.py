@@ -5,7 +5,7 @@
   joint pushes with its rate while the total energy is below the goal's,
   saturated at the torque limit), a physically consistent trajectory that
   already swings;
-* :func:`rigid_counterpart` / :func:`lift_to_elastic` - solve the elastic task
+* :func:`rigid_counterpart_problem` / :func:`lift_to_elastic` - solve the elastic task
   first on the rigid point-mass pendulum with the same masses and lengths, then
   lift it with quasi-static spring lengths;
 * :func:`lift_plan` - a rigid plan lifted to elastic states for a planning level
@@ -29,7 +29,7 @@ from ...model.quasistatic import quasi_static_lengths
 from ...model.statics import static_spring_lengths, static_spring_rates
 from .problem import SwingUpProblem
 
-__all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart", "lift_to_elastic", "lift_plan"]
+__all__ = ["Guess", "linear_guess", "energy_guess", "rigid_counterpart_problem", "lift_to_elastic", "lift_plan"]
 
 
 @dataclass(frozen=True)
@@ -155,7 +155,7 @@ def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
     return Guess(traj.t, traj.x, traj.u)
 
 
-def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
+def rigid_counterpart_problem(problem: SwingUpProblem) -> SwingUpProblem:
     """The same task on the rigid point-mass pendulum with the elastic model's masses and lengths.
 
     The model is :func:`pendulab.model.counterpart.rigid_counterpart`; start
@@ -178,7 +178,7 @@ def rigid_counterpart(problem: SwingUpProblem) -> SwingUpProblem:
         ``problem`` is not on the elastic model.
     """
     if problem.model.kind != "elastic":
-        raise ValueError(f"rigid_counterpart needs an elastic problem, got model kind {problem.model.kind!r}")
+        raise ValueError(f"rigid_counterpart_problem needs an elastic problem, got model kind {problem.model.kind!r}")
     model = counterpart.rigid_counterpart(problem.model)
     return SwingUpProblem(
         model=model,

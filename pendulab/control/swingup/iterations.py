@@ -9,19 +9,24 @@ The NLPs are cached across calls, so the callback is part of the cached solver
 and the hooks are module state, installed and removed by the context manager.
 The callback is also a point where Python runs during a long IPOPT solve, so a
 Ctrl-C there raises at once (CasADi reports it as a failed solve naming
-``KeyboardInterrupt``, which :func:`pendulab.control.swingup.solve.swing_up` re-raises).
+``KeyboardInterrupt``, which :func:`pendulab.control.swingup.solve.solve_transcription` re-raises).
 """
 
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import casadi as ca
 
-__all__ = ["IterationCallback", "iteration_hook", "wall_time_budget", "build_hook", "notify_build", "observe"]
+__all__ = [
+    "IterationCallback", "iteration_hook", "wall_time_budget", "build_hook", "notify_build", "observe",
+    "SigintWatch", "watch_sigint",
+]  # fmt: skip
 
 #: Installed hooks, outermost first. Each is called with no argument after every IPOPT iteration.
 _HOOKS: list[Callable[[], bool | None]] = []
@@ -252,3 +257,57 @@ def observe(on_iteration: Callable[[], Any], on_build: Callable[[str], Any]) -> 
 
     with iteration_hook(tick), build_hook(on_build):
         yield
+
+
+class SigintWatch:
+    """Whether a SIGINT arrived while a solve ran (set by :func:`watch_sigint`)."""
+
+    def __init__(self) -> None:
+        self.hit = False
+
+    def handler(self, previous: Any) -> Any:
+        def on_sigint(signum: int, frame: Any) -> None:
+            if not callable(previous):  # SIG_DFL: would end the process; interrupt instead
+                self.hit = True
+                raise KeyboardInterrupt
+            try:
+                previous(signum, frame)  # the caller's handler (Python's default raises KeyboardInterrupt)
+            except KeyboardInterrupt:
+                self.hit = True
+                raise
+
+        return on_sigint
+
+    def check(self, message: str = "") -> None:
+        """Raise ``KeyboardInterrupt`` when a SIGINT arrived or CasADi's message names one.
+
+        IPOPT's own status does not tell: CasADi reports an interrupted run as
+        ``NonIpopt_Exception_Thrown``, like any other exception in a callback.
+        """
+        if self.hit or "KeyboardInterrupt" in message:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def watch_sigint() -> Iterator[SigintWatch]:
+    """Watch SIGINT while a solve runs (main thread only: signal handlers cannot be installed elsewhere).
+
+    Yields
+    ------
+    SigintWatch
+        Its ``hit`` is set when a SIGINT arrived; ``check(message)`` raises ``KeyboardInterrupt`` then.
+    """
+    # Signal handlers can only be installed from the main thread; elsewhere only CasADi's message tells.
+    flag = SigintWatch()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous in (signal.SIG_IGN, None):
+        yield flag
+        return
+    signal.signal(signal.SIGINT, flag.handler(previous))
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -1,60 +1,14 @@
-"""Which model to plan an elastic swing-up on, and a plan proven on the full elastic dynamics.
+"""A swing-up plan proven on the task's full dynamics, and the front door :func:`swing_up`.
 
-Model no more than the task needs (DESIGN.md, principle 4) - the rule of the
-scene hierarchy (:mod:`pendulab.bench.hierarchy`), restated here because
-``control`` may not import ``bench``: *the cheapest model whose error is within
-the tolerance wins; the full elastic model is the reference and always
-qualifies.* Levels, cheapest first:
-
-``rigid``
-    Plan on the rigid point-mass counterpart; the springs are taken as rigid
-    links (r = L, v = 0).
-``rigid+quasi-static``
-    Plan on the rigid counterpart; the springs follow at their quasi-static
-    lengths r*(theta, omega, u) (:func:`pendulab.model.quasistatic.quasi_static_lengths`:
-    gravity, centrifugal and torque load, zero radial acceleration), v = dr*/dt.
-``elastic``
-    Plan on the full elastic model, warm-started from the quasi-static lift of
-    the rigid plan. p-refinement first: the lowest collocation degree (from the
-    task's up to :data:`ELASTIC_DEGREE`) that resolves the fastest spring mode
-    on the task's N intervals, else :data:`ELASTIC_DEGREE` on a uniform mesh
-    fine enough for it (:func:`pendulab.control.swingup.mesh.oscillation_mesh`:
-    Radau of degree d follows an undamped mode within 1e-3 per interval up to
-    ``h w`` = 1.41, 2.54, 3.83, 5.2, 6.7 for d = 3 ... 7), then h-refinement
-    where the estimate still misses the tolerance. The warm start is the rigid plan
-    re-solved on that mesh and degree (a coarse plan interpolated onto it cost
-    the elastic NLP ~200 IPOPT iterations instead of ~20).
-
-The error of a level is *predicted* from the modes (screening) and then
-*measured* (the proof): the lifted plan is checked interval by interval on the
-full elastic dynamics (:func:`pendulab.control.swingup.errors.estimate_error_arrays`).
-A level that fails its proof hands over to the next one, so the decision never
-rests on the prediction alone.
-
-Prediction, with ``w_p`` the highest pendular and ``w_s`` the lowest spring
-frequency (modes at hanging and upright, :func:`pendulab.analysis.modes.modes`)
-and ``eps = w_p / w_s``:
-
-* rigid: a spring not at its loaded length oscillates about it; the spring force
-  of that oscillation is set by the load (not by k), and its effect on the
-  angular rates over one interval averages out as ``1 / w_s``:
-  error ~ ``C_RIGID * eps``;
-* rigid+quasi-static: the lengths carry the load; what remains is the next
-  order of the slow-manifold expansion: error ~ ``C_QUASI_STATIC * eps**2``.
-
-The rigid plan is refined to half the tolerance, leaving the other half to
-the modelling error of the lift. The constants bound the measured ratios on
-``swingup_pendubot_elastic`` with springs of 1e3 ... 1e9 N/m (one rigid plan lifted;
-benchmarks/results/swingup.md, "Planning rule"): rigid 1.1 ... 4.2, quasi-static
-5 ... 14. They order the attempts; the proof decides.
-
-Proofs use the error estimate's default normalisation (each state's largest
-magnitude over the plan, the issue's metric); ``error_scale="bob-speed"``
-judges the spring rates against the bobs' speed instead (the one definition is
-in :mod:`.errors`). The constants above were fitted with the bob-speed scale:
-under the default scale a quasi-statically lifted plan of very stiff springs
-can fail its proof (each step of the held torque rings the springs with rates
-far above the quasi-static ones) and the elastic level takes over.
+:func:`plan` applies the planning rule of :mod:`.rule` (which model to plan an
+elastic swing-up on: rigid, rigid + quasi-static springs, or the full elastic
+model; the rule and its constants are documented there), lifts the plan to the
+task's state and proves it on the full dynamics; :func:`swing_up` is the same
+path returning the plan's :class:`~pendulab.control.swingup.result.SwingUpResult`,
+the function a user calls first for every shipped task, rigid or elastic.
+:func:`pendulab.control.swingup.solve.solve_transcription` is the expert path:
+one transcription of the problem as given (no planning model), with every
+solver option.
 """
 
 from __future__ import annotations
@@ -66,80 +20,29 @@ from typing import Any
 
 import numpy as np
 
-from ...analysis.modes import modes
-from ...model.model import Model
 from .errors import SCALES, ErrorEstimate, estimate_error_arrays, rescale
-from .guess import Guess, lift_plan, rigid_counterpart
+from .guess import Guess, lift_plan, rigid_counterpart_problem
 from .mesh import oscillation_mesh
 from .problem import SwingUpProblem
-from .solve import SwingUpResult, swing_up
+from .rule import (  # noqa: F401  (PLANNING, C_RIGID, C_QUASI_STATIC, elastic_error: re-exported from their old home)
+    C_QUASI_STATIC,
+    C_RIGID,
+    ELASTIC_DEGREE,
+    LEVELS,
+    PLANNING,
+    PlanningDecision,
+    elastic_error,
+    fastest_spring_frequency,
+    planning_rule,
+)
+from .solve import SwingUpResult, solve_transcription
 from .transcription import COLLOCATION
 
 _IPOPT_OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: Largest constraint violation of a valid plan (as the solver's own check) [state units].
 _FEASIBILITY_TOL = 1e-6
 
-__all__ = [
-    "PLANNING",
-    "LEVELS",
-    "C_RIGID",
-    "C_QUASI_STATIC",
-    "ELASTIC_DEGREE",
-    "PlanningDecision",
-    "Plan",
-    "planning_rule",
-    "plan",
-    "elastic_error",
-    "solve_objective",
-]
-
-#: Planning choices accepted in task files and by :func:`plan` (``quasi-static`` = ``rigid+quasi-static``).
-PLANNING: tuple[str, ...] = ("auto", "rigid", "quasi-static", "elastic")
-#: Planning levels, cheapest first.
-LEVELS: tuple[str, ...] = ("rigid", "rigid+quasi-static", "elastic")
-#: Predicted relative error of a rigid plan on the elastic dynamics per unit of w_p / w_s.
-C_RIGID = 4.0
-#: Predicted relative error of a quasi-statically lifted rigid plan per unit of (w_p / w_s)^2.
-C_QUASI_STATIC = 15.0
-#: Highest collocation degree of the elastic level's p-refinement (beyond it, more intervals).
-ELASTIC_DEGREE = 7
-_LEVEL_OF = {"rigid": "rigid", "quasi-static": "rigid+quasi-static", "elastic": "elastic"}
-
-
-@dataclass(frozen=True)
-class PlanningDecision:
-    """The planning-model rule applied to one elastic model.
-
-    Attributes
-    ----------
-    requested : str
-        What was asked (one of :data:`PLANNING`).
-    chosen : str
-        Level the rule starts from (one of :data:`LEVELS`; always ``rigid`` for a rigid model).
-    pendular_frequency : float
-        Highest pendular abs(lambda) at hanging and upright [rad/s].
-    spring_frequency : float
-        Lowest spring-mode frequency at hanging and upright [rad/s] (inf for a rigid model).
-    predicted : dict of str to float
-        Predicted relative error of each level on the elastic dynamics (dimensionless).
-    tolerance : float
-        Relative tolerance (dimensionless).
-    reason : str
-        One line: why this level.
-    """
-
-    requested: str
-    chosen: str
-    pendular_frequency: float
-    spring_frequency: float
-    predicted: dict[str, float]
-    tolerance: float
-    reason: str
-
-    @property
-    def separation(self) -> float:
-        """Frequency ratio ``spring_frequency / pendular_frequency`` (inf for a rigid model)."""
-        return self.spring_frequency / self.pendular_frequency
+__all__ = ["Plan", "plan", "swing_up", "solve_objective", "is_solved"]
 
 
 @dataclass(frozen=True)
@@ -184,26 +87,6 @@ class Plan:
         return bool(self.result.success and self.estimate is not None and self.estimate.passed)
 
 
-def _frequencies(model: Model) -> tuple[float, float]:
-    """Highest pendular abs(lambda) and lowest spring frequency [rad/s] at hanging and upright."""
-    pend, spring = 0.0, math.inf
-    for at in ("down-down", "up-up"):
-        for md in modes(model, at):
-            if md.spring_share >= 0.5 and md.kind == "oscillatory":
-                spring = min(spring, md.omega_n)
-            elif md.spring_share < 0.5:
-                pend = max(pend, md.omega_n)
-    return pend, spring
-
-
-def _fastest_spring(model: Model) -> float:
-    """Highest spring-mode frequency [rad/s] at hanging and upright (0 without springs)."""
-    return max(
-        (md.omega_n for at in ("down-down", "up-up") for md in modes(model, at) if md.spring_share >= 0.5),
-        default=0.0,
-    )
-
-
 def _rigid_guess(guess: Any) -> Any:
     """An elastic trajectory guess projected onto the rigid state (angles and rates); names pass through."""
     if isinstance(guess, SwingUpResult):
@@ -213,99 +96,20 @@ def _rigid_guess(guess: Any) -> Any:
     return guess
 
 
-def _solved(res: SwingUpResult) -> bool:
-    """IPOPT converged to a point that satisfies the constraints (whatever the error estimate says)."""
+def is_solved(res: SwingUpResult) -> bool:
+    """IPOPT converged to a point that satisfies the constraints (whatever the error estimate says).
+
+    Parameters
+    ----------
+    res : SwingUpResult
+        A solve.
+
+    Returns
+    -------
+    bool
+        Converged, feasible within the solver's own check, finite.
+    """
     return bool(res.status in _IPOPT_OK and res.max_violation <= _FEASIBILITY_TOL and np.all(np.isfinite(res.x)))
-
-
-def _check_tolerance(tolerance: Any) -> float:
-    try:
-        tol = float(tolerance)
-    except (TypeError, ValueError):
-        raise TypeError(f"tolerance must be a number (relative defect), got {type(tolerance).__name__}") from None
-    if not (math.isfinite(tol) and tol > 0.0):
-        raise ValueError(f"tolerance must be a positive finite relative defect, got {tolerance!r}")
-    return tol
-
-
-def planning_rule(model: Model, tolerance: float = 1e-3, planning: str = "auto") -> PlanningDecision:
-    """Pick the cheapest planning model predicted to meet ``tolerance`` on the elastic dynamics.
-
-    Parameters
-    ----------
-    model : Model
-        The task's model (elastic; a rigid model is planned on as it is).
-    tolerance : float
-        Relative defect the plan must meet on the full dynamics (dimensionless, > 0).
-    planning : {"auto", "rigid", "quasi-static", "elastic"}
-        ``auto`` applies the rule; the others force a starting level (the proof
-        still runs, and a failed level still hands over to the next one).
-
-    Returns
-    -------
-    PlanningDecision
-        The starting level, the frequencies and the predicted errors.
-
-    Raises
-    ------
-    TypeError
-        ``model`` is not a Model or ``tolerance`` is not a number.
-    ValueError
-        Unknown ``planning`` name or a non-positive tolerance.
-    """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
-    if planning not in PLANNING:
-        raise ValueError(f"planning must be one of {list(PLANNING)}, got {planning!r}")
-    tol = _check_tolerance(tolerance)
-    if model.kind != "elastic":
-        pend, _ = _frequencies(model)
-        return PlanningDecision(planning, "rigid", pend, math.inf, {}, tol, "rigid model: planned on as it is")
-    pend, spring = _frequencies(model)
-    eps = pend / spring
-    predicted = {"rigid": C_RIGID * eps, "rigid+quasi-static": C_QUASI_STATIC * eps**2, "elastic": 0.0}
-    if planning != "auto":
-        chosen = _LEVEL_OF[planning]
-        reason = f"requested {planning!r}"
-    else:
-        chosen = next(level for level in LEVELS if predicted[level] <= tol)
-        head = f"springs {spring / pend:.3g}x faster than the pendulum (w_s = {spring:.4g}, w_p = {pend:.4g} rad/s): "
-        cheaper = ", ".join(f"{k} {predicted[k]:.2g}" for k in LEVELS[: LEVELS.index(chosen)])
-        if chosen == "elastic":
-            reason = head + f"no cheaper model predicted within tolerance {tol:.1e} ({cheaper})"
-        else:
-            reason = head + f"{chosen} predicted {predicted[chosen]:.2g} <= tolerance {tol:.1e}"
-            reason += f" ({cheaper})" if cheaper else ""
-    return PlanningDecision(planning, chosen, pend, spring, predicted, tol, reason)
-
-
-def elastic_error(model: Model, t: np.ndarray, x: np.ndarray, u: np.ndarray, tolerance: float = 1e-3) -> ErrorEstimate:
-    """Error estimate of a plan on ``model`` with spring rates judged against the bob speed.
-
-    Parameters
-    ----------
-    model : Model
-        Model the plan must satisfy (rigid models: the plain estimate).
-    t : ndarray, shape (N + 1,)
-        Grid [s].
-    x : ndarray, shape (N + 1, nx)
-        States on the grid.
-    u : ndarray, shape (N, 2)
-        Held torques [N.m].
-    tolerance : float
-        Relative tolerance of the verdict.
-
-    Returns
-    -------
-    ErrorEstimate
-        :func:`estimate_error_arrays` with ``scale="bob-speed"`` (the definition lives there).
-
-    Raises
-    ------
-    ValueError
-        Bad shapes or values (from :func:`estimate_error_arrays`).
-    """
-    return estimate_error_arrays(model, t, x, u, tolerance=tolerance, scale="bob-speed")
 
 
 def _solve(
@@ -320,8 +124,8 @@ def _solve(
     max_intervals: int = 600,
     error_scale: str = "state",
 ) -> SwingUpResult:
-    """swing_up with the error tolerance and mesh refinement of the solver."""
-    return swing_up(
+    """The transcription-level solve with the error tolerance and mesh refinement of the solver."""
+    return solve_transcription(
         problem,
         method,
         N,
@@ -359,7 +163,7 @@ def solve_objective(
     N, degree : int
         Intervals and collocation degree.
     guess : str, Guess or SwingUpResult
-        Initial guess of :func:`swing_up`; the effort stage runs only for ``"auto"``.
+        Initial guess of :func:`solve_transcription`; the effort stage runs only for ``"auto"``.
     tolerance : float
         Relative error tolerance (passed to the solver when it refines).
     refine : bool
@@ -418,7 +222,7 @@ def plan(
         level raises the degree, and if needed N, until the fastest spring mode is
         resolved, module notes).
     guess : str, Guess or SwingUpResult
-        Initial guess of the first solve (see :func:`swing_up`).
+        Initial guess of the first solve (see :func:`solve_transcription`).
     refine : bool
         Mesh refinement of the solver on/off.
     max_intervals : int
@@ -490,7 +294,7 @@ def plan(
     warm: Any = guess
     levels = LEVELS[LEVELS.index(decision.chosen) :]
     d_el, n_el = _elastic_discretisation(problem, method, N, degree, tol, max_intervals)
-    rigid_problem = rigid_counterpart(problem)
+    rigid_problem = rigid_counterpart_problem(problem)
     rigid_res: SwingUpResult | None = None
     if levels[0] != "elastic" or guess == "auto":
         ts = time.perf_counter()
@@ -503,7 +307,7 @@ def plan(
             tl = ts if level == levels[0] else time.perf_counter()
             # A converged rigid plan that missed its share of the tolerance still lifts: the proof
             # on the elastic dynamics includes its discretisation error.
-            if not _solved(rigid_res):
+            if not is_solved(rigid_res):
                 record(level, rigid_res, None, tl)
                 continue
             try:
@@ -519,13 +323,13 @@ def plan(
             if est.passed:
                 return finish(replace(lifted, success=True, error=est), level, est)
     ts = time.perf_counter()
-    if rigid_res is not None and _solved(rigid_res):
+    if rigid_res is not None and is_solved(rigid_res):
         warm = _elastic_warm_start(problem, rigid_problem, rigid_res, method, n_el, d_el)
         build += warm.build_time
     res = _solve(problem, method, n_el, d_el, warm, tol, refine, None, max(max_intervals, n_el), error_scale)
     build += res.build_time
     # The solver's own estimate (same model, same scale) is the proof.
-    est = res.error if _solved(res) else None
+    est = res.error if is_solved(res) else None
     record("elastic", res, est, ts)
     return finish(res, "elastic", est)
 
@@ -540,7 +344,7 @@ def _elastic_discretisation(
     """
     if method not in COLLOCATION:
         return degree, N
-    omega = _fastest_spring(problem.model)
+    omega = fastest_spring_frequency(problem.model)
     for d in range(degree, max(degree, ELASTIC_DEGREE) + 1):
         if oscillation_mesh(problem.horizon, omega, d, tol, N) == N:
             return d, N
@@ -559,11 +363,112 @@ def _elastic_warm_start(
     """
     fine = replace(rigid_res, build_time=0.0)  # its build is already counted
     if (rigid_res.N, rigid_res.degree) != (N, degree) or not np.allclose(np.diff(rigid_res.t), rigid_res.horizon / rigid_res.N):
-        fine = swing_up(rigid_problem, method, N, degree=degree, guess=rigid_res, tolerance=None)
-        if not _solved(fine):
+        fine = solve_transcription(rigid_problem, method, N, degree=degree, guess=rigid_res, tolerance=None)
+        if not is_solved(fine):
             fine = replace(rigid_res, build_time=fine.build_time)
     try:
         x = lift_plan(problem.model, "rigid+quasi-static", fine.t, fine.x, fine.u)
     except RuntimeError:  # springs too soft to carry the motion quasi-statically: springs at rest length
         x = lift_plan(problem.model, "rigid", fine.t, fine.x, fine.u)
     return replace(fine, problem=problem, x=x, xc=np.zeros((0, problem.model.nx)), message="rigid plan lifted: " + fine.message)
+
+
+#: Options of :func:`swing_up` that only the transcription-level solve has (ignored by the planner: an error there).
+_TRANSCRIPTION_ONLY = ("integrator", "ipopt_options", "max_refinements", "mesh", "error_method", "max_wall_time")
+
+
+def swing_up(
+    problem: SwingUpProblem,
+    method: str = "radau",
+    N: int = 100,
+    *,
+    degree: int = 3,
+    tolerance: float | None = 1e-3,
+    planning: str = "auto",
+    guess: str | Guess | SwingUpResult = "auto",
+    refine: bool = True,
+    max_intervals: int | None = None,
+    error_scale: str = "state",
+    **transcription: Any,
+) -> SwingUpResult:
+    """Solve a swing-up problem, rigid or elastic: the front door.
+
+    A rigid problem is solved as it is
+    (:func:`~pendulab.control.swingup.solve.solve_transcription`: transcription,
+    a posteriori error estimate, mesh refinement). An elastic problem is planned
+    by the planning rule (:func:`plan`: the cheapest planning model predicted to
+    meet ``tolerance``, lifted and proven on the full elastic dynamics, the elastic
+    level at the collocation degree its spring modes need), so every shipped task
+    solves with these defaults. For the decision and the evidence call :func:`plan`;
+    for one transcription of an elastic problem as given (the expert path) call
+    :func:`~pendulab.control.swingup.solve.solve_transcription`.
+
+    Parameters
+    ----------
+    problem : SwingUpProblem
+        The problem.
+    method : {"radau", "legendre", "shooting"}
+        Transcription.
+    N : int
+        Intervals of the first mesh.
+    degree : int
+        Collocation degree (of the rigid plan of an elastic problem; the planner raises it where needed).
+    tolerance : float or None
+        Relative defect the plan must meet (dimensionless). None: one solve without an error
+        estimate (rigid problems only: an elastic plan is always proven).
+    planning : {"auto", "rigid", "quasi-static", "elastic"}
+        Starting level of an elastic problem (``auto``: the rule); a rigid problem accepts ``auto`` and ``rigid``.
+    guess : str, Guess or SwingUpResult
+        Initial guess (see :func:`~pendulab.control.swingup.solve.solve_transcription`).
+    refine : bool
+        Mesh refinement on/off.
+    max_intervals : int, optional
+        Cap on the intervals of a refined mesh (default: the transcription's 600, the planner's 300).
+    error_scale : {"state", "bob-speed"}
+        Normalisation of the error estimate.
+    **transcription
+        Options of the transcription-level solve (``integrator``, ``ipopt_options``,
+        ``max_refinements``, ``mesh``, ``error_method``, ``max_wall_time``): rigid problems only.
+
+    Returns
+    -------
+    SwingUpResult
+        The plan on the problem's own model (an elastic plan from a rigid level is
+        lifted to the elastic state); ``success`` False with the reason in ``message``.
+
+    Raises
+    ------
+    TypeError
+        ``problem`` is not a SwingUpProblem, or an unknown keyword.
+    ValueError
+        Bad settings, or a transcription-only option (or ``tolerance=None``, a
+        planning level) that does not apply to the problem's kind.
+    KeyboardInterrupt
+        On Ctrl-C during a solve.
+    """
+    if not isinstance(problem, SwingUpProblem):
+        raise TypeError(f"problem must be a SwingUpProblem, got {type(problem).__name__}")
+    unknown = sorted(set(transcription) - set(_TRANSCRIPTION_ONLY))
+    if unknown:
+        raise TypeError(f"swing_up() got unexpected keyword argument(s) {unknown}; options: {list(_TRANSCRIPTION_ONLY)}")
+    if problem.model.kind != "elastic":
+        if planning not in ("auto", "rigid"):
+            raise ValueError(f"planning={planning!r} applies to elastic problems only; this problem's model is rigid")
+        if max_intervals is not None:
+            transcription["max_intervals"] = max_intervals
+        return solve_transcription(
+            problem, method, N, degree=degree, tolerance=tolerance, guess=guess, refine=refine, error_scale=error_scale,
+            **transcription,
+        )  # fmt: skip
+    given = sorted(transcription)
+    if given or tolerance is None:
+        what = given if given else ["tolerance=None"]
+        raise ValueError(
+            f"{what} apply to the transcription-level solve only; swing_up plans an elastic problem by the planning "
+            "rule (proven to a tolerance). Call pendulab.control.swingup.solve.solve_transcription for one "
+            "transcription of the elastic problem as given"
+        )
+    return plan(
+        problem, planning=planning, tolerance=tolerance, method=method, N=N, degree=degree, guess=guess, refine=refine,
+        max_intervals=300 if max_intervals is None else max_intervals, error_scale=error_scale,
+    ).result  # fmt: skip

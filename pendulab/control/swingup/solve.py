@@ -1,4 +1,4 @@
-"""``swing_up``: solve a :class:`SwingUpProblem` with IPOPT and report honestly.
+"""``solve_transcription``: solve a :class:`SwingUpProblem` with IPOPT and report honestly (the expert path).
 
 The default initial guess (``"auto"``) needs no tuning: a straight line from
 start to goal; if IPOPT fails from there, a homotopy from the fully actuated
@@ -19,18 +19,14 @@ optimal.
 
 An interrupt (Ctrl-C) is never a failed solve: CasADi catches the
 ``KeyboardInterrupt`` raised inside IPOPT's callbacks and returns as if IPOPT
-had failed, which would start the next homotopy stage. :func:`swing_up`
+had failed, which would start the next homotopy stage. :func:`solve_transcription`
 watches SIGINT while it runs and raises ``KeyboardInterrupt`` as soon as the
 interrupted IPOPT run returns, without starting another.
 """
 
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -38,16 +34,16 @@ import numpy as np
 
 from ..._checks import bounded_int, positive_float
 from .errors import SCALES, ErrorEstimate, estimate_error
-from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart
-from .iterations import wall_time_budget
+from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart_problem
+from .iterations import SigintWatch, wall_time_budget, watch_sigint
 from .mesh import collocation_states, parent_intervals, refine_mesh
 from .problem import SwingUpProblem
 from .result import SwingUpResult
 from .transcription import COLLOCATION, INTERVALS_WHY, MAX_INTERVALS, Transcription, _build, get_transcription
 
-__all__ = ["SwingUpResult", "swing_up", "GUESSES"]
+__all__ = ["SwingUpResult", "solve_transcription", "GUESSES"]
 
-#: Named initial-guess strategies accepted by :func:`swing_up`.
+#: Named initial-guess strategies accepted by :func:`solve_transcription`.
 GUESSES: tuple[str, ...] = ("auto", "linear", "energy", "homotopy")
 _IPOPT_OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: A "successful" solution must satisfy its constraints to this level (defects in state units).
@@ -57,7 +53,7 @@ _HOMOTOPY = (1.0, 0.3, 0.1, 0.03, 0.0)
 _WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-3}
 
 
-def swing_up(
+def solve_transcription(
     problem: SwingUpProblem,
     method: str = "radau",
     N: int = 100,
@@ -76,6 +72,11 @@ def swing_up(
     max_wall_time: float | None = None,
 ) -> SwingUpResult:
     """Solve a swing-up problem by direct collocation or multiple shooting with IPOPT, check and refine it.
+
+    The expert path: one transcription of the problem as given, with every
+    solver option. The front door is :func:`pendulab.control.swing_up`, which
+    applies the planning rule to elastic problems (a stiff elastic task solved
+    here directly at degree 3, N = 100 refines to the interval cap and fails).
 
     Parameters
     ----------
@@ -152,8 +153,8 @@ def swing_up(
         max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
     bounded_int("max_intervals", max_intervals, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
     settings = _Settings(method, N, degree, integrator, ipopt_options)
-    with _watch_interrupt() as interrupt, wall_time_budget(max_wall_time) as budget:
-        res = _swing_up(problem, settings, guess, mesh, interrupt, tolerance, refine, max_refinements, max_intervals,
+    with watch_sigint() as interrupt, wall_time_budget(max_wall_time) as budget:
+        res = _solve_transcription(problem, settings, guess, mesh, interrupt, tolerance, refine, max_refinements, max_intervals,
                         (error_method, error_scale))  # fmt: skip
     if budget.exceeded:
         res = replace(
@@ -162,12 +163,12 @@ def swing_up(
     return res
 
 
-def _swing_up(
+def _solve_transcription(
     problem: SwingUpProblem,
     settings: _Settings,
     guess: Any,
     mesh: Any,
-    interrupt: _Interrupt,
+    interrupt: SigintWatch,
     tolerance: float | None,
     refine: bool,
     max_refinements: int,
@@ -209,7 +210,7 @@ def _check_and_refine(
     max_refinements: int,
     max_intervals: int,
     error: tuple[str, str],
-    interrupt: _Interrupt,
+    interrupt: SigintWatch,
     t_start: float,
 ) -> SwingUpResult:
     history: list[dict[str, Any]] = []
@@ -277,7 +278,12 @@ def _history_entry(res: SwingUpResult, est: ErrorEstimate | None, t_est: float) 
 
 
 def _solve_refined(
-    problem: SwingUpProblem, settings: _Settings, prev: SwingUpResult, mesh: np.ndarray, pieces: np.ndarray, interrupt: _Interrupt
+    problem: SwingUpProblem,
+    settings: _Settings,
+    prev: SwingUpResult,
+    mesh: np.ndarray,
+    pieces: np.ndarray,
+    interrupt: SigintWatch,
 ) -> SwingUpResult:
     """Re-solve on a refined mesh, warm from the previous solution transferred exactly."""
     options = {**_WARM_IPOPT, **(settings.ipopt_options or {})}
@@ -304,7 +310,7 @@ def _solve_refined(
 
 
 def _solve_mesh(
-    problem: SwingUpProblem, settings: _Settings, guess: str | Guess | SwingUpResult, mesh: Any, interrupt: _Interrupt
+    problem: SwingUpProblem, settings: _Settings, guess: str | Guess | SwingUpResult, mesh: Any, interrupt: SigintWatch
 ) -> SwingUpResult:
     """One solve on one mesh with the guess strategy ``guess`` (no error estimate)."""
     method, N, degree, integrator, ipopt_options = (
@@ -337,7 +343,7 @@ def _solve_mesh(
         g = energy_guess(problem)
     elif guess in ("auto", "homotopy") and problem.model.kind == "elastic":
         # The rigid plan is only a guess here: no estimate, no refinement.
-        rigid_res = _solve_mesh(rigid_counterpart(problem), replace(settings, ipopt_options=None), guess, mesh, interrupt)
+        rigid_res = _solve_mesh(rigid_counterpart_problem(problem), replace(settings, ipopt_options=None), guess, mesh, interrupt)
         build_extra += rigid_res.build_time
         stages.extend({**s, "label": "rigid: " + s["label"]} for s in rigid_res.stages)
         g = lift_to_elastic(problem, rigid_res.t, rigid_res.x, np.vstack([rigid_res.u, rigid_res.u[-1:]]))
@@ -380,53 +386,6 @@ def _guess_vector(tr: Transcription, problem: SwingUpProblem, g: Guess, mesh: np
     return tr.join(X, Xc, np.clip(U, lb, ub), T)
 
 
-class _Interrupt:
-    """Whether a SIGINT arrived while :func:`swing_up` ran (set by :func:`_watch_interrupt`)."""
-
-    def __init__(self) -> None:
-        self.hit = False
-
-    def handler(self, previous: Any) -> Any:
-        def on_sigint(signum: int, frame: Any) -> None:
-            if not callable(previous):  # SIG_DFL: would end the process; interrupt instead
-                self.hit = True
-                raise KeyboardInterrupt
-            try:
-                previous(signum, frame)  # the caller's handler (Python's default raises KeyboardInterrupt)
-            except KeyboardInterrupt:
-                self.hit = True
-                raise
-
-        return on_sigint
-
-    def check(self, message: str = "") -> None:
-        """Raise ``KeyboardInterrupt`` when a SIGINT arrived or CasADi's message names one.
-
-        IPOPT's own status does not tell: CasADi reports an interrupted run as
-        ``NonIpopt_Exception_Thrown``, like any other exception in a callback.
-        """
-        if self.hit or "KeyboardInterrupt" in message:
-            raise KeyboardInterrupt
-
-
-@contextlib.contextmanager
-def _watch_interrupt() -> Iterator[_Interrupt]:
-    # Signal handlers can only be installed from the main thread; elsewhere only CasADi's message tells.
-    flag = _Interrupt()
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-    previous = signal.getsignal(signal.SIGINT)
-    if previous in (signal.SIG_IGN, None):
-        yield flag
-        return
-    signal.signal(signal.SIGINT, flag.handler(previous))
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def _run(
     tr: Transcription,
     problem: SwingUpProblem,
@@ -434,7 +393,7 @@ def _run(
     passive: float,
     label: str,
     stages: list,
-    interrupt: _Interrupt,
+    interrupt: SigintWatch,
     mesh: np.ndarray | None = None,
 ) -> dict:
     lb, ub = problem.torque_bounds(passive_fraction=passive)

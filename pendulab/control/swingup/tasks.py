@@ -29,15 +29,18 @@ controller sample time, ``[initial]`` the start state by name and an optional
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ...model.model import Model
 from ...scene import SCENE_DIR, Scene, load_scene
 from ..feedback import upright_state
-from .planning import PLANNING
 from .problem import SwingUpProblem
+from .rule import PLANNING
+
+if TYPE_CHECKING:
+    from .planning import Plan
 
 __all__ = ["Task", "load_task", "task_names", "resolve_task", "short_name"]
 
@@ -82,6 +85,28 @@ class Task:
     success_fraction: float
     tolerance: float = 1e-3
     planning: str = "auto"
+    _plans: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def plan(self) -> Plan:
+        """The task's swing-up plan, computed once per task and kept (what controllers of the task track).
+
+        :func:`pendulab.control.swingup.planning.plan` with the task's settings
+        (``planning``, ``tolerance``, ``method``, ``N``, ``degree``): the planning
+        rule for an elastic task, the transcription for a rigid one. A failed plan
+        is kept too (``plan().success`` is False; solving again would fail again).
+
+        Returns
+        -------
+        Plan
+            The plan, its decision and its error estimate on the task's dynamics.
+        """
+        if "plan" not in self._plans:
+            from .planning import plan
+
+            self._plans["plan"] = plan(
+                self.problem, planning=self.planning, tolerance=self.tolerance, method=self.method, N=self.N, degree=self.degree
+            )
+        return self._plans["plan"]
 
     @property
     def name(self) -> str:

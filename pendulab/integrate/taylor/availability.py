@@ -8,7 +8,7 @@ from typing import Any
 
 from ..._checks import MissingExtraError
 
-__all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module", "unavailable_reason"]
+__all__ = ["EXTRA_HINT", "TaylorUnavailableError", "heyoka_module", "taylor_unavailable_reason"]
 
 #: How to install heyoka with pendulab (the optional dependency group "taylor").
 EXTRA_HINT = 'pip install "pendulab[taylor]"'
@@ -40,7 +40,7 @@ def heyoka_module() -> Any:
         ) from exc
 
 
-def unavailable_reason() -> str | None:
+def taylor_unavailable_reason() -> str | None:
     """Why ``method="taylor"`` cannot run here, without importing heyoka.
 
     Returns

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ..registry import STIFF_HINT, MethodSpec, RunRequest, RunResult
-from .availability import heyoka_module, unavailable_reason
+from .availability import heyoka_module, taylor_unavailable_reason
 from .cache import _Borrowed, _entry, compile_count, structure_key
 
 _OPTIONS = {"compact_mode": bool, "high_accuracy": bool, "max_steps": int}
@@ -126,6 +126,10 @@ def _hint(outcome: Any, hy: Any) -> str:
 #: The Taylor method.
 METHOD_SPECS: tuple[MethodSpec, ...] = (
     MethodSpec(
-        "taylor", "taylor", "heyoka adaptive Taylor series (LLVM JIT)", run_taylor, settings={"available": unavailable_reason}
+        "taylor",
+        "taylor",
+        "heyoka adaptive Taylor series (LLVM JIT)",
+        run_taylor,
+        settings={"available": taylor_unavailable_reason},
     ),
 )

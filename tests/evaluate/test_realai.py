@@ -9,10 +9,10 @@ import pytest
 
 import pendulab as pl
 from pendulab.control.feedback import balance_controller
-from pendulab.control.realai import DT, N_STEPS, PUBLISHED, leaderboard_model, realai_score, run, to_relative
-from pendulab.control.realai import criteria as crit
-from pendulab.control.realai.criteria import criteria, score
-from pendulab.control.realai.simulate import rk4_rollout
+from pendulab.control.realai.spec import DT, N_STEPS, leaderboard_model
+from pendulab.evaluate.realai import PUBLISHED, realai_score, rk4_rollout, run, to_relative
+from pendulab.evaluate.realai import criteria as crit
+from pendulab.evaluate.realai.criteria import criteria, score_v2
 
 L1, L2 = 0.2, 0.3
 
@@ -88,13 +88,13 @@ def test_success_rule_ignores_the_last_sample_as_the_leaderboard_does() -> None:
 
 def test_score_formula() -> None:
     zero = dict.fromkeys(crit.CRITERIA, 0.0)
-    assert score(zero, True) == 1.0
-    assert score(zero, False) == 0.0
+    assert score_v2(zero, True) == 1.0
+    assert score_v2(zero, False) == 0.0
     vals = {"swingup_time": 2.0, "energy": 6.0, "torque_cost": 2.0, "torque_smoothness": 0.01, "velocity_cost": 40.0}
     # Every term is tanh(pi/10) by construction.
-    assert score(vals, True) == pytest.approx(1.0 - math.tanh(math.pi / 10), rel=1e-14)
+    assert score_v2(vals, True) == pytest.approx(1.0 - math.tanh(math.pi / 10), rel=1e-14)
     with pytest.raises(ValueError, match="criteria"):
-        score({"energy": 1.0}, True)
+        score_v2({"energy": 1.0}, True)
 
 
 def test_bad_trajectories_raise() -> None:

@@ -42,13 +42,13 @@ import casadi as ca
 import numpy as np
 
 from ..analysis.equilibria import equilibrium
+from ..control.feedback import SampledController
 from ..model.model import INPUT_NAMES, Model, model_functions
-from .feedback import SampledController
 
 if TYPE_CHECKING:
-    from .swingup.tasks import Task
+    from ..control.swingup.tasks import Task
 
-__all__ = ["Perturbation", "EpisodeResult", "run_episode", "substeps", "FRICTION_SMOOTHING", "MAX_SUBSTEP"]
+__all__ = ["Perturbation", "EpisodeResult", "run_perturbed_episode", "substeps", "FRICTION_SMOOTHING", "MAX_SUBSTEP"]
 
 #: Rate scale [rad/s] of the smooth Coulomb friction ``-cf tanh(rate / FRICTION_SMOOTHING)``.
 FRICTION_SMOOTHING = 0.05
@@ -274,7 +274,7 @@ def _push_torque(pushes: list[tuple[int, float, float, float]], t: float) -> np.
     return tau
 
 
-def run_episode(
+def run_perturbed_episode(
     controller: SampledController,
     task: Task,
     x0: Any,

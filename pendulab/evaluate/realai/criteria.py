@@ -24,11 +24,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ...control.realai.spec import HEIGHT_FRACTION, NORMS
+
 __all__ = [
     "CRITERIA",
-    "NORMS",
     "PUBLISHED",
-    "HEIGHT_FRACTION",
     "to_relative",
     "swingup_time",
     "energy",
@@ -36,23 +36,11 @@ __all__ = [
     "torque_smoothness",
     "velocity_cost",
     "criteria",
-    "score",
+    "score_v2",
 ]
 
 #: Criterion names, in the leaderboard's order.
 CRITERIA: tuple[str, ...] = ("swingup_time", "energy", "torque_cost", "torque_smoothness", "velocity_cost")
-
-#: Normalisations n_i of the v2 score (simulation leaderboard): s, J, N^2 m^2 s, N.m, rad^2/s.
-NORMS: Mapping[str, float] = {
-    "swingup_time": 20.0,
-    "energy": 60.0,
-    "torque_cost": 20.0,
-    "torque_smoothness": 0.1,
-    "velocity_cost": 400.0,
-}
-
-#: Success line: the end effector must stay above this fraction of L1 + L2.
-HEIGHT_FRACTION: float = 0.9
 
 #: Published RealAIGym simulation leaderboard v2 scores (issue 13's list), best first.
 PUBLISHED: Mapping[str, Mapping[str, float]] = {
@@ -282,7 +270,7 @@ def criteria(T: np.ndarray, X: np.ndarray, U: np.ndarray, L1: float, L2: float) 
     }
 
 
-def score(values: Mapping[str, float], success: bool) -> float:
+def score_v2(values: Mapping[str, float], success: bool) -> float:
     """The v2 RealAI score ``success * (1 - (1/5) sum_i tanh(pi c_i / n_i))``.
 
     Parameters

@@ -35,83 +35,13 @@ from typing import Any
 
 import numpy as np
 
+from ...control.feedback import SampledController, full_input
+from ...control.realai.spec import DT, N_STEPS, T_FINAL, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
 from ...model.model import INPUT_NAMES, Model
 from ...model.pycode import to_python
-from ..feedback import SampledController, full_input
-from ..swingup.tasks import Task, load_task
-from .criteria import CRITERIA, PUBLISHED, criteria, score, to_relative
+from .criteria import CRITERIA, PUBLISHED, criteria, score_v2, to_relative
 
-__all__ = [
-    "DT",
-    "T_FINAL",
-    "N_STEPS",
-    "TORQUE_LIMIT",
-    "TASKS",
-    "RealAIResult",
-    "leaderboard_task",
-    "leaderboard_model",
-    "rk4_rollout",
-    "run",
-]
-
-#: Leaderboard step [s].
-DT: float = 0.002
-#: Episode length [s].
-T_FINAL: float = 10.0
-#: Number of RK4 steps (= rows of the scored CSV): 500 frames of 10 steps.
-N_STEPS: int = int(T_FINAL / 0.02) * int(0.02 / DT)
-#: Torque limit of the actuated joint [N.m].
-TORQUE_LIMIT: float = 6.0
-#: Leaderboard tasks and the joint each drives (index into (tau1, tau2)).
-TASKS: dict[str, int] = {"pendubot": 0, "acrobot": 1}
-
-
-def _check_task(task: str) -> str:
-    if task not in TASKS:
-        raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
-    return task
-
-
-def leaderboard_task(task: str) -> Task:
-    """The pendulab swing-up task of a leaderboard task (``swingup_pendubot`` / ``swingup_acrobot``; design C.1, model 1.0).
-
-    Parameters
-    ----------
-    task : {"pendubot", "acrobot"}
-        Leaderboard task.
-
-    Returns
-    -------
-    Task
-        As shipped (joint damping 0.001 N.m.s/rad, controller sample time 10 ms).
-
-    Raises
-    ------
-    ValueError
-        Unknown ``task``.
-    """
-    return load_task(f"swingup_{_check_task(task)}")
-
-
-def leaderboard_model(task: str) -> Model:
-    """The leaderboard plant: the task's rigid model with zero damping (Coulomb friction, rotor inertia: not modelled).
-
-    Parameters
-    ----------
-    task : {"pendubot", "acrobot"}
-        Leaderboard task.
-
-    Returns
-    -------
-    Model
-        Rigid model, ``b1 = b2 = 0``.
-
-    Raises
-    ------
-    ValueError
-        Unknown ``task``.
-    """
-    return leaderboard_task(task).model.with_params(b1=0.0, b2=0.0)
+__all__ = ["RealAIResult", "rk4_rollout", "run"]
 
 
 @dataclass
@@ -131,7 +61,7 @@ class RealAIResult:
     u : ndarray, shape (N, 2)
         Applied torques (tau1, tau2) [N.m], held over [t_k, t_k + 2 ms].
     criteria : dict of str to float
-        The five criteria (:data:`~pendulab.control.realai.criteria.CRITERIA`).
+        The five criteria (:data:`~pendulab.evaluate.realai.criteria.CRITERIA`).
     score : float
         RealAI score v2.
     success : bool
@@ -281,7 +211,7 @@ def run(
     TypeError
         ``controller`` lacks ``sample_time``/``input_names`` or is not callable.
     """
-    _check_task(task)
+    check_task(task)
     if not (callable(controller) and hasattr(controller, "sample_time") and hasattr(controller, "input_names")):
         raise TypeError(
             f"controller must be a SampledController (callable with sample_time, input_names), got {type(controller)}"
@@ -311,4 +241,4 @@ def run(
     prm = model.params
     values = criteria(t, to_relative(x), u, prm.L1, prm.L2)
     success = values["swingup_time"] < t[-1]
-    return RealAIResult(task, name, t, x, u, values, score(values, success), bool(success))
+    return RealAIResult(task, name, t, x, u, values, score_v2(values, success), bool(success))

@@ -7,10 +7,10 @@ import pytest
 
 import pendulab as pl
 from pendulab.control.feedback import as_feedback, balance_controller, energy_swingup, upright_state
-from pendulab.control.perturb import Perturbation, run_episode, substeps
-from pendulab.control.scorecard import CATEGORIES, categories_for, rerun, score
 from pendulab.control.swingup.tasks import load_task
 from pendulab.ensemble.pool import map_runs
+from pendulab.evaluate import CATEGORIES, categories_for, rerun, score
+from pendulab.evaluate.perturb import Perturbation, run_perturbed_episode, substeps
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ class _Recorder:
 
 def test_plant_matches_simulate(pendubot):
     ctrl, x0 = _balance_factory(pendubot)
-    ep = run_episode(ctrl, pendubot, x0, t_final=2.0)
+    ep = run_perturbed_episode(ctrl, pendubot, x0, t_final=2.0)
     ref = pl.simulate(pendubot.model, x0, 2.0, dt=ctrl.sample_time, u=as_feedback(ctrl, pendubot.model), rtol=1e-11, atol=1e-11)
     # RK4 at 2 ms on a stable closed loop (pendular modes < 20 rad/s): global error ~ (h w)^4 ~ 1e-6 of the state.
     assert np.max(np.abs(ep.x - ref.x)) < 1e-5
@@ -55,7 +55,7 @@ def test_plant_matches_simulate(pendubot):
 def test_plant_matches_simulate_elastic():
     task = load_task("pendubot_elastic_soft")
     ctrl, x0 = _balance_factory(task)
-    ep = run_episode(ctrl, task, x0, t_final=1.0)
+    ep = run_perturbed_episode(ctrl, task, x0, t_final=1.0)
     ref = pl.simulate(task.model, x0, 1.0, dt=ctrl.sample_time, u=as_feedback(ctrl, task.model), rtol=1e-11, atol=1e-11)
     # Substep from the fastest spring mode (h w <= 0.5): RK4 phase error of the spring oscillation stays ~1e-4 of its
     # amplitude (~1e-3 m) over 1 s.
@@ -65,8 +65,8 @@ def test_plant_matches_simulate_elastic():
 
 def test_zero_perturbation_is_nominal(pendubot):
     ctrl, x0 = _balance_factory(pendubot)
-    a = run_episode(ctrl, pendubot, x0, t_final=1.0)
-    b = run_episode(ctrl, pendubot, x0, Perturbation(meas_noise=0.0, torque_noise=0.0, delay=0.0, seed=7), t_final=1.0)
+    a = run_perturbed_episode(ctrl, pendubot, x0, t_final=1.0)
+    b = run_perturbed_episode(ctrl, pendubot, x0, Perturbation(meas_noise=0.0, torque_noise=0.0, delay=0.0, seed=7), t_final=1.0)
     # Same arithmetic, no random numbers drawn: bit-identical.
     assert np.array_equal(a.x, b.x)
 
@@ -74,7 +74,7 @@ def test_zero_perturbation_is_nominal(pendubot):
 def test_delay_shows_the_past_state(pendubot):
     rec = _Recorder()
     x0 = pendubot.model.state(theta1=1.0)
-    ep = run_episode(rec, pendubot, x0, Perturbation(delay=0.03), t_final=0.5)
+    ep = run_perturbed_episode(rec, pendubot, x0, Perturbation(delay=0.03), t_final=0.5)
     seen = np.array(rec.seen)
     assert np.array_equal(seen[3:], ep.x[: len(seen) - 3])  # exactly x(t - 0.03 s)
     assert np.array_equal(seen[:3], np.tile(x0, (3, 1)))  # before t = 0: the start state
@@ -83,7 +83,7 @@ def test_delay_shows_the_past_state(pendubot):
 
 def test_measurement_noise_only_on_rates(pendubot):
     rec = _Recorder()
-    ep = run_episode(rec, pendubot, pendubot.model.state(theta1=1.0), Perturbation(meas_noise=0.3, seed=1), t_final=0.5)
+    ep = run_perturbed_episode(rec, pendubot, pendubot.model.state(theta1=1.0), Perturbation(meas_noise=0.3, seed=1), t_final=0.5)
     err = np.array(rec.seen) - ep.x[: len(rec.seen)]
     assert np.all(err[:, :2] == 0.0)
     # 50 samples x 2 rates of N(0, 0.3): the sample std lies within 30 % of 0.3 (5 sigma of the std's spread).
@@ -119,7 +119,7 @@ def test_passive_joint_torque_fails(pendubot):
         def __call__(self, t, x):
             return np.array([0.5])
 
-    ep = run_episode(Acro(), pendubot, pendubot.problem.start, t_final=0.1)
+    ep = run_perturbed_episode(Acro(), pendubot, pendubot.problem.start, t_final=0.1)
     assert not ep.success and "passive" in ep.reason
 
 
@@ -203,7 +203,7 @@ def test_one_joint_pumping_never_removes_energy_below_the_top(name):
             return u
 
     watch = Watch()
-    ep = run_episode(watch, task, task.problem.start, t_final=4.0)
+    ep = run_perturbed_episode(watch, task, task.problem.start, t_final=4.0)
     pumping = np.array(watch.pumping)
     X, U = ep.x[:-1][pumping], ep.u[pumping]
     power = np.array([float(model.functions["power_in"](x, u, model.p)) for x, u in zip(X, U, strict=True)])

@@ -2,7 +2,7 @@
 
 Each category of :data:`CATEGORIES` sweeps one perturbation over levels (ranges
 after RealAIGym's robustness benchmark, see ``docs/scorecard.md``). Every run is
-one closed-loop episode (:func:`pendulab.control.perturb.run_episode`) judged by
+one closed-loop episode (:func:`pendulab.evaluate.perturb.run_perturbed_episode`) judged by
 the RealAIGym criterion: end effector at or above ``0.9 (L1 + L2)`` over the last
 second, every torque command finite and within the task's limit. Stochastic
 categories (noise, pushes) run ``runs`` seeded episodes per level; deterministic
@@ -16,340 +16,34 @@ leaderboard averages its criteria).
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._checks import bounded_int, positive_float
+from ..control.controllers import controller_for_task
+from ..control.feedback import SampledController
+from ..control.swingup.tasks import resolve_task
 from ..ensemble.pool import default_workers, map_runs
-from .controllers import controller_for_task
-from .feedback import SampledController
-from .perturb import Perturbation, run_episode, substeps
+
+# Category, categories_for, record_from_dict: re-exported (the old pendulab.control.scorecard had them).
+from .card import CategoryScore, RunKey, RunRecord, Scorecard, record_from_dict, run_key  # noqa: F401
+from .categories import CATEGORIES, Category, categories_for  # noqa: F401
+from .perturb import run_perturbed_episode, substeps
 
 if TYPE_CHECKING:
-    from .swingup.tasks import Task
+    from ..control.swingup.tasks import Task
 
-__all__ = [
-    "Category", "CATEGORIES", "RunRecord", "CategoryScore", "Scorecard", "score", "rerun", "categories_for",
-    "MAX_RUNS", "MAX_LEVELS", "run_key", "record_from_dict",
-]  # fmt: skip
-
-
-@dataclass(frozen=True)
-class Category:
-    """One perturbation swept over levels.
-
-    Attributes
-    ----------
-    name : str
-        Category name (CLI ``--categories``).
-    description : str
-        What is perturbed, in one line.
-    unit : str
-        Unit of the levels.
-    levels : tuple of float
-        Default levels.
-    stochastic : bool
-        True: ``runs`` seeded episodes per level; False: one episode per level.
-    kinds : tuple of str
-        Model kinds the category applies to.
-    """
-
-    name: str
-    description: str
-    unit: str
-    levels: tuple[float, ...]
-    stochastic: bool
-    kinds: tuple[str, ...] = ("rigid", "elastic")
-
-    def perturbation(self, task: Task, level: float, seed: tuple[int, ...]) -> Perturbation:
-        """The perturbation of one run.
-
-        Parameters
-        ----------
-        task : Task
-            Gives the nominal parameters that factors scale.
-        level : float
-            The level [``unit``].
-        seed : tuple of int
-            Seed of the run.
-
-        Returns
-        -------
-        Perturbation
-            What differs from the nominal closed loop.
-        """
-        par = task.model.params.resolved()
-        scaled = {
-            "mass": ("m1", "m2"),
-            "length": ("L1", "L2", "lc1", "lc2") if task.model.kind == "rigid" else ("L1", "L2"),
-            "inertia": ("I1", "I2"),
-            "stiffness": ("k1", "k2"),
-        }
-        if self.name in scaled:
-            return Perturbation(params={n: par[n] * level for n in scaled[self.name]}, seed=seed)
-        if self.name == "damping":
-            return Perturbation(params={"b1": par["b1"] + level, "b2": par["b2"] + level}, seed=seed)
-        kw: dict[str, Any] = {
-            "friction": {"friction": (level, level)},
-            "measurement_noise": {"meas_noise": level},
-            "torque_noise": {"torque_noise": level},
-            "torque_response": {"response": level},
-            "delay": {"delay": level},
-            "pushes": {"push_amplitude": level},
-        }[self.name]
-        return Perturbation(seed=seed, **kw)
-
-
-#: The categories, in report order. Ranges after RealAIGym's robustness benchmark (docs/scorecard.md).
-CATEGORIES: Mapping[str, Category] = {
-    c.name: c
-    for c in (
-        Category("mass", "masses m1, m2 scaled by the factor", "x", (0.75, 0.875, 1.0, 1.125, 1.25), False),
-        Category("length", "lengths L1, L2 (and lc1, lc2) scaled by the factor", "x", (0.75, 0.875, 1.0, 1.125, 1.25), False),
-        Category("inertia", "inertias I1, I2 scaled by the factor", "x", (0.75, 0.875, 1.0, 1.125, 1.25), False, ("rigid",)),
-        Category("damping", "joint damping b1, b2 increased by", "N.m.s/rad", (0.0, 0.025, 0.05, 0.075, 0.1), False),
-        Category("friction", "Coulomb friction on both joints", "N.m", (0.0, 0.05, 0.1, 0.15, 0.2), False),
-        Category(
-            "stiffness", "spring stiffnesses k1, k2 scaled by the factor", "x", (0.5, 0.75, 1.0, 1.25, 1.5), False, ("elastic",)
-        ),
-        Category("measurement_noise", "Gaussian noise on omega1, omega2 (std)", "rad/s", (0.0, 0.1, 0.2, 0.3, 0.5), True),
-        Category("torque_noise", "Gaussian noise on the driven torques (std)", "N.m", (0.0, 0.25, 0.5, 0.75, 1.0), True),
-        Category("torque_response", "torque responsiveness factor per sample", "-", (0.1, 0.5, 1.0, 1.5, 2.0), False),
-        Category("delay", "measurement delay", "s", (0.0, 0.01, 0.02, 0.03, 0.04), False),
-        Category("pushes", "3 Gaussian torque pulses per joint, amplitude up to", "N.m", (0.5, 1.0, 2.0, 3.0, 5.0), True),
-    )
-}
-
-
-def categories_for(kind: str) -> tuple[str, ...]:
-    """Names of the categories that apply to a model kind.
-
-    Parameters
-    ----------
-    kind : {"rigid", "elastic"}
-        Model kind.
-
-    Returns
-    -------
-    tuple of str
-        In :data:`CATEGORIES` order (no ``inertia`` for the point-mass elastic
-        model, no ``stiffness`` for the rigid one).
-    """
-    return tuple(name for name, c in CATEGORIES.items() if kind in c.kinds)
-
-
-@dataclass(frozen=True)
-class RunRecord:
-    """One run of the scorecard.
-
-    Attributes
-    ----------
-    category : str
-        Category name.
-    level_index : int
-        Index into the category's levels.
-    level : float
-        The level [category unit].
-    run : int
-        Run number within the level.
-    seed : tuple of int
-        ``(seed, category index, level index, run)``: the run's random stream.
-    success : bool
-        RealAIGym criterion met.
-    reason : str
-        Why it failed ("" on success).
-    t_up : float
-        Swing-up time [s] (nan on failure).
-    """
-
-    category: str
-    level_index: int
-    level: float
-    run: int
-    seed: tuple[int, ...]
-    success: bool
-    reason: str
-    t_up: float
-
-
-@dataclass(frozen=True)
-class CategoryScore:
-    """Success rates of one category.
-
-    Attributes
-    ----------
-    name : str
-        Category name.
-    unit : str
-        Unit of the levels.
-    levels : tuple of float
-        Levels swept.
-    runs : tuple of int
-        Runs per level.
-    success_rates : tuple of float
-        Fraction of successful runs per level, in [0, 1].
-    score : float
-        Mean of ``success_rates``.
-    """
-
-    name: str
-    unit: str
-    levels: tuple[float, ...]
-    runs: tuple[int, ...]
-    success_rates: tuple[float, ...]
-    score: float
-
-
-@dataclass(frozen=True)
-class Scorecard:
-    """Robustness of one controller on one task.
-
-    Attributes
-    ----------
-    controller : str
-        Controller name.
-    task : str
-        Task name.
-    categories : tuple of CategoryScore
-        Per category and level success rates.
-    overall : float
-        Mean of the category scores, in [0, 1].
-    records : tuple of RunRecord
-        Every run, failures with their reasons.
-    seed : int
-        Base seed.
-    runs_per_level : int
-        Runs per level of the stochastic categories.
-    wall_time : float
-        Wall time of the scorecard [s].
-    n_sub : int
-        RK4 substeps per controller sample of every run's plant.
-    """
-
-    controller: str
-    task: str
-    categories: tuple[CategoryScore, ...]
-    overall: float
-    records: tuple[RunRecord, ...]
-    seed: int
-    runs_per_level: int
-    wall_time: float
-    n_sub: int = 1
-
-    @property
-    def failures(self) -> tuple[RunRecord, ...]:
-        """The failed runs (with reasons)."""
-        return tuple(r for r in self.records if not r.success)
-
-    def category(self, name: str) -> CategoryScore:
-        """One category's scores.
-
-        Parameters
-        ----------
-        name : str
-            Category name.
-
-        Returns
-        -------
-        CategoryScore
-            Its per-level success rates.
-
-        Raises
-        ------
-        KeyError
-            The scorecard has no such category.
-        """
-        for c in self.categories:
-            if c.name == name:
-                return c
-        raise KeyError(f"no category {name!r} in this scorecard; it has {[c.name for c in self.categories]}")
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready content.
-
-        Returns
-        -------
-        dict
-            controller, task, overall, seed, runs_per_level, wall_time_s,
-            categories (name, unit, levels, runs, success_rates, score) and
-            failures (category, level, run, seed, reason).
-        """
-        return {
-            "controller": self.controller,
-            "task": self.task,
-            "overall": self.overall,
-            "seed": self.seed,
-            "runs_per_level": self.runs_per_level,
-            "n_runs": len(self.records),
-            "wall_time_s": self.wall_time,
-            "rk4_substeps": self.n_sub,
-            "aggregation": "category score = mean success rate over its levels; overall = mean of category scores",
-            "categories": [asdict(c) for c in self.categories],
-            "failures": [
-                {"category": r.category, "level": r.level, "run": r.run, "seed": list(r.seed), "reason": r.reason}
-                for r in self.failures
-            ],
-        }
-
-    def to_json(self, indent: int | None = 2) -> str:
-        """The scorecard as JSON (:meth:`to_dict`).
-
-        Parameters
-        ----------
-        indent : int or None
-            JSON indentation.
-
-        Returns
-        -------
-        str
-            JSON text (NaN-free: non-finite numbers become null).
-        """
-        return json.dumps(_finite(self.to_dict()), indent=indent)
-
-    def table(self) -> str:
-        """Markdown table: one row per category, success rate per level, category score.
-
-        Returns
-        -------
-        str
-            Markdown (header, one row per category, the overall score).
-        """
-        lines = [
-            f"Robustness of `{self.controller}` on `{self.task}` (success rate per level; "
-            f"{self.runs_per_level} runs per level of the stochastic categories)",
-            "",
-            "| category | unit | levels: success rate | score |",
-            "|---|---|---|---|",
-        ]
-        for c in self.categories:
-            cells = ", ".join(f"{lv:g}: {rate:.0%}" for lv, rate in zip(c.levels, c.success_rates, strict=True))
-            lines.append(f"| {c.name} | {c.unit} | {cells} | {c.score:.2f} |")
-        lines.append(f"| **overall** | | | **{self.overall:.2f}** |")
-        return "\n".join(lines)
-
-
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    return obj
+__all__ = ["score", "rerun", "MAX_RUNS", "MAX_LEVELS"]
 
 
 ControllerSpec = str | Callable[["Task"], tuple[SampledController, np.ndarray]]
 
 
 def _resolve(controller: ControllerSpec, task: Task | str) -> tuple[Task, str, SampledController, np.ndarray]:
-    from .swingup.tasks import resolve_task
-
     tk = resolve_task(task)
     if isinstance(controller, str):
         ctrl, x0 = controller_for_task(controller, tk)
@@ -387,53 +81,6 @@ def _check_selection(task: Task, categories: Sequence[str] | None, levels: Mappi
 MAX_RUNS = 5000
 #: Most levels of one category.
 MAX_LEVELS = 100
-#: Identity of a run within a scorecard (category, level index, run, seed): what ``completed`` records are matched by.
-RunKey = tuple[str, int, int, tuple[int, ...]]
-
-
-def record_from_dict(data: Mapping[str, Any]) -> RunRecord:
-    """A :class:`RunRecord` from its JSON form (``dataclasses.asdict`` of a record, ``t_up`` null for nan).
-
-    Parameters
-    ----------
-    data : mapping
-        Fields of :class:`RunRecord`.
-
-    Returns
-    -------
-    RunRecord
-        The record.
-
-    Raises
-    ------
-    ValueError
-        Missing or malformed fields.
-    """
-    try:
-        t_up = data["t_up"]
-        return RunRecord(
-            str(data["category"]), int(data["level_index"]), float(data["level"]), int(data["run"]),
-            tuple(int(v) for v in data["seed"]), bool(data["success"]), str(data["reason"]),
-            float("nan") if t_up is None else float(t_up),
-        )  # fmt: skip
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"not a scorecard run record: {dict(data)!r} ({exc})") from None
-
-
-def run_key(record: RunRecord) -> RunKey:
-    """The identity of a run (category, level index, run number, seed) used to skip completed runs.
-
-    Parameters
-    ----------
-    record : RunRecord
-        A run.
-
-    Returns
-    -------
-    tuple
-        ``(category, level_index, run, seed)``.
-    """
-    return (record.category, int(record.level_index), int(record.run), tuple(int(v) for v in record.seed))
 
 
 def score(
@@ -510,8 +157,6 @@ def score(
     if categories is not None and (isinstance(categories, str) or not isinstance(categories, Sequence)):
         raise TypeError(f"categories must be a sequence of category names, got {type(categories).__name__}")
     t0 = time.perf_counter()
-    from .swingup.tasks import resolve_task
-
     # Every selection is checked before the controller is designed (a tvlqr or nmpc plan takes seconds).
     names = _check_selection(resolve_task(task), categories, levels)
     tk, cname, ctrl, x0 = _resolve(controller, task)
@@ -538,11 +183,11 @@ def score(
     # One substep count for every run, fine enough for the stiffest/lightest plant of the plan, and its sample
     # map compiled here before the workers fork (so it is built once, not once per worker).
     n_sub = _plan_substeps(tk, ctrl, x0, plan)
-    run_episode(ctrl, tk, x0, t_final=ctrl.sample_time, n_sub=n_sub)
+    run_perturbed_episode(ctrl, tk, x0, t_final=ctrl.sample_time, n_sub=n_sub)
 
     def one(item: tuple[str, int, float, int, tuple[int, ...]]) -> RunRecord:
         name, li, level, r, sd = item
-        res = run_episode(ctrl, tk, x0, CATEGORIES[name].perturbation(tk, level, sd), n_sub=n_sub)
+        res = run_perturbed_episode(ctrl, tk, x0, CATEGORIES[name].perturbation(tk, level, sd), n_sub=n_sub)
         return RunRecord(name, li, level, r, sd, res.success, res.reason, res.t_up)
 
     todo = [item for item in plan if (item[0], item[1], item[3], item[4]) not in done]
@@ -632,7 +277,7 @@ def rerun(controller: ControllerSpec, task: Task | str, record: RunRecord, *, n_
     """
     tk, _, ctrl, x0 = _resolve(controller, task)
     pert = CATEGORIES[record.category].perturbation(tk, record.level, record.seed)
-    res = run_episode(ctrl, tk, x0, pert, n_sub=n_sub)
+    res = run_perturbed_episode(ctrl, tk, x0, pert, n_sub=n_sub)
     return RunRecord(
         record.category, record.level_index, record.level, record.run, record.seed, res.success, res.reason, res.t_up
     )
