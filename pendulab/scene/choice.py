@@ -317,7 +317,7 @@ class ModelChoice:
                 f"verify: {v.level} measured error {v.measured_error:.2e} (predicted {v.predicted_error:.2e}), "
                 f"valid until {v.measured_horizon:.3g} s (predicted {v.predicted_horizon:.3g} s); "
                 f"{'within' if v.within else 'NOT within'} tolerance; "
-                f"run {v.level_time:.3g} s vs reference {v.reference_time:.3g} s"
+                f"one run {v.level_time:.3g} s vs reference {v.reference_time:.3g} s (a first run includes any compilation)"
             )
             if v.reference_horizon is not None:
                 lines.append(
