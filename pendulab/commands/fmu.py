@@ -35,7 +35,10 @@ def _export(args: argparse.Namespace) -> int:
 
     model = make_model(args.model, **_parse_sets(args.set or []))
     x0 = model.state(**_parse_sets(args.initial or [])) if args.initial else None
-    path = export(model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0, platforms=args.platforms)
+    path = export(
+        model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0, platforms=args.platforms,
+        flip_events=args.flip_events,
+    )  # fmt: skip
     if args.json:
         start = model.state() if x0 is None else x0
         summary = {
@@ -127,6 +130,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     e.add_argument("--out", type=Path, required=True, help="output .fmu file")
     e.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")
+    e.add_argument(
+        "--flip-events",
+        action="store_true",
+        help="add event indicators pi - |theta_i| (Model Exchange importers stop at every flip of a link)",
+    )
     e.add_argument(
         "--platforms",
         default=None,

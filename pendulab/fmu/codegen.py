@@ -68,20 +68,26 @@ VR_Z = 1000
 SPRING_LIMIT = 0.1
 
 
-def event_indicator_names(kind: str) -> tuple[str, ...]:
-    """Names of the FMU's event-indicator variables (``spring_margin1``, ``spring_margin2`` for the elastic model).
+def event_indicator_names(kind: str, flip_events: bool = False) -> tuple[str, ...]:
+    """Names of the FMU's event-indicator variables.
+
+    ``spring_margin1``, ``spring_margin2`` (elastic model: r_i - SPRING_LIMIT L_i), then, with
+    ``flip_events``, ``flip_margin1``, ``flip_margin2`` (pi - |theta_i|: 0 when link i passes upright).
 
     Parameters
     ----------
     kind : {"rigid", "elastic"}
         Model kind.
+    flip_events : bool
+        Whether the FMU has flip events (an export option).
 
     Returns
     -------
     tuple of str
-        Empty for the rigid model (it has no events).
+        Spring margins first, then flip margins; empty for the rigid model without flip events.
     """
-    return ("spring_margin1", "spring_margin2") if kind == "elastic" else ()
+    springs = ("spring_margin1", "spring_margin2") if kind == "elastic" else ()
+    return springs + (("flip_margin1", "flip_margin2") if flip_events else ())
 
 
 @dataclass(frozen=True)
@@ -120,6 +126,8 @@ class ModelLayout:
     p_positive: tuple[bool, ...]
     #: rows: derivatives then outputs; columns: states, inputs, then parameters (structural non-zeros)
     dependencies: np.ndarray
+    #: event indicators pi - |theta_i| (Model Exchange: the importer locates every flip of a link)
+    flip_events: bool = False
 
     def vr(self, group: str, index: int = 0) -> int:
         """Value reference of a variable.
@@ -169,7 +177,7 @@ def identifier_for(model: Model) -> str:
     return identifier_for_kind(model.kind)
 
 
-def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
+def layout(model: Model, x0: np.ndarray | None = None, flip_events: bool = False) -> ModelLayout:
     """Variable layout of the FMU of ``model``.
 
     Parameters
@@ -178,6 +186,8 @@ def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
         The pendulum; its parameters become the parameter start values.
     x0 : ndarray, shape (nx,), optional
         State start values [SI]; default hanging at rest.
+    flip_events : bool
+        Add the flip event indicators pi - |theta_i|.
 
     Returns
     -------
@@ -206,6 +216,7 @@ def layout(model: Model, x0: np.ndarray | None = None) -> ModelLayout:
         p_tunable=tuple(n in TUNABLE_PARAMS for n in names),
         p_positive=tuple(info.positive for info in model.param_info),
         dependencies=deps,
+        flip_events=bool(flip_events),
     )
 
 
@@ -296,6 +307,8 @@ def token(lay: ModelLayout, fmi_version: int) -> str:
     """
     h = hashlib.sha256()
     h.update(f"{lay.kind}|{fmi_version}|{lay.p_default.tobytes().hex()}|{lay.x_start.tobytes().hex()}".encode())
+    if lay.flip_events:  # (absent otherwise: the tokens of FMUs without flip events are unchanged)
+        h.update(b"|flip_events")
     for name in (*FIXED_SOURCES, *FIXED_HEADERS[fmi_version], f"fmi{fmi_version}.c"):
         h.update(_fixed_file(name))
     d = h.hexdigest()
@@ -333,7 +346,8 @@ typedef int (*casadi_fn)(const casadi_real **arg, casadi_real **res, casadi_int 
 #define MODEL_NU {lay.nu}
 #define MODEL_NY {lay.ny}
 #define MODEL_NP {lay.np}
-#define MODEL_NZ {len(event_indicator_names(lay.kind))}
+#define MODEL_NZ {len(event_indicator_names(lay.kind, lay.flip_events))}
+#define MODEL_NF {2 if lay.flip_events else 0}
 #define MODEL_SPRING_LIMIT {SPRING_LIMIT!r}
 
 #define MODEL_VR_TIME {VR_TIME}

@@ -150,8 +150,14 @@ def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop
         "<code>fmi2Terminated</code> status, FMI 3 returns early (when allowed, else <code>Discard</code>) with "
         "<code>terminateSimulation</code>.</li>"
         if elastic
-        else "<li>The rigid model has no events (no event indicators).</li>"
+        else "<li>The rigid model has no spring events.</li>"
     )
+    if lay.flip_events:
+        spring += (
+            "<li>Flip events: <code>flip_margin1</code>, <code>flip_margin2</code> = &pi; &minus; |&theta;<sub>i</sub>| "
+            "reach 0 when link i passes the upright position; Model Exchange importers stop there (nothing in the "
+            "model changes). Co-Simulation ignores them.</li>"
+        )
     page = f"""<!DOCTYPE html>
 <html lang="en">
 <head>

@@ -123,6 +123,7 @@ def export(
     step_size: float = 0.01,
     cc: str | None = None,
     platforms: str | list[str] | tuple[str, ...] | None = None,
+    flip_events: bool = False,
 ) -> Path:
     """Write an FMU of ``model`` with Co-Simulation and Model Exchange interfaces.
 
@@ -149,6 +150,10 @@ def export(
         only. Other platforms are cross-compiled (Debian's cross gcc on PATH, else Zig's C compiler
         from ``pendulab[cross]``). FMI 2.0 defines no aarch64 folder. Every binary must export exactly
         the FMI functions of the standard header (read from the file; checked here).
+    flip_events : bool
+        Add the event indicators ``flip_margin1``, ``flip_margin2`` = pi - |theta_i| (0 when link i
+        passes the upright position): Model Exchange importers then stop at every flip. Co-Simulation
+        ignores them (no event mode).
 
     Returns
     -------
@@ -177,7 +182,9 @@ def export(
             raise ValueError(f"{name} must be a positive finite number [s], got {value!r}")
     targets = None if platforms is None else resolve_platforms(platforms, fmi_version)
     path = Path(path)
-    lay = layout(model, x0)
+    if not isinstance(flip_events, bool):
+        raise TypeError(f"flip_events must be True or False, got {flip_events!r}")
+    lay = layout(model, x0, flip_events=flip_events)
     sources = generate_sources(model, fmi_version, lay)
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ") if timestamp else None
     files: dict[str, bytes] = {

@@ -133,19 +133,15 @@ def _variables(model: Model, lay: ModelLayout, fmi_version: int) -> list[_Var]:
         out.append(
             _Var(info.name, lay.vr("y", i), "output", "continuous", info.description, initial="calculated", unit=info.unit)
         )
-    for i, name in enumerate(event_indicator_names(lay.kind)):
-        out.append(
-            _Var(
-                name,
-                VR_Z + i,
-                "local",
-                "continuous",
-                f"event indicator: r{i + 1} - {SPRING_LIMIT!r} L{i + 1} (the model is singular at r = 0; the FMU stops "
-                "when it reaches 0)",
-                initial="calculated",
-                unit="m",
-            )
+    for i, name in enumerate(event_indicator_names(lay.kind, lay.flip_events)):
+        j = int(name[-1])  # spring or link number
+        spring = name.startswith("spring")
+        desc = (
+            f"event indicator: r{j} - {SPRING_LIMIT!r} L{j} (the model is singular at r = 0; the FMU stops when it reaches 0)"
+            if spring
+            else f"event indicator: pi - |theta{j}| (0 when link {j} passes the upright position; Model Exchange)"
         )
+        out.append(_Var(name, VR_Z + i, "local", "continuous", desc, initial="calculated", unit="m" if spring else "rad"))
     for i, info in enumerate(model.param_info):
         tun = lay.p_tunable[i]
         extra = {"min": POSITIVE_MIN if info.positive else "0.0"}
@@ -300,7 +296,7 @@ def model_description(
             "generationTool": f"pendulab {__version__}",
             **({"generationDateAndTime": timestamp} if timestamp else {}),
             "variableNamingConvention": "structured",
-            **({} if v3 else {"numberOfEventIndicators": str(len(event_indicator_names(lay.kind)))}),
+            **({} if v3 else {"numberOfEventIndicators": str(len(event_indicator_names(lay.kind, lay.flip_events)))}),
         },
     )
     caps = {
@@ -317,7 +313,7 @@ def model_description(
             "modelIdentifier": ident,
             "canHandleVariableCommunicationStepSize": "true",
             # a spring reaching its limit ends the step early when the importer allows early return
-            **({"mightReturnEarlyFromDoStep": "true"} if v3 and event_indicator_names(lay.kind) else {}),
+            **({"mightReturnEarlyFromDoStep": "true"} if v3 and lay.kind == "elastic" else {}),
             **caps,
         },
     )
@@ -369,8 +365,11 @@ def model_description(
             for vr, row in rows:
                 deps = _dependencies(lay, row, with_params=tag == "InitialUnknown")
                 ET.SubElement(ms, tag, valueReference=str(vr), dependencies=" ".join(map(str, deps)))
-        for i, _ in enumerate(event_indicator_names(lay.kind)):  # spring margin i depends on the state r_i
-            ET.SubElement(ms, "EventIndicator", valueReference=str(VR_Z + i), dependencies=str(lay.vr("x", 2 + i)))
+        for i, name in enumerate(event_indicator_names(lay.kind, lay.flip_events)):
+            # a spring margin depends on the state r_j (index 2, 3 of the elastic state), a flip margin on theta_j
+            j = int(name[-1]) - 1
+            state = lay.vr("x", 2 + j if name.startswith("spring") else j)
+            ET.SubElement(ms, "EventIndicator", valueReference=str(VR_Z + i), dependencies=str(state))
     else:
         for tag, rows in (("Outputs", outputs), ("Derivatives", derivs), ("InitialUnknowns", outputs + derivs)):
             group = ET.SubElement(ms, tag)

@@ -123,3 +123,43 @@ def test_indicators_are_the_spring_margins_and_the_rigid_model_has_none(fmu_buil
         with pytest.raises(FMICallException):  # the wrong count is an error, not a buffer overrun
             d.fmu.getEventIndicators(z, 3)
         d.close()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_flip_events_are_located_where_the_native_run_crosses_upright(tmp_path, version):
+    model = pl.rigid()
+    x0 = model.state(theta1=2.0, theta2=2.0, omega2=6.0)
+    fmu = export(model, tmp_path / "flip.fmu", version, timestamp=False, x0=x0, flip_events=True)
+    res = simulate_fmu(fmu, fmi_type="ModelExchange", stop_time=3.0, output_interval=H, relative_tolerance=1e-10,
+                       output=["theta1", "theta2", "flip_margin1", "flip_margin2"])  # fmt: skip
+    ref = pl.simulate(model, x0, 3.0, dt=1e-5, rtol=1e-12, atol=1e-12)
+    z = np.pi - np.abs(ref["theta2"])
+    k = np.nonzero(np.sign(z[1:]) != np.sign(z[:-1]))[0]
+    native = ref.t[k] + z[k] / (z[k] - z[k + 1]) * (ref.t[k + 1] - ref.t[k])  # linear interpolation of the crossing
+    assert len(native) == 3  # link 2 passes upright three times in 3 s (0.21 s, 2.04 s, 2.69 s)
+    # fmpy records each state event (before and after it): the rows where the importer stopped at the flip
+    at_event = np.unique(np.round(res["time"][np.abs(res["flip_margin2"]) < 1e-8], 12))
+    # CVode's root finding at rtol 1e-10 against CVODES at 1e-12 (non-chaotic over 3 s: the error is ~1e-8)
+    np.testing.assert_allclose(at_event, native, atol=1e-6)
+    assert np.all(np.abs(res["flip_margin1"]) > 1e-3)  # link 1 does not flip: no spurious event
+    # the flip changes nothing in the model: the trajectory equals the run without flip events
+    plain = simulate_fmu(export(model, tmp_path / "plain.fmu", version, timestamp=False, x0=x0), fmi_type="ModelExchange",
+                         stop_time=3.0, output_interval=H, relative_tolerance=1e-10, output=["theta2"])  # fmt: skip
+    assert abs(res["theta2"][-1] - plain["theta2"][-1]) < 1e-6  # only the importer's step sequence differs
+
+
+def test_flip_events_option_is_validated(tmp_path):
+    with pytest.raises(TypeError, match="flip_events must be True or False"):
+        export(pl.rigid(), tmp_path / "x.fmu", 3, flip_events="yes")
+
+
+def test_cli_flip_events(tmp_path, capsys):
+    from fmpy import read_model_description
+
+    from pendulab.cli import main
+
+    out = tmp_path / "f.fmu"
+    assert main(["fmu", "export", "--model", "elastic", "--fmi-version", "2", "--flip-events", "--out", str(out)]) == 0
+    md = read_model_description(str(out))
+    assert md.numberOfEventIndicators == 4  # two spring margins, two flip margins
+    assert {"flip_margin1", "flip_margin2"} <= {v.name for v in md.modelVariables}

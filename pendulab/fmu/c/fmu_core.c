@@ -130,6 +130,16 @@ static int bad_spring_length(const double *x) {
     return -1;
 }
 
+#ifndef MODEL_NF
+#define MODEL_NF 0
+#endif
+#define CORE_PI 3.14159265358979323846
+
+/* Event indicator k: spring margins first (k < MODEL_NR), then flip margins pi - |theta_j| (export option):
+ * 0 when link j passes the upright position; a flip changes nothing in the model, the importer just stops
+ * its integrator there (Model Exchange). */
+static double indicator(const CoreData *d, int k);
+
 /* Spring margin i (event indicator): r_i - MODEL_SPRING_LIMIT * L_i. */
 static double spring_margin(const CoreData *d, const double *x, int i) {
     return x[MODEL_R_INDEX + i] - MODEL_SPRING_LIMIT * d->p[MODEL_P_L + i];
@@ -148,8 +158,13 @@ CoreStatus core_event_indicators(Instance *inst, double *z, size_t n, const char
                   z == NULL && n > 0 ? " and a NULL array" : "");
         return ST_ERROR;
     }
-    for (int i = 0; i < MODEL_NZ && i < MODEL_NR; i++) z[i] = spring_margin(&inst->d, inst->d.x, i);
+    for (int k = 0; k < MODEL_NZ; k++) z[k] = indicator(&inst->d, k);
     return ST_OK;
+}
+
+static double indicator(const CoreData *d, int k) {
+    if (k < MODEL_NR) return spring_margin(d, d->x, k);
+    return CORE_PI - fabs(d->x[k - MODEL_NR]); /* theta1, theta2 are the first two states */
 }
 
 int core_spring_event(Instance *inst, const char *fname) {
@@ -252,7 +267,7 @@ CoreStatus core_get_real(Instance *inst, const char *fname, const unsigned int *
         case KIND_PARAM: value[i] = inst->d.p[k]; break;
         case KIND_TOL: value[i] = inst->d.tolerance; break;
         case KIND_HMAX: value[i] = inst->d.max_step; break;
-        case KIND_INDICATOR: value[i] = spring_margin(&inst->d, inst->d.x, k < MODEL_NR ? k : 0); break;
+        case KIND_INDICATOR: value[i] = indicator(&inst->d, k); break;
         default:
             core_logf(inst, ST_ERROR, "%s: unknown value reference %u for a real variable", fname, vr[i]);
             return ST_ERROR;
