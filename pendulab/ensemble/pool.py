@@ -23,6 +23,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
@@ -128,15 +129,32 @@ def shutdown_now(pool: Executor) -> None:
 
 @contextlib.contextmanager
 def _sigint_blocked() -> Iterator[None]:
-    """Block SIGINT in this thread while workers are forked; a Ctrl-C meanwhile is delivered right after."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    """Hold a Ctrl-C back while workers are forked; it is raised right after, once the pool knows every worker.
+
+    Two layers: SIGINT is blocked in this thread (a child forked meanwhile starts with it blocked,
+    until :func:`ignore_sigint`), and Python's handler is swapped for one that only records the
+    signal, because the kernel may deliver SIGINT to another thread (a pool or heyoka thread) and
+    Python would then raise ``KeyboardInterrupt`` in the middle of the pool's bookkeeping, leaving
+    a worker the pool does not know about (seen as a worker still alive after Ctrl-C).
+    """
+    deferred: list[tuple[int, Any]] = []
+    previous: Any = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.getsignal(signal.SIGINT)
+        if callable(previous):
+            signal.signal(signal.SIGINT, lambda signum, frame: deferred.append((signum, frame)))
+        else:
+            previous = None
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if hasattr(signal, "pthread_sigmask") else None
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+            if deferred:
+                previous(*deferred[0])  # the default handler raises KeyboardInterrupt here
 
 
 def _run_chunk(job: int, chunk: list[Any]) -> list[Any]:
