@@ -243,9 +243,20 @@ CtrlStatus ctrl_do_step(CtrlInstance *inst, double current, double h, const char
         return CST_ERROR;
     }
     double end = current + h;
+    /* bounded work: at most CTRL_MAX_SAMPLES_PER_STEP evaluations of the law in one DoStep */
+    double due = floor((end - slack - sample_instant(d, d->next_sample)) / d->sample_time) + 1.0;
+    if (!isfinite(end) || due > CTRL_MAX_SAMPLES_PER_STEP) {
+        ctrl_logf(inst, CST_ERROR, "%s: a step of %g s covers %g samples of %g s; at most %d per step", fname, h, due,
+                  d->sample_time, CTRL_MAX_SAMPLES_PER_STEP);
+        return CST_ERROR;
+    }
     /* Every sample instant before the end of the step (the one now included) is committed, with the inputs held over
      * the step. Invariant: the next sample instant is never more than the slack before the current time. */
-    while (sample_instant(d, d->next_sample) <= end - slack) {
+    for (long n = 0; sample_instant(d, d->next_sample) <= end - slack; n++) {
+        if (n >= CTRL_MAX_SAMPLES_PER_STEP) { /* sample instants that rounding cannot tell apart (huge times) */
+            ctrl_logf(inst, CST_ERROR, "%s: more than %d samples in one step at t = %g s", fname, CTRL_MAX_SAMPLES_PER_STEP, end);
+            return CST_ERROR;
+        }
         if (commit(inst, fname) != CST_OK) {
             d->machine = CMS_ERROR;
             return CST_ERROR;

@@ -31,6 +31,10 @@ typedef enum {
  * time in floating point); the same slack as pendulab's TVLQR tracker uses for its sample index. */
 #define CTRL_SAMPLE_SLACK 1e-6
 
+/* Work limit of one DoStep: at most this many samples (evaluations of the control law); a longer step is an
+ * Error (the instance stays usable) instead of an unbounded loop. */
+#define CTRL_MAX_SAMPLES_PER_STEP 1000000
+
 typedef struct {
     unsigned long magic;
     int machine;

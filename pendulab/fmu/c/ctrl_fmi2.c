@@ -23,11 +23,6 @@ static void ctrl_log_fmi2(CtrlInstance *inst, CtrlStatus status, const char *cat
     CtrlInstance *inst = &c2->core;                                                                                   \
     ctrl_logf(inst, CST_OK, "%s", fname)
 
-static fmi2Status fail(CtrlInstance *inst, CtrlStatus s) {
-    if (s >= CST_ERROR && inst->d.machine != CMS_INSTANTIATED) inst->d.machine = CMS_ERROR;
-    return (fmi2Status)s;
-}
-
 static fmi2Status refuse(CtrlInstance *inst, const char *fname, const char *why) {
     ctrl_logf(inst, CST_ERROR, "%s: %s", fname, why);
     return fmi2Error;
@@ -105,7 +100,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     GET_INSTANCE("fmi2ExitInitializationMode");
-    return fail(inst, ctrl_exit_initialization(inst, "fmi2ExitInitializationMode"));
+    return (fmi2Status)ctrl_exit_initialization(inst, "fmi2ExitInitializationMode");
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
@@ -123,7 +118,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     GET_INSTANCE("fmi2GetReal");
-    return fail(inst, ctrl_get_real(inst, "fmi2GetReal", vr, nvr, value));
+    return (fmi2Status)ctrl_get_real(inst, "fmi2GetReal", vr, nvr, value);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
@@ -267,7 +262,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     GET_INSTANCE("fmi2DoStep");
     (void)noSetFMUStatePriorToCurrentPoint;
-    return fail(inst, ctrl_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi2DoStep"));
+    return (fmi2Status)ctrl_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi2DoStep");
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {

@@ -26,11 +26,6 @@ static void ctrl_log_fmi3(CtrlInstance *inst, CtrlStatus status, const char *cat
     CtrlInstance *inst = &c3->core;                                                                                   \
     ctrl_logf(inst, CST_OK, "%s", fname)
 
-static fmi3Status fail(CtrlInstance *inst, CtrlStatus s) {
-    if (s >= CST_ERROR && inst->d.machine != CMS_INSTANTIATED) inst->d.machine = CMS_ERROR;
-    return (fmi3Status)s;
-}
-
 static fmi3Status refuse(CtrlInstance *inst, const char *fname, const char *why) {
     ctrl_logf(inst, CST_ERROR, "%s: %s", fname, why);
     return fmi3Error;
@@ -140,7 +135,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     GET_INSTANCE("fmi3ExitInitializationMode");
-    return fail(inst, ctrl_exit_initialization(inst, "fmi3ExitInitializationMode"));
+    return (fmi3Status)ctrl_exit_initialization(inst, "fmi3ExitInitializationMode");
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
@@ -166,7 +161,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
                           fmi3Float64 values[], size_t nValues) {
     GET_INSTANCE("fmi3GetFloat64");
     if (nValues != nValueReferences) return refuse(inst, "fmi3GetFloat64", "nValues must equal nValueReferences (scalars only)");
-    return fail(inst, ctrl_get_real(inst, "fmi3GetFloat64", valueReferences, nValueReferences, values));
+    return (fmi3Status)ctrl_get_real(inst, "fmi3GetFloat64", valueReferences, nValueReferences, values);
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
@@ -525,7 +520,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     (void)noSetFMUStatePriorToCurrentPoint;
     if (eventHandlingNeeded == NULL || terminateSimulation == NULL || earlyReturn == NULL || lastSuccessfulTime == NULL)
         return refuse(inst, "fmi3DoStep", "NULL output argument");
-    fmi3Status s = fail(inst, ctrl_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep"));
+    fmi3Status s = (fmi3Status)ctrl_do_step(inst, currentCommunicationPoint, communicationStepSize, "fmi3DoStep");
     *eventHandlingNeeded = fmi3False;
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
