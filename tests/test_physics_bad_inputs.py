@@ -61,6 +61,12 @@ CASES = [
         ["x0[1]", "r1, r2", "-1.0"],
     ),
     ("rtol of 1 (no correct digit)", lambda: _sim(rtol=1.0), ValueError, ["rtol", "(0, 1)", "1.0"]),
+    (
+        "taylor tolerance below double epsilon (uninterruptible compile)",
+        lambda: _sim(method="taylor", rtol=1e-100),
+        ValueError,
+        ["rtol", "2.22e-16", "1e-100"],
+    ),
     ("unknown method", lambda: _sim(method="euler"), ValueError, ["'euler'", "cvodes", "DOP853"]),
     ("inf t_final", lambda: _sim(t_final=math.inf), ValueError, ["t_final", "positive finite", "inf"]),
     ("NaN t_final", lambda: _sim(t_final=NAN), ValueError, ["t_final", "positive finite", "nan"]),

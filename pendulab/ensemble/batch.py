@@ -45,8 +45,6 @@ __all__ = [
     "run_chunk",
     "default_batch_size",
     "check_batch_size",
-    "check_tolerance_floor",
-    "MIN_TOL",
     "SIMD_ENV",
     "SLICE_STEPS",
     "MAX_BATCH_SIZE",
@@ -63,10 +61,6 @@ SIMD_ENV = "PENDULAB_SIMD_SIZE"
 MAX_BATCH_SIZE = 64
 #: Batch steps per propagation slice: budgets and the stop flag are checked between slices.
 SLICE_STEPS = 2000
-#: Smallest heyoka tolerance accepted (double-precision epsilon): a smaller one adds no digit in double
-#: precision but raises the Taylor order, and with it a JIT compilation that cannot be interrupted
-#: (measured: tol 1e-60 compiles in 12 s, 1e-100 in 86 s).
-MIN_TOL = float(np.finfo(float).eps)
 #: Internal event indices of the elastic model's spring-collapse events (r1 = 0, r2 = 0).
 _SPRING_EVENTS = {-10: 1, -11: 2}
 
@@ -91,29 +85,6 @@ def check_batch_size(value: object, name: str = "batch_size") -> int:
         The width.
     """
     return bounded_int(name, value, low=1, high=MAX_BATCH_SIZE, why="SIMD lanes of one batch integrator")
-
-
-def check_tolerance_floor(name: str, value: float) -> float:
-    """``value`` when it is at least :data:`MIN_TOL`, else ``ValueError`` naming ``name`` and the floor.
-
-    Parameters
-    ----------
-    name : str
-        Argument name used in the message.
-    value : float
-        A positive tolerance (already checked by the shared layer).
-
-    Returns
-    -------
-    float
-        The tolerance.
-    """
-    if value < MIN_TOL:
-        raise ValueError(
-            f"{name} must be at least {MIN_TOL:.3g} (double-precision epsilon) for heyoka, got {value!r}: "
-            "a smaller tolerance adds no digit and only lengthens the Taylor order and its compilation"
-        )
-    return value
 
 
 def default_batch_size() -> int:

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._checks import bounded_int, check_model, check_spring_lengths, positive_float, relative_tolerance
 from ..integrate import METHODS, simulate
-from ..integrate.taylor.availability import heyoka_module
+from ..integrate.taylor.availability import check_tolerance_floor, heyoka_module
 from ..model.model import Model
 from .batch import (
     STATUS_EVENT,
@@ -29,7 +29,6 @@ from .batch import (
     ChunkStoppedError,
     ChunkTask,
     check_batch_size,
-    check_tolerance_floor,
     default_batch_size,
     run_chunk,
 )

@@ -73,6 +73,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .._checks import bounded_int, check_model, check_spring_lengths, positive_float, relative_tolerance
+from ..integrate.taylor.availability import check_tolerance_floor
 from ..model.model import Model
 from ..model.quasistatic import quasi_static_lengths
 from ..model.statics import static_spring_lengths
@@ -455,8 +456,6 @@ def largest_lyapunov(
         raise ValueError(f"renorm_interval must be at most t_total = {T!r} s, got {renorm_interval!r} s")
     tol = relative_tolerance("rtol", rtol)
     if method == "taylor":
-        from .batch import check_tolerance_floor
-
         check_tolerance_floor("rtol", tol)
     if not isinstance(method, str) or method not in _RUNNERS:
         raise ValueError(f"method must be one of {list(LYAPUNOV_METHODS)}, got {method!r}")

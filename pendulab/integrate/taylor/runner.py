@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ..registry import STIFF_HINT, MethodSpec, RunRequest, RunResult
-from .availability import heyoka_module, taylor_unavailable_reason
+from .availability import check_tolerance_floor, heyoka_module, taylor_unavailable_reason
 from .cache import _Borrowed, _entry, compile_count, structure_key
 
 _OPTIONS = {"compact_mode": bool, "high_accuracy": bool, "max_steps": int}
@@ -61,7 +61,7 @@ def run_taylor(req: RunRequest) -> RunResult:
     hy = heyoka_module()
     opts = _options(req)
     model, t, sched = req.model, req.t, req.schedule
-    tol = min(req.rtol, req.atol)
+    tol = check_tolerance_floor("rtol" if req.rtol <= req.atol else "atol", min(req.rtol, req.atol))
     zero_u = tuple(int(i) for i in np.flatnonzero(np.all(sched == 0.0, axis=0))) if sched is not None else ()
     key = structure_key(model.kind, model.p, zero_u, tol, opts["compact_mode"], opts["high_accuracy"])
     before = compile_count()
