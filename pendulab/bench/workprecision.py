@@ -26,31 +26,30 @@ ones come from the integrate registry, the FMU's embedded solvers from
 from __future__ import annotations
 
 import contextlib
-import csv
 import math
 import signal
 import statistics
-import textwrap
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .._checks import is_interrupt, positive_float
-from .._io import atomic_open
 from ..integrate import SimulationError
 from ..model.model import Model
 from ..scene import Scene
 from .cases import get_cases
-from .fmu_methods import fmu_bench_methods
 from .journal import Journal
-from .methods import TOLS, TOLS_QUICK, BenchMethod, native_bench_methods
+from .methods import BenchMethod
 from .reference import Reference, load_reference
+from .wp_report import fastest_table, plot_work_precision  # noqa: F401  (re-exported: their old home)
+from .wp_rows import BENCH_METHODS, Row, merge_rows, read_csv, write_csv  # noqa: F401  (re-exported: their old home)
 
+# Row, BENCH_METHODS and the CSV in :mod:`.wp_rows`; figures and tables in :mod:`.wp_report` (re-exported here).
 __all__ = [
     "BenchMethod",
     "BENCH_METHODS",
@@ -66,73 +65,6 @@ __all__ = [
 Progress = Callable[[int, int, str], None]
 
 REPEAT_BUDGET_S = 2.0  # stop repeating a point once its timed runs took this long [s]
-
-#: The benchmark's methods (insertion order = legend order): native methods, then the FMU's solvers.
-BENCH_METHODS: dict[str, BenchMethod] = {
-    **native_bench_methods(),
-    **{m.name: m for m in fmu_bench_methods(TOLS, TOLS_QUICK)},
-}
-
-
-@dataclass
-class Row:
-    """One (case, method, setting) measurement.
-
-    Errors are max-abs state differences from the stored reference (mixed
-    state units: rad, m, rad/s, m/s); nan unless ``status`` is ``"ok"``.
-
-    Attributes
-    ----------
-    case : str
-        Case name.
-    method : str
-        Method name (a key of ``BENCH_METHODS``).
-    sweep : str
-        ``"tol"`` (rtol = atol = setting) or ``"step"`` (fixed step [s]).
-    setting : float
-        The tolerance or step of this point.
-    status : str
-        ``"ok"``, ``"failed"``, ``"unstable"`` (non-finite or blown-up state)
-        or ``"skipped"`` (a looser setting was already too slow).
-    final_error : float
-        Max-abs state error at t_final.
-    grid_error : float
-        Max-abs state error over the output grid.
-    energy_drift : float
-        Max over the grid of |E(t) - E(0)| [J].
-    wall_median, wall_min : float
-        Median and smallest wall time of the timed runs [s].
-    cpu_median : float
-        Median CPU time (``time.process_time``) of the timed runs [s].
-    first_run : float
-        Wall time of the untimed warm-up run [s].
-    repeats : int
-        Number of timed runs.
-    n_steps, n_rhs : float
-        Steps and right-hand-side evaluations reported by the method (nan if not).
-    reference_accuracy : float
-        Accuracy of the reference; smaller errors are not resolved.
-    message : str
-        Why a point failed or was skipped.
-    """
-
-    case: str
-    method: str
-    sweep: str
-    setting: float
-    status: str  # ok | failed | unstable | skipped
-    final_error: float = math.nan
-    grid_error: float = math.nan
-    energy_drift: float = math.nan
-    wall_median: float = math.nan
-    wall_min: float = math.nan
-    cpu_median: float = math.nan
-    first_run: float = math.nan
-    repeats: int = 0
-    n_steps: float = math.nan
-    n_rhs: float = math.nan
-    reference_accuracy: float = math.nan
-    message: str = ""
 
 
 def _measure(method: BenchMethod, case: Scene, model: Model, x0: np.ndarray, ref: Reference, setting: float, repeats: int) -> Row:
@@ -324,223 +256,3 @@ def watch_interrupt() -> Iterator[Callable[[], bool]]:
         yield lambda: hit[0]
     finally:
         signal.signal(signal.SIGINT, previous)
-
-
-_FIELDS = [f for f in Row.__dataclass_fields__]
-
-
-def write_csv(rows: Iterable[Row], path: str | Path) -> Path:
-    """Write rows to CSV (one line per case, method and setting).
-
-    Parameters
-    ----------
-    rows : iterable of Row
-        The measurements.
-    path : str or Path
-        CSV file (parent directories are created); columns are the fields of
-        :class:`Row`, floats with 6 significant digits.
-
-    Returns
-    -------
-    Path
-        The written file.
-    """
-    path = Path(path)
-    with atomic_open(path, "w", newline="") as fh:  # never a truncated CSV after an interrupt
-        w = csv.DictWriter(fh, fieldnames=_FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in asdict(r).items()})
-    return path
-
-
-def read_csv(path: str | Path) -> list[Row]:
-    """Read rows written by :func:`write_csv`.
-
-    Parameters
-    ----------
-    path : str or Path
-        CSV file with the fields of :class:`Row` as columns.
-
-    Returns
-    -------
-    list of Row
-        In file order.
-    """
-    out = []
-    with Path(path).open() as fh:
-        for d in csv.DictReader(fh):
-            kw: dict[str, Any] = {}
-            for k, v in d.items():
-                typ = Row.__dataclass_fields__[k].type
-                kw[k] = float(v) if typ == "float" else int(v) if typ == "int" else v
-            out.append(Row(**kw))
-    return out
-
-
-def merge_rows(old: Iterable[Row], new: Iterable[Row]) -> list[Row]:
-    """Rows of ``old`` whose (case, method) was not re-measured, plus ``new``.
-
-    Parameters
-    ----------
-    old : iterable of Row
-        Earlier results (e.g. from :func:`read_csv`).
-    new : iterable of Row
-        Re-measured results; they replace every old row of the same (case, method).
-
-    Returns
-    -------
-    list of Row
-        Sorted by case order of ``CASES`` and method order of ``BENCH_METHODS``
-        (unknown names last), so a partial re-run merged into a complete CSV
-        gives the same layout as a full run.
-    """
-    from .cases import CASES
-
-    new = list(new)
-    remeasured = {(r.case, r.method) for r in new}
-    rows = [r for r in old if (r.case, r.method) not in remeasured] + new
-    case_rank = {c: i for i, c in enumerate(CASES)}
-    method_rank = {m: i for i, m in enumerate(BENCH_METHODS)}
-    big = len(case_rank) + len(method_rank)
-    return sorted(rows, key=lambda r: (case_rank.get(r.case, big), method_rank.get(r.method, big)))
-
-
-# tab20 comes in dark/light pairs: use the dark ones first so neighbours differ.
-_COLOR_ORDER = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19)
-_TIME_LABEL = {"wall_median": "median wall time [s]", "cpu_median": "median CPU time [s]"}
-_METRIC_LABEL = {
-    "grid_error": "achieved error: max |x - x_ref| over the output grid",
-    "final_error": "achieved error: max |x(T) - x_ref(T)|",
-    "energy_drift": "energy drift: max |E(t) - E(0)| [J]",
-}
-
-
-def _family(method: str) -> str:
-    bm = BENCH_METHODS.get(method)
-    return bm.family if bm is not None else ""
-
-
-def plot_work_precision(
-    rows: Sequence[Row], path: str | Path, metric: str = "grid_error", title: str = "", time_metric: str = "wall_median"
-) -> Path:
-    """Median wall (or CPU) time against achieved error (log-log), one panel per case.
-
-    Only rows with status ``"ok"`` are drawn; a dotted line marks the
-    reference accuracy (error metrics only).
-
-    Parameters
-    ----------
-    rows : sequence of Row
-        The measurements.
-    path : str or Path
-        Image file to write (parent directories are created).
-    metric : {"grid_error", "final_error", "energy_drift"}
-        Error on the horizontal axis.
-    title : str
-        Figure title; default describes the line styles.
-    time_metric : {"wall_median", "cpu_median"}
-        Time on the vertical axis [s].
-
-    Returns
-    -------
-    Path
-        The written file.
-
-    Raises
-    ------
-    ValueError
-        Unknown ``metric`` or ``time_metric``.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    if metric not in _METRIC_LABEL:
-        raise ValueError(f"metric must be one of {list(_METRIC_LABEL)}, got {metric!r}")
-    if time_metric not in _TIME_LABEL:
-        raise ValueError(f"time_metric must be one of {list(_TIME_LABEL)}, got {time_metric!r}")
-    cases = list(dict.fromkeys(r.case for r in rows))
-    methods = list(dict.fromkeys(r.method for r in rows))
-    ncol = min(2, len(cases))
-    nrow = math.ceil(len(cases) / ncol)
-    # Constrained layout keeps the title, labels and the legend below the panels inside the figure.
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.2 * nrow + 0.8), squeeze=False, layout="constrained")
-    cmap = plt.get_cmap("tab20")
-    markers = "osD^v<>ph*Xd8PH+"
-    for ax, case in zip(axes.flat, cases, strict=False):
-        acc = math.nan
-        for i, m in enumerate(methods):
-            pts = [r for r in rows if r.case == case and r.method == m and r.status == "ok"]
-            if not pts:
-                continue
-            acc = pts[0].reference_accuracy
-            xs = [max(getattr(r, metric), 1e-17) for r in pts]
-            ys = [getattr(r, time_metric) for r in pts]
-            ls = "-." if _family(m) == "fmu" else "--" if pts[0].sweep == "step" else "-"
-            color = cmap(_COLOR_ORDER[i % len(_COLOR_ORDER)])
-            if _family(m) == "fmu":  # tab20's light shades are hard to see; the FMU lines get black and grey
-                color = ("black", "dimgray")[sum(_family(n) == "fmu" for n in methods[:i]) % 2]
-            ax.loglog(xs, ys, ls, marker=markers[i % len(markers)], color=color, ms=4, lw=1, label=m)
-        if metric != "energy_drift" and math.isfinite(acc):
-            ax.axvline(acc, color="k", ls=":", lw=1)
-            ax.text(acc, ax.get_ylim()[1], " reference\n accuracy", va="top", fontsize=7)
-        ax.set_title(case, fontsize=10)
-        ax.set_xlabel(_METRIC_LABEL[metric], fontsize=8)
-        ax.set_ylabel(_TIME_LABEL[time_metric], fontsize=8)
-        ax.grid(True, which="major", alpha=0.3)
-    for ax in list(axes.flat)[len(cases) :]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    for ax in axes.flat:
-        h, lab = ax.get_legend_handles_labels()
-        if len(lab) > len(labels):
-            handles, labels = h, lab
-    fig.legend(
-        handles, labels, loc="outside lower center", ncol=min(7 if ncol > 1 else 4, len(labels)), fontsize=8, frameon=False
-    )
-    default_title = "Work-precision: solid = tolerance sweep, dashed = fixed-step sweep, dash-dot = FMU via fmpy"
-    # One panel is 6.4 in wide: wrap the title to fit it (about 11 characters per inch at 11 pt).
-    fig.suptitle(textwrap.fill(title or default_title, width=int(6.4 * ncol * 11)), fontsize=11)
-    from ..viz.save import save_figure
-
-    return save_figure(fig, path, dpi=110)
-
-
-def fastest_table(rows: Sequence[Row], case: str, levels: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) -> list[dict]:
-    """For each error level, the method reaching it (grid error) in the least median time.
-
-    Parameters
-    ----------
-    rows : sequence of Row
-        The measurements (only status ``"ok"`` counts).
-    case : str
-        Case to rank.
-    levels : sequence of float
-        Grid-error levels to reach.
-
-    Returns
-    -------
-    list of dict
-        One per level: ``level``, ``method``, ``setting``, ``sweep``,
-        ``grid_error``, ``wall_median`` [s], and ``runner_up`` with its time
-        ``ratio`` when there is one; ``method`` is None when nobody reaches
-        the level.
-    """
-    ok = [r for r in rows if r.case == case and r.status == "ok"]
-    table = []
-    for lev in levels:
-        best: dict[str, Row] = {}
-        for r in ok:
-            if r.grid_error <= lev and (r.method not in best or r.wall_median < best[r.method].wall_median):
-                best[r.method] = r
-        ranked = sorted(best.values(), key=lambda r: r.wall_median)
-        entry: dict[str, Any] = {"level": lev, "method": None}
-        if ranked:
-            w = ranked[0]
-            entry.update(method=w.method, setting=w.setting, sweep=w.sweep, grid_error=w.grid_error, wall_median=w.wall_median)
-            if len(ranked) > 1:
-                entry.update(runner_up=ranked[1].method, ratio=ranked[1].wall_median / w.wall_median)
-        table.append(entry)
-    return table

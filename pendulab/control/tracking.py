@@ -333,7 +333,7 @@ def swingup_reference(
 def resample_reference(
     t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, model: Model | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Put a reference ``(t, x, u)`` on the uniform sample grid ``0, h, 2h, ... <= t[-1]``.
+    """Put a reference ``(t, x, u)`` on the uniform sample grid ``k h <= t[-1]`` (k = 0, 1, 2, and so on).
 
     Torques are zero-order held (the value of the last reference knot at or
     before each sample), so a reference whose knots are a multiple of ``h``
