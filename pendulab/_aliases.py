@@ -58,6 +58,9 @@ RENAMED: dict[tuple[str, str], str] = {
     ("pendulab.control.realai.criteria", "score"): f"{_REALAI}.criteria:score_v2",
     ("pendulab.control.realai.simulate", "leaderboard_model"): "pendulab.control.realai.spec:leaderboard_model",
     ("pendulab.control.realai.simulate", "leaderboard_task"): "pendulab.control.realai.spec:leaderboard_task",
+    # modules split in two
+    ("pendulab.native.library", "native_library"): "pendulab.native.loader:native_library",
+    ("pendulab.native.library", "loaded_libraries"): "pendulab.native.loader:loaded_libraries",
     # one name per concept
     ("pendulab.control.realai", "Plan"): "pendulab.control.realai.design:LeaderboardPlan",
     ("pendulab.control.realai.design", "Plan"): "pendulab.control.realai.design:LeaderboardPlan",

@@ -92,6 +92,7 @@ def test_one_name_per_concept_old_names_warn():
     from pendulab.control.swingup.solve import solve_transcription
     from pendulab.integrate.compiled import compiled_unavailable_reason
     from pendulab.integrate.taylor.availability import taylor_unavailable_reason
+    from pendulab.native.loader import native_library
 
     cases = [
         ("pendulab.control.realai.design", "Plan", LeaderboardPlan),
@@ -101,6 +102,7 @@ def test_one_name_per_concept_old_names_warn():
         ("pendulab.bench.fmu_methods", "fmu_runner", fmu_bench_runner),
         ("pendulab.integrate.compiled", "unavailable_reason", compiled_unavailable_reason),
         ("pendulab.integrate.taylor.availability", "unavailable_reason", taylor_unavailable_reason),
+        ("pendulab.native.library", "native_library", native_library),  # the loader got its own module
     ]
     for module, old, new in cases:
         with pytest.warns(DeprecationWarning, match=new.__name__):

@@ -27,7 +27,7 @@ from ..integrate.taylor import compiled_integrator, structure_key
 from ..integrate.taylor.availability import heyoka_module, taylor_unavailable_reason
 from ..model.model import ACTUATIONS, Model, make_model
 from ..native.build import cache_dir, cached_artifact, compiler_unavailable_reason, source_digest
-from ..native.library import native_library
+from ..native.loader import native_library
 
 __all__ = ["INTEGRATORS", "NativePlant", "FmuBackend", "resolve_integrator", "cached_fmu", "MAX_REPLAY_STEPS"]
 

@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from ..native.build import compiler_unavailable_reason
-from ..native.library import ERROR_CODES, GridResult, native_library
+from ..native.library import ERROR_CODES, GridResult
+from ..native.loader import native_library
 from .registry import MethodSpec, RunRequest, RunResult
 
 __all__ = ["METHOD_SPECS", "run_compiled", "compiled_unavailable_reason", "DEFAULT_MAX_STEPS", "MIN_RTOL"]

@@ -30,7 +30,8 @@ from .build import (
     find_compiler,
 )
 from .codegen import C_DIR, model_c_source, native_sources
-from .library import SOLVERS, GridResult, IntervalStepper, NativeLibrary, native_library
+from .library import SOLVERS, GridResult, IntervalStepper, NativeLibrary
+from .loader import native_library
 
 __all__ = [
     "CFLAGS",
