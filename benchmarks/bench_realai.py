@@ -27,7 +27,7 @@ from tqdm import tqdm
 
 from pendulab.control.realai.design import default_guess, save_plan, sweep, tracker_for_plan
 from pendulab.control.realai.spec import HEIGHT_FRACTION
-from pendulab.evaluate.realai import CONTROLLER_NAMES, CRITERIA, PUBLISHED, realai_score, run
+from pendulab.evaluate.realai import CONTROLLER_NAMES, CRITERIA, PUBLISHED, realai_score, run_leaderboard
 
 #: Continuation per task: (swing-up time t_up, plan end t_end) [s] of each solve; the first starts from the
 #: task's effort-optimal swing-up, each next one from the previous plan. The best closed-loop score is kept.
@@ -42,7 +42,7 @@ def regenerate(task: str) -> None:
     guess = default_guess(task, STEPS[task][0][1])
 
     def evaluate(plan) -> float:
-        return run(task, tracker_for_plan(plan), "best").score
+        return run_leaderboard(task, tracker_for_plan(plan), "best").score
 
     bar = lambda steps: tqdm(steps, desc=f"plans {task}", unit="solve")  # noqa: E731
     plan, s = sweep(task, STEPS[task], evaluate, guess, progress=bar)

@@ -52,9 +52,11 @@ RENAMED: dict[tuple[str, str], str] = {
     ("pendulab.control", "realai_score"): f"{_REALAI}:realai_score",
     **{
         ("pendulab.control.realai", n): f"{_REALAI}:{n}"
-        for n in ("CONTROLLER_NAMES", "CRITERIA", "PUBLISHED", "RealAIResult", "realai_score", "run", "to_relative")
+        for n in ("CONTROLLER_NAMES", "CRITERIA", "PUBLISHED", "RealAIResult", "realai_score", "to_relative")
     },
     ("pendulab.control.perturb", "run_episode"): f"{_EVAL}.perturb:run_perturbed_episode",
+    ("pendulab.control.realai", "run"): f"{_REALAI}:run_leaderboard",
+    ("pendulab.control.realai.simulate", "run"): f"{_REALAI}.simulate:run_leaderboard",
     ("pendulab.control.realai.criteria", "score"): f"{_REALAI}.criteria:score_v2",
     ("pendulab.control.realai.simulate", "leaderboard_model"): "pendulab.control.realai.spec:leaderboard_model",
     ("pendulab.control.realai.simulate", "leaderboard_task"): "pendulab.control.realai.spec:leaderboard_task",

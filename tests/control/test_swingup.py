@@ -96,7 +96,7 @@ def test_free_horizon_mix_beats_fixed_horizon(pendubot):
 
 def test_elastic_solve_starts_from_rigid_counterpart():
     pb = load_task("pendubot_elastic_soft").problem
-    r = solve_transcription(pb, "radau", 30, tolerance=None)  # the expert path's guess only; the error estimate is tested elsewhere
+    r = solve_transcription(pb, "radau", 30, tolerance=None)  # expert path's guess; the estimate is tested elsewhere
     assert r.success, r.message
     assert r.stages[0]["label"].startswith("rigid:")  # auto guess: rigid point-mass solve, lifted
     smin, smax = pb.stretch_limits

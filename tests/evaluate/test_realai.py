@@ -10,7 +10,7 @@ import pytest
 import pendulab as pl
 from pendulab.control.feedback import balance_controller
 from pendulab.control.realai.spec import DT, N_STEPS, leaderboard_model
-from pendulab.evaluate.realai import PUBLISHED, realai_score, rk4_rollout, run, to_relative
+from pendulab.evaluate.realai import PUBLISHED, realai_score, rk4_rollout, run_leaderboard, to_relative
 from pendulab.evaluate.realai import criteria as crit
 from pendulab.evaluate.realai.criteria import criteria, score_v2
 
@@ -124,7 +124,7 @@ def test_run_clips_the_actuated_joint_and_zeroes_the_passive_one() -> None:
     model = leaderboard_model("acrobot")
     # Full-actuation LQR sampled at 2 ms asks for large torques on both joints from hanging.
     ctrl = balance_controller(model, DT, design="discrete")
-    res = run("acrobot", ctrl, "lqr-full")
+    res = run_leaderboard("acrobot", ctrl, "lqr-full")
     assert len(res.t) == N_STEPS == len(res.u)
     assert np.all(res.u[:, 0] == 0.0)
     assert np.max(np.abs(res.u[:, 1])) <= 6.0
@@ -141,7 +141,7 @@ def test_bad_names_and_controllers() -> None:
         realai_score("pendubot", 3.0)  # type: ignore[arg-type]
     ctrl = balance_controller(leaderboard_model("pendubot"), 0.003, actuation="pendubot")
     with pytest.raises(ValueError, match="sample_time"):
-        run("pendubot", ctrl)
+        run_leaderboard("pendubot", ctrl)
 
 
 @pytest.mark.parametrize("task", ["pendubot", "acrobot"])

@@ -20,7 +20,7 @@ from ...control.realai.design import best_controller
 from ...control.realai.spec import TASKS, leaderboard_task
 from ...control.swingup.tasks import short_name
 from .criteria import CRITERIA, PUBLISHED, score_v2, to_relative
-from .simulate import RealAIResult, rk4_rollout, run
+from .simulate import RealAIResult, rk4_rollout, run_leaderboard
 
 __all__ = [
     "CONTROLLER_NAMES",
@@ -29,7 +29,7 @@ __all__ = [
     "RealAIResult",
     "realai_score",
     "rk4_rollout",
-    "run",
+    "run_leaderboard",
     "score_v2",
     "to_relative",
 ]
@@ -90,7 +90,7 @@ def realai_score(
             raise ValueError(f"controller must be one of {list(CONTROLLER_NAMES)} or a SampledController, got {name!r}")
     else:
         ctrl, name = controller, type(controller).__name__
-    result = run(task, ctrl, name, progress=progress)
+    result = run_leaderboard(task, ctrl, name, progress=progress)
     if csv_path is not None:
         result.write_csv(csv_path)
     return result

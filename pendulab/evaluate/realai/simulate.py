@@ -41,7 +41,7 @@ from ...model.model import INPUT_NAMES, Model
 from ...model.pycode import to_python
 from .criteria import CRITERIA, PUBLISHED, criteria, score_v2, to_relative
 
-__all__ = ["RealAIResult", "rk4_rollout", "run"]
+__all__ = ["RealAIResult", "rk4_rollout", "run_leaderboard"]
 
 
 @dataclass
@@ -180,7 +180,7 @@ def rk4_rollout(model: Model, x0: np.ndarray, policy: Any, n_steps: int, dt: flo
     return np.array(ts), np.array(xs), np.array(us, dtype=float).reshape(n_steps, len(INPUT_NAMES))
 
 
-def run(
+def run_leaderboard(
     task: str, controller: SampledController, name: str = "custom", *, progress: Callable[[int, int], None] | None = None
 ) -> RealAIResult:
     """Run ``controller`` through the leaderboard simulation of ``task`` and score it.
