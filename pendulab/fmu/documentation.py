@@ -156,7 +156,8 @@ def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop
         spring += (
             "<li>Flip events: <code>flip_margin1</code>, <code>flip_margin2</code> = &pi; &minus; |&theta;<sub>i</sub>| "
             "reach 0 when link i passes the upright position; Model Exchange importers stop there (nothing in the "
-            "model changes). Co-Simulation ignores them.</li>"
+            "model changes). FMI 3 Co-Simulation with <code>eventModeUsed</code> and early return allowed: "
+            "<code>DoStep</code> ends at each flip (bisection to 1e-12 s) with <code>eventHandlingNeeded</code>.</li>"
         )
     page = f"""<!DOCTYPE html>
 <html lang="en">

@@ -312,8 +312,9 @@ def model_description(
         {
             "modelIdentifier": ident,
             "canHandleVariableCommunicationStepSize": "true",
-            # a spring reaching its limit ends the step early when the importer allows early return
-            **({"mightReturnEarlyFromDoStep": "true"} if v3 and lay.kind == "elastic" else {}),
+            # a spring reaching its limit (or, in event mode, a flip) ends the step early when the importer allows it
+            **({"mightReturnEarlyFromDoStep": "true"} if v3 and (lay.kind == "elastic" or lay.flip_events) else {}),
+            **({"hasEventMode": "true"} if v3 and lay.flip_events else {}),
             **caps,
         },
     )

@@ -163,3 +163,41 @@ def test_cli_flip_events(tmp_path, capsys):
     md = read_model_description(str(out))
     assert md.numberOfEventIndicators == 4  # two spring margins, two flip margins
     assert {"flip_margin1", "flip_margin2"} <= {v.name for v in md.modelVariables}
+
+
+def test_fmi3_co_simulation_event_mode_stops_at_each_flip(tmp_path):
+    from fmpy import read_model_description
+
+    model = pl.rigid()
+    x0 = model.state(theta1=2.0, theta2=2.0, omega2=6.0)
+    fmu = export(model, tmp_path / "flip3.fmu", 3, timestamp=False, x0=x0, flip_events=True)
+    cs = read_model_description(str(fmu)).coSimulation
+    assert cs.hasEventMode and cs.mightReturnEarlyFromDoStep
+    res = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=3.0, output_interval=H, use_event_mode=True,
+                       early_return_allowed=True, output=["theta2", "flip_margin2"])  # fmt: skip
+    ref = pl.simulate(model, x0, 3.0, dt=1e-5, rtol=1e-12, atol=1e-12)
+    z = np.pi - np.abs(ref["theta2"])
+    k = np.nonzero(np.sign(z[1:]) != np.sign(z[:-1]))[0]
+    native = ref.t[k] + z[k] / (z[k] - z[k + 1]) * (ref.t[k + 1] - ref.t[k])
+    # early return at each flip, located by bisection to 1e-12 s; fmpy records the event point before and after
+    at_event = np.unique(np.round(res["time"][np.abs(res["flip_margin2"]) < 1e-9], 9))
+    # embedded dopri5 at the default 1e-8 tolerance against CVODES at 1e-12 (non-chaotic 3 s: error ~1e-8 rad)
+    np.testing.assert_allclose(at_event, native, atol=1e-6)
+    # the flips change nothing: the end state equals the run without event mode within the solver tolerance
+    plain = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=3.0, output_interval=H, output=["theta2"])
+    assert abs(res["theta2"][-1] - plain["theta2"][-1]) < 1e-7  # different internal step sequences, tolerance 1e-8
+    # without early return the step runs to its end and only flags the event
+    late = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=3.0, output_interval=H, use_event_mode=True, output=["theta2"])
+    assert late["theta2"][-1] == plain["theta2"][-1]  # bit-identical: flagging an event changes no step
+    assert len(np.unique(late["time"])) == len(plain)  # fmpy samples each event point twice, no extra points
+
+
+@pytest.mark.parametrize("version_kind", ["rigid", "elastic"])
+def test_event_mode_is_refused_without_flip_events(fmu_builds, version_kind, capsys):
+    from fmpy.fmi3 import FMU3Slave
+
+    built = fmu_builds[(version_kind, 3)]
+    s = FMU3Slave(guid=built.md.guid, unzipDirectory=built.unzipdir, modelIdentifier=f"pendulab_{version_kind}", instanceName="x")
+    with pytest.raises(Exception, match="instantiate|Failed"):
+        s.instantiate(eventModeUsed=True)
+    assert "eventModeUsed is not supported" in capsys.readouterr().out

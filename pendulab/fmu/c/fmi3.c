@@ -13,7 +13,6 @@ typedef char fmi3_int32_is_int[sizeof(int) == sizeof(fmi3Int32) ? 1 : -1];
 typedef struct {
     Instance core;
     fmi3LogMessageCallback logMessage;
-    int early_return_allowed; /* Co-Simulation: the importer accepts a step that ends before its end point */
 } Fmi3Instance;
 
 static void fmi3_log(Instance *inst, CoreStatus status, const char *category, const char *message) {
@@ -108,16 +107,20 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     (void)requiredIntermediateVariables;
     (void)nRequiredIntermediateVariables;
     (void)intermediateUpdate;
-    if (eventModeUsed) {
-        /* the model has no events (hasEventMode is false): refuse rather than ignore the request */
+    if (eventModeUsed && MODEL_NF == 0) {
+        /* event mode only with flip events (hasEventMode = true): refuse rather than ignore the request */
         if (logMessage != NULL)
             logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                       "fmi3InstantiateCoSimulation: eventModeUsed is not supported (hasEventMode = false)");
+                       "fmi3InstantiateCoSimulation: eventModeUsed is not supported (hasEventMode = false: export "
+                       "with flip events for a CS event mode)");
         return NULL;
     }
     Fmi3Instance *c = (Fmi3Instance *)instantiate(instanceName, instantiationToken, loggingOn, instanceEnvironment,
                                                   logMessage, 1);
-    if (c != NULL) c->early_return_allowed = earlyReturnAllowed ? 1 : 0; /* used only when a spring reaches its limit */
+    if (c != NULL) {
+        c->core.early_return = earlyReturnAllowed ? 1 : 0; /* a spring limit or (event mode) a flip ends a step early */
+        c->core.event_mode_used = eventModeUsed ? 1 : 0;
+    }
     return c;
 }
 
@@ -163,14 +166,17 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
         inst->d.machine = MS_ERROR;
         return (fmi3Status)s;
     }
-    inst->d.machine = inst->is_cosim ? MS_STEP : MS_EVENT;
+    inst->d.machine = inst->is_cosim && !inst->event_mode_used ? MS_STEP : MS_EVENT; /* CS event mode: Event Mode */
     return fmi3OK;
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     GET_INSTANCE("fmi3EnterEventMode");
-    ME_ONLY("fmi3EnterEventMode");
-    CHECK_STATE(MS_EVENT | MS_CONT, "fmi3EnterEventMode");
+    if (inst->is_cosim && !inst->event_mode_used) {
+        core_logf(inst, ST_ERROR, "fmi3EnterEventMode: Co-Simulation without eventModeUsed has no event mode");
+        return fmi3Error;
+    }
+    CHECK_STATE(inst->is_cosim ? MS_STEP : (MS_EVENT | MS_CONT), "fmi3EnterEventMode");
     inst->d.machine = MS_EVENT;
     return fmi3OK;
 }
@@ -577,8 +583,12 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *nominalsOfContinuousStatesChanged, fmi3Boolean *valuesOfContinuousStatesChanged,
                                     fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime) {
     GET_INSTANCE("fmi3UpdateDiscreteStates");
-    ME_ONLY("fmi3UpdateDiscreteStates");
+    if (inst->is_cosim && !inst->event_mode_used) {
+        core_logf(inst, ST_ERROR, "fmi3UpdateDiscreteStates: Co-Simulation without eventModeUsed has no event mode");
+        return fmi3Error;
+    }
     CHECK_STATE(MS_EVENT, "fmi3UpdateDiscreteStates");
+    inst->event_pending = 0; /* a flip changes no discrete state: handled */
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
     if (terminateSimulation)
         *terminateSimulation = core_spring_event(inst, "fmi3UpdateDiscreteStates") ? fmi3True : fmi3False;
@@ -694,7 +704,11 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
     GET_INSTANCE("fmi3EnterStepMode");
     CS_ONLY("fmi3EnterStepMode");
-    return unsupported(inst, "fmi3EnterStepMode (no event mode: the FMU is in step mode after initialization)");
+    if (!inst->event_mode_used)
+        return unsupported(inst, "fmi3EnterStepMode (no event mode: the FMU is in step mode after initialization)");
+    CHECK_STATE(MS_EVENT, "fmi3EnterStepMode");
+    inst->d.machine = MS_STEP;
+    return fmi3OK;
 }
 
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
@@ -720,11 +734,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return fmi3Error;
     }
     CoreStatus s = core_do_step(inst, currentCommunicationPoint, communicationStepSize);
-    *eventHandlingNeeded = fmi3False;
+    *eventHandlingNeeded = inst->event_pending ? fmi3True : fmi3False; /* a flip (event mode) */
     *terminateSimulation = inst->terminate_requested ? fmi3True : fmi3False;
-    *earlyReturn = fmi3False;
+    *earlyReturn = s == ST_OK && inst->event_pending && inst->d.time < currentCommunicationPoint + communicationStepSize;
     *lastSuccessfulTime = inst->d.time;
-    if (s == ST_DISCARD && inst->terminate_requested && c3->early_return_allowed) {
+    if (s == ST_DISCARD && inst->terminate_requested && inst->early_return) {
         /* a spring reached its limit: the step ended early at lastSuccessfulTime, and the FMU asks to stop */
         *earlyReturn = fmi3True;
         return fmi3OK;

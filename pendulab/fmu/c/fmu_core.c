@@ -41,6 +41,7 @@ void core_defaults(Instance *inst) {
     d->max_step = MODEL_HMAX_DEFAULT;
     d->solver = MODEL_SOLVER_DEFAULT;
     inst->terminate_requested = 0;
+    inst->event_pending = 0;
 }
 
 static void vlog(Instance *inst, CoreStatus status, const char *category, const char *fmt, va_list ap) {
@@ -139,6 +140,8 @@ static int bad_spring_length(const double *x) {
  * 0 when link j passes the upright position; a flip changes nothing in the model, the importer just stops
  * its integrator there (Model Exchange). */
 static double indicator(const CoreData *d, int k);
+static int flipped(const CoreData *a, const CoreData *b);
+static CoreStatus locate_flip(Instance *inst, const CoreData *before, double t_end);
 
 /* Spring margin i (event indicator): r_i - MODEL_SPRING_LIMIT * L_i. */
 static double spring_margin(const CoreData *d, const double *x, int i) {
@@ -512,6 +515,41 @@ CoreStatus core_do_step(Instance *inst, double current, double h) {
         d->machine = MS_ERROR; /* the trajectory left the model's domain (a spring length reached 0) */
         return ST_ERROR;
     }
+    inst->event_pending = 0;
+    if (MODEL_NF > 0 && inst->event_mode_used && flipped(&before, d)) {
+        inst->event_pending = 1;
+        if (inst->early_return) return locate_flip(inst, &before, t_end);
+        core_debugf(inst, "DoStep: a link passed upright during the step ending at t = %.17g", d->time);
+    }
+    return ST_OK;
+}
+
+/* 1 when a flip indicator has a different sign at b than at a. */
+static int flipped(const CoreData *a, const CoreData *b) {
+    for (int k = MODEL_NR; k < MODEL_NZ; k++)
+        if ((indicator(a, k) > 0.0) != (indicator(b, k) > 0.0)) return 1;
+    return 0;
+}
+
+/* Bisection for the first flip in (before.time, t_end]: re-integrate from the latest point known to lie before
+ * it; the FMU ends at the first point found past it (within CORE_EVENT_TIME_RTOL max(1, |t|)). */
+static CoreStatus locate_flip(Instance *inst, const CoreData *before, double t_end) {
+    CoreData lo = *before, past = inst->d; /* past: a state after the flip (the end of the step) */
+    double t_hi = t_end;
+    for (int it = 0; it < 200 && t_hi - lo.time > CORE_EVENT_TIME_RTOL * fmax(1.0, fabs(t_hi)); it++) {
+        CoreData mid = lo;
+        double t = mid.time, t_mid = 0.5 * (lo.time + t_hi);
+        if (ode_integrate(&mid.ode, rhs_cb, jac_cb, inst, &t, mid.x, t_mid) != ODE_OK) break;
+        mid.time = t;
+        if (flipped(&lo, &mid)) {
+            t_hi = t_mid;
+            past = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    inst->d = past;
+    core_debugf(inst, "DoStep: a link passes upright at t = %.17g: early return for event handling", past.time);
     return ST_OK;
 }
 
@@ -661,7 +699,7 @@ CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname
      * error is possible (FMI 2.0 section 2.1.3, FMI 3.0 section 2.2.3). Only a state of the other interface
      * (an ME event/continuous-time state into a CS instance, a CS step state into an ME instance) is refused. */
     int machine = saved->machine;
-    int legal = inst->is_cosim ? (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
+    int legal = inst->is_cosim ? (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED | (inst->event_mode_used ? MS_EVENT : 0))
                                : (MS_INSTANTIATED | MS_INIT | MS_EVENT | MS_CONT | MS_TERMINATED);
     if (!(machine & legal)) {
         core_logf(inst, ST_ERROR, "%s: FMU state was taken in %s, which a %s instance cannot resume", fname,
@@ -670,5 +708,6 @@ CoreStatus core_restore(Instance *inst, const CoreData *saved, const char *fname
     }
     memcpy(&inst->d, saved, sizeof(CoreData)); /* the blob may be unaligned (a deserialized byte buffer) */
     inst->terminate_requested = 0;
+    inst->event_pending = 0;
     return ST_OK;
 }

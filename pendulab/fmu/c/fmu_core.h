@@ -66,6 +66,9 @@ typedef struct Instance {
     int is_cosim;
     int logging_on;
     int terminate_requested; /* a spring reached its limit in DoStep: the FMU asked the master to stop */
+    int event_mode_used;     /* FMI 3 CS with eventModeUsed (flip events): DoStep stops at a flip */
+    int early_return;        /* the importer allows DoStep to end before its end point */
+    int event_pending;       /* the last DoStep found a flip: eventHandlingNeeded */
     core_log_fn log;
     void *env;             /* importer's environment pointer */
     const void *callbacks; /* FMI 2: the fmi2CallbackFunctions pointer */
@@ -115,6 +118,11 @@ CoreStatus core_set_time(Instance *inst, double t);
  * CORE_EVENT_SUBSTEPS equal sub-steps before the limit and returns ST_DISCARD with
  * inst->terminate_requested set (FMI 2: Discard + fmi2Terminated status; FMI 3: terminateSimulation). */
 #define CORE_EVENT_SUBSTEPS 64
+/* FMI 3 CS event mode (flip events, eventModeUsed): after a successful step, a flip indicator that changed
+ * sign is located by bisection (re-integrating from the step's start, to CORE_EVENT_TIME_RTOL max(1, |t|));
+ * with early return allowed the step ends just past the flip, else at its end point, and event_pending is
+ * set (eventHandlingNeeded). */
+#define CORE_EVENT_TIME_RTOL 1e-12
 CoreStatus core_event_indicators(Instance *inst, double *z, size_t n, const char *fname);
 /* 1 (with a log line) when a spring margin is <= 0 at the current state, else 0. */
 int core_spring_event(Instance *inst, const char *fname);
