@@ -34,6 +34,7 @@ CASES = {
     "tvlqr_pendubot": ("tvlqr", "pendubot", 6.0),  # tracks the optimized plan (~4 s), then the final LQR
     "swingup_acrobot": ("swingup", "acrobot", 3.0),  # one-joint pumping (tau2 only)
     "lqr_elastic": ("lqr", None, 1.0),
+    "swingup_elastic": ("swingup", None, 6.0),  # the pumping law with the spring energy; catches at ~3 s
 }
 
 
