@@ -145,7 +145,17 @@ def _affine(u0: Any, K: Any, e: ca.SX, m: int, nx: int) -> ca.SX:
     return ca.vertcat(*[u0[i] - sum((K(i, j) * e[j] for j in range(nx)), ca.SX(0)) for i in range(m)])
 
 
+def _finite(name: str, value: Any) -> np.ndarray:
+    """``value`` as a float array; ValueError when any entry is NaN or infinite (never exported as a broken law)."""
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"controller {name} must be finite to be exported, got non-finite entries in {np.ravel(arr)[:6]!r}")
+    return arr
+
+
 def _balance(ident: str, lsf: LinearStateFeedback, x: ca.SX) -> ca.Function:
+    for name in ("K", "x_eq", "u_eq") + (("P",) if lsf.P is not None else ()) + (("u_max",) if lsf.u_max is not None else ()):
+        _finite(name, getattr(lsf, name))
     names = lsf.model.state_names
     e = _wrapped_error(x, ca.DM(lsf.x_eq), names)
     K = np.asarray(lsf.K, dtype=float)
@@ -197,6 +207,8 @@ def controller_law(controller: Any) -> ControllerLaw:
         x_start = np.asarray(controller.x_eq, dtype=float)
     elif kind == "swingup":
         sw: EnergySwingUp = controller
+        for name in ("k_energy", "kp", "kd", "u_max", "catch_cost", "e_up"):
+            _finite(name, getattr(sw, name))
         energy = model.functions["energy"](x, ca.DM(np.asarray(model.p, dtype=float)))
         deficit = sw.e_up - energy
         w1, w2 = x[model.nq], x[model.nq + 1]
@@ -217,6 +229,8 @@ def controller_law(controller: Any) -> ControllerLaw:
         x_start = model.rest_state()
     else:
         tr: TVLQRTracker = controller
+        for name in ("t_ref", "x_ref", "u_ref", "K") + (("u_max",) if tr.u_max is not None else ()):
+            _finite(name, getattr(tr, name))
         m, nx = len(outs), model.nx
         xr, ur, kk = ca.SX.sym("x_ref", nx), ca.SX.sym("u_ref", m), ca.SX.sym("K", m * nx)
         u = _clip(_affine(ur, lambda i, j: kk[i * nx + j], _wrapped_error(x, xr, names), m, nx), tr.u_max)
@@ -301,7 +315,9 @@ def design_controller(
 
 
 def _c_double(v: float) -> str:
-    return repr(float(v)) if math.isfinite(v) else "0.0"
+    if not math.isfinite(v):  # a design with NaN/inf gains or references must not become a silently wrong FMU
+        raise ValueError(f"controller data must be finite to be exported, got {v!r}")
+    return repr(float(v))
 
 
 def _c_array(values: np.ndarray) -> str:

@@ -242,6 +242,11 @@ def test_nmpc_and_foreign_controllers_are_refused():
         design_controller("pid")
     with pytest.raises(TypeError, match="LinearStateFeedback"):
         controller_law(object())
+    ctrl, _x0, _model = design_controller("lqr")
+    ctrl.K = ctrl.K.copy()
+    ctrl.K[0, 0] = np.nan  # a broken design is refused, never exported with a placeholder
+    with pytest.raises(ValueError, match="K must be finite"):
+        controller_law(ctrl)
 
 
 def test_cli_export_controller(tmp_path, capsys):
