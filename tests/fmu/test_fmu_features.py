@@ -2,8 +2,9 @@
 
 Rows name a check in their second column: ``@Element.attr`` (an attribute of the FMI 3 plant FMU's
 modelDescription.xml: "true" or a positive number is a yes, missing / "false" / 0 a no), ``file:path``
-(an archive entry), ``element:Tag`` (a child of the root), ``version:N`` (export writes FMI N). The
-pendulab column must start with "yes" or "no" where there is a check.
+(an archive entry), ``element:Tag`` (a child of the root), ``version:N`` (export writes FMI N); an ``elastic:``
+or ``flips:`` prefix checks the elastic FMU or the rigid one exported with flip events instead of the default
+rigid one. The pendulab column must start with "yes" or "no" where there is a check.
 """
 
 from __future__ import annotations
@@ -54,10 +55,23 @@ def test_the_table_has_checkable_rows():
     assert len(ROWS) >= 15  # the capability flags, interfaces, versions and archive entries
 
 
+@pytest.fixture(scope="module")
+def flips_fmu(tmp_path_factory) -> Path:
+    import pendulab as pl
+    from pendulab.fmu import export
+
+    return export(pl.rigid(), tmp_path_factory.mktemp("flips") / "rigid_flips.fmu", 3, timestamp=False, flip_events=True)
+
+
 @pytest.mark.parametrize(("feature", "check", "cell"), ROWS, ids=[r[0] for r in ROWS])
-def test_pendulab_column_is_true(fmu_builds, feature, check, cell):
-    built = fmu_builds[("rigid", 3)]
-    with zipfile.ZipFile(built.path) as z:
+def test_pendulab_column_is_true(fmu_builds, flips_fmu, feature, check, cell):
+    variant, sep, rest = check.partition(":")
+    if sep and variant in ("elastic", "flips"):
+        check = rest
+    else:
+        variant = "rigid"
+    path = flips_fmu if variant == "flips" else fmu_builds[(variant, 3)].path
+    with zipfile.ZipFile(path) as z:
         names = set(z.namelist())
         root = ET.fromstring(z.read("modelDescription.xml"))
     kind, _, what = check.partition(":")
