@@ -112,6 +112,8 @@ class ModelLayout:
         Whether each parameter must be positive.
     dependencies : ndarray of bool, shape (nx + ny, nx + nu + np)
         Structural non-zeros: rows derivatives then outputs; columns states, inputs, then parameters.
+    flip_events : bool
+        Declare the event indicators pi - abs(theta_i) (Model Exchange: the importer locates every flip).
     """
 
     identifier: str

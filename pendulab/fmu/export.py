@@ -151,7 +151,7 @@ def export(
         from ``pendulab[cross]``). FMI 2.0 defines no aarch64 folder. Every binary must export exactly
         the FMI functions of the standard header (read from the file; checked here).
     flip_events : bool
-        Add the event indicators ``flip_margin1``, ``flip_margin2`` = pi - |theta_i| (0 when link i
+        Add the event indicators ``flip_margin1``, ``flip_margin2`` = pi - abs(theta_i) (0 when link i
         passes the upright position): Model Exchange importers then stop at every flip, and the FMI 3
         Co-Simulation interface offers event mode (``hasEventMode``): with ``eventModeUsed`` and early
         return allowed, ``DoStep`` ends at each flip (located by bisection) with ``eventHandlingNeeded``.

@@ -266,6 +266,19 @@ class SigintWatch:
         self.hit = False
 
     def handler(self, previous: Any) -> Any:
+        """A SIGINT handler that records the signal and raises ``KeyboardInterrupt`` (through ``previous`` if callable).
+
+        Parameters
+        ----------
+        previous : callable or signal constant
+            The handler in force before the solve.
+
+        Returns
+        -------
+        callable
+            The handler to install for the solve.
+        """
+
         def on_sigint(signum: int, frame: Any) -> None:
             if not callable(previous):  # SIG_DFL: would end the process; interrupt instead
                 self.hit = True
@@ -283,6 +296,16 @@ class SigintWatch:
 
         IPOPT's own status does not tell: CasADi reports an interrupted run as
         ``NonIpopt_Exception_Thrown``, like any other exception in a callback.
+
+        Parameters
+        ----------
+        message : str
+            CasADi's error message of the failed solve ("" when none).
+
+        Raises
+        ------
+        KeyboardInterrupt
+            A SIGINT arrived during the solve, or the message names one.
         """
         if self.hit or "KeyboardInterrupt" in message:
             raise KeyboardInterrupt

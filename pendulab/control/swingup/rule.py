@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 
+from ...analysis.model_error import C_QUASI_STATIC, C_RIGID, mode_ratio_errors
 from ...analysis.modes import modes
 from ...model.model import Model
 from .errors import ErrorEstimate, estimate_error_arrays
@@ -85,10 +86,6 @@ __all__ = [
 PLANNING: tuple[str, ...] = ("auto", "rigid", "quasi-static", "elastic")
 #: Planning levels, cheapest first.
 LEVELS: tuple[str, ...] = ("rigid", "rigid+quasi-static", "elastic")
-#: Predicted relative error of a rigid plan on the elastic dynamics per unit of w_p / w_s.
-C_RIGID = 4.0
-#: Predicted relative error of a quasi-statically lifted rigid plan per unit of (w_p / w_s)^2.
-C_QUASI_STATIC = 15.0
 #: Highest collocation degree of the elastic level's p-refinement (beyond it, more intervals).
 ELASTIC_DEGREE = 7
 _LEVEL_OF = {"rigid": "rigid", "quasi-static": "rigid+quasi-static", "elastic": "elastic"}
@@ -205,8 +202,7 @@ def planning_rule(model: Model, tolerance: float = 1e-3, planning: str = "auto")
         pend, _ = _frequencies(model)
         return PlanningDecision(planning, "rigid", pend, math.inf, {}, tol, "rigid model: planned on as it is")
     pend, spring = _frequencies(model)
-    eps = pend / spring
-    predicted = {"rigid": C_RIGID * eps, "rigid+quasi-static": C_QUASI_STATIC * eps**2, "elastic": 0.0}
+    predicted = mode_ratio_errors(pend, spring)  # the one definition, shared with the scenes' a priori rule
     if planning != "auto":
         chosen = _LEVEL_OF[planning]
         reason = f"requested {planning!r}"
