@@ -98,7 +98,7 @@ def main() -> None:
             rows += measure(tol, args.repeats, bar)
     within = sum(r["median"][r["auto"]] <= 1.5 * r["median"][r["fastest"]] for r in rows)
     text = (
-        "# `method=\"auto\"` against the fastest method\n\n"
+        '# `method="auto"` against the fastest method\n\n'
         f"`python benchmarks/bench_auto.py --repeats {args.repeats}` on {platform.processor() or platform.machine()}, "
         f"{datetime.now(timezone.utc):%Y-%m-%d}; {T_FINAL:g} s runs, medians of {args.repeats} interleaved rounds after a "
         "warm-up (excluded: taylor's elastic system compiles for seconds per tolerance on first use, which the rule "

@@ -48,6 +48,7 @@ def test_ctrl_c_exits_130(monkeypatch, capsys, tmp_path):
     import pendulab.evaluate as sc
 
     monkeypatch.chdir(tmp_path)  # the default output directory is ./pendulab-out/score/...
+
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
