@@ -15,7 +15,7 @@ from __future__ import annotations
 import sys
 from typing import Any
 
-from pendulab.bench.hierarchy import choose_model
+from pendulab.bench.hierarchy import measure_model_choice
 from pendulab.scene import load_scene
 
 TEST_KWARGS = {"repeats": 1}
@@ -24,7 +24,7 @@ TEST_KWARGS = {"repeats": 1}
 def run(*, scene: str = "stiff_moderate_amplitude", repeats: int = 3) -> dict[str, Any]:
     """Check ``scene``; return the report, the chosen level and its trajectory."""
     sc = load_scene(scene)
-    level, report = choose_model(sc, repeats=repeats)
+    level, report = measure_model_choice(sc, repeats=repeats)
     return {"report": report, "level": level, "trajectory": level.simulate(sc)}
 
 

@@ -70,6 +70,7 @@ RENAMED: dict[tuple[str, str], str] = {
     ("pendulab.control.swingup.guess", "rigid_counterpart"): "pendulab.control.swingup.guess:rigid_counterpart_problem",
     ("pendulab.control.swingup.solve", "swing_up"): "pendulab.control.swingup.solve:solve_transcription",
     ("pendulab.bench.fmu_methods", "fmu_runner"): "pendulab.bench.fmu_methods:fmu_bench_runner",
+    ("pendulab.bench.hierarchy", "choose_model"): "pendulab.bench.hierarchy:measure_model_choice",
     ("pendulab.integrate.compiled", "unavailable_reason"): "pendulab.integrate.compiled:compiled_unavailable_reason",
     ("pendulab.integrate.taylor.availability", "unavailable_reason"): (
         "pendulab.integrate.taylor.availability:taylor_unavailable_reason"

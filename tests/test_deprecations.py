@@ -123,3 +123,13 @@ def test_no_package_reaches_up_with_importlib():
                 reaching.append(rel.as_posix())
     # The CLI's command dispatch and the alias table are the only dynamic imports across packages.
     assert sorted(set(reaching)) == ["cli.py"]
+
+
+def test_measured_model_choice_has_its_own_name():
+    """One name, one concept: scene.choose_model is the a priori rule; the measured study is measure_model_choice."""
+    hierarchy = importlib.import_module("pendulab.bench.hierarchy")
+    from pendulab.scene import choose_model
+
+    with pytest.warns(DeprecationWarning, match="hierarchy.measure_model_choice"):
+        old = hierarchy.choose_model
+    assert old is hierarchy.measure_model_choice and old is not choose_model

@@ -58,7 +58,7 @@ __all__ = [
     "ModelLevel",
     "check_scene",
     "measure_levels",
-    "choose_model",
+    "measure_model_choice",
     "levels_for",
     "stiffness_amplitude_study",
     "LEVELS",
@@ -257,7 +257,7 @@ def _run_levels(
     return results, X_ref, wall_ref
 
 
-def choose_model(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
+def measure_model_choice(scene: Scene, *, repeats: int = 3) -> tuple[ModelLevel, HierarchyReport]:
     """The cheapest model level within the scene's tolerance, and the report.
 
     Parameters

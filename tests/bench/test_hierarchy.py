@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from pendulab.bench.hierarchy import check_scene, choose_model
+from pendulab.bench.hierarchy import check_scene, measure_model_choice
 from pendulab.cli import main
 from pendulab.scene import load_scene as load
 
@@ -41,7 +41,7 @@ def test_shared_scenes(scene, expected):
 
 def test_chosen_level_trajectory_reproduces_reported_error():
     sc = load("stiff_moderate_amplitude")
-    level, rep = choose_model(sc, repeats=1)
+    level, rep = measure_model_choice(sc, repeats=1)
     traj, ref = level.simulate(sc), sc.simulate()
     assert level.model.kind == "rigid" and traj.state_names == ref.state_names
     err = max(float(np.max(np.abs(traj[n] - ref[n]))) for n in sc.outputs)
