@@ -27,10 +27,8 @@ Four studies (``pendulab bench stability``):
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -38,12 +36,13 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .._checks import is_interrupt
-from .._io import atomic_open
 from ..integrate import simulate
 from ..integrate.fixed_step import FIXED_METHODS, IMAG_AXIS_LIMIT, integrate_fixed
 from ..model.model import Model, elastic
 from ..model.quasistatic import quasi_static_state
 from .journal import Journal
+from .stability_report import write_stability
+from .stability_result import _HORIZON, ACCURATE, FAILED, INACCURATE, POSITION_TOL, UNSTABLE, StabilityResult
 from .workprecision import watch_interrupt
 
 __all__ = [
@@ -60,10 +59,6 @@ __all__ = [
     "FAILED",
 ]
 
-POSITION_TOL = 1e-3  # [m] bob-position error that counts as accurate
-UNSTABLE, INACCURATE, ACCURATE = 0, 1, 2
-FAILED = -1  # a map cell whose run raised (recorded with its reason in StabilityResult.failures)
-_HORIZON = 1.0
 _THETA = (0.3, 0.3)
 Progress = Callable[[int, int, str], None]
 
@@ -175,66 +170,6 @@ def classify(model: Model, method: str, n_steps: int, ref_positions: np.ndarray)
         return UNSTABLE, math.inf
     err = float(np.max(np.abs(model.positions(X) - ref_positions)))
     return (ACCURATE if err <= POSITION_TOL else INACCURATE), err
-
-
-@dataclass
-class StabilityResult:
-    """Everything ``pendulab bench stability`` measured.
-
-    Attributes
-    ----------
-    ks : ndarray, shape (nk,)
-        Spring stiffnesses [N/m] of the map.
-    n_steps : ndarray, shape (nh,)
-        Steps over the 1 s horizon; h = 1 / n_steps [s] (see ``hs``).
-    omega_max : ndarray, shape (nk,)
-        Fastest linearized mode per k [rad/s].
-    maps : dict of str to ndarray
-        Method -> classes, shape (nk, nh) (``UNSTABLE``, ``INACCURATE``, ``ACCURATE``).
-    errors : dict of str to ndarray
-        Method -> bob-position errors [m], shape (nk, nh).
-    blowup : list of (float, float, float)
-        (k [N/m], measured, predicted RK4 blow-up step [s]).
-    step_counts : list of dict
-        ``k``, ``start``, ``method`` and accepted ``steps`` over 1 s.
-    energy : dict of str to (ndarray, ndarray)
-        Label -> (t [s], E(t) - E(0) [J]) of the energy study.
-    failures : list of dict
-        Units that raised: ``unit`` (journal key) and ``reason``.
-    """
-
-    ks: np.ndarray
-    n_steps: np.ndarray  # steps over the 1 s horizon; h = 1 / n_steps
-    omega_max: np.ndarray  # per k [rad/s]
-    maps: dict[str, np.ndarray] = field(default_factory=dict)  # method -> (len(ks), len(n_steps)) classes
-    errors: dict[str, np.ndarray] = field(default_factory=dict)
-    blowup: list[tuple[float, float, float]] = field(default_factory=list)  # (k, h_measured, h_predicted)
-    step_counts: list[dict[str, Any]] = field(default_factory=list)
-    energy: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)  # label -> (t, E - E0)
-    failures: list[dict[str, str]] = field(default_factory=list)  # {"unit": key, "reason": ...}
-
-    @property
-    def hs(self) -> np.ndarray:
-        return _HORIZON / self.n_steps
-
-    def summary(self) -> dict[str, Any]:
-        """JSON-friendly summary of the blow-up, step-count and energy studies.
-
-        Returns
-        -------
-        dict
-            ``rk4_blowup`` (k, measured and predicted step [s], relative
-            difference), ``step_counts``, and ``energy_change_J``: the final
-            energy change [J] per run, and ``failures`` (units that raised, with the reason).
-        """
-        return {
-            "rk4_blowup": [
-                {"k": k, "h_measured": hm, "h_predicted": hp, "relative_difference": hm / hp - 1} for k, hm, hp in self.blowup
-            ],
-            "step_counts": self.step_counts,
-            "energy_change_J": {lab: float(dE[-1]) for lab, (_, dE) in self.energy.items()},
-            "failures": self.failures,
-        }
 
 
 def _step_count(model: Model, method: str, x0: np.ndarray, tol: float) -> int:
@@ -404,154 +339,3 @@ def _energy_run(label: str, quick: bool) -> list[list[float]]:
     tr = simulate(model, x0, 2.0 if quick else 10.0, _ENERGY_H, **_ENERGY_RUNS[label])
     E = model.energy(tr.x)
     return [tr.t.tolist(), (E - E[0]).tolist()]
-
-
-def write_stability(res: StabilityResult, out: str | Path) -> list[Path]:
-    """Write CSVs and charts of a stability run.
-
-    Parameters
-    ----------
-    res : StabilityResult
-        As returned by :func:`run_stability`.
-    out : str or Path
-        Output directory (created).
-
-    Returns
-    -------
-    list of Path
-        ``stability_map.csv``, ``rk4_limit.csv``, ``step_counts.csv`` and the
-        charts ``stability_map.png``, ``stability_steps.png``,
-        ``stability_energy.png``.
-    """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "stability_map.csv", out / "rk4_limit.csv", out / "step_counts.csv"]
-    names = {UNSTABLE: "unstable", INACCURATE: "stable-inaccurate", ACCURATE: "stable-accurate", FAILED: "failed"}
-    # Atomic writes: an interrupted run never leaves a truncated CSV.
-    with atomic_open(paths[0], "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["method", "k", "omega_max", "h", "h_omega_max", "class", "position_error"])
-        for m, grid in res.maps.items():
-            for i, k in enumerate(res.ks):
-                for j, h in enumerate(res.hs):
-                    w.writerow(
-                        [
-                            m,
-                            f"{k:.6g}",
-                            f"{res.omega_max[i]:.6g}",
-                            f"{h:.6g}",
-                            f"{h * res.omega_max[i]:.4g}",
-                            names[grid[i, j]],
-                            f"{res.errors[m][i, j]:.3e}",
-                        ]
-                    )
-    with atomic_open(paths[1], "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["k", "h_measured", "h_predicted", "relative_difference"])
-        for k, hm, hp in res.blowup:
-            w.writerow([f"{k:.6g}", f"{hm:.6g}", f"{hp:.6g}", f"{hm / hp - 1:.4f}"])
-    with atomic_open(paths[2], "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=["k", "start", "method", "steps"])
-        w.writeheader()
-        w.writerows(res.step_counts)
-    paths += [_plot_map(res, out / "stability_map.png"), _plot_steps(res, out / "stability_steps.png")]
-    paths.append(_plot_energy(res, out / "stability_energy.png"))
-    return paths
-
-
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _plot_map(res: StabilityResult, path: Path) -> Path:
-    plt = _plt()
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
-
-    methods = list(res.maps)
-    ncol = 3
-    nrow = math.ceil(len(methods) / ncol)
-    fig, axes = plt.subplots(
-        nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow + 0.6), squeeze=False, sharex=True, sharey=True, layout="constrained"
-    )
-    cmap = ListedColormap(["#d62728", "#ffbf40", "#2ca02c"])
-    lk, lh = np.log10(res.ks), np.log10(res.hs)
-
-    def edges(v: np.ndarray) -> np.ndarray:
-        mid = 0.5 * (v[1:] + v[:-1])
-        return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
-
-    kk = np.logspace(lk[0], lk[-1], 100)
-    wmax = np.interp(np.log10(kk), lk, np.log10(res.omega_max))
-    for ax, m in zip(axes.flat, methods, strict=False):
-        # Failed cells (FAILED < 0) stay blank.
-        cells = np.ma.masked_less(res.maps[m].T, 0)
-        ax.pcolormesh(10 ** edges(lk), 10 ** edges(lh), cells, cmap=cmap, vmin=0, vmax=2, shading="flat")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        lim = IMAG_AXIS_LIMIT.get(m)
-        if lim:
-            ax.plot(kk, lim / 10**wmax, "k-", lw=2, label=f"h w_max = {lim:.2f}")
-        ax.plot(kk, 1.0 / 10**wmax, "k:", lw=1, label="h w_max = 1")
-        fm = FIXED_METHODS[m]
-        ax.set_title(f"{m} (order {fm.order}, {'explicit' if fm.explicit else 'implicit'})", fontsize=9)
-        ax.legend(fontsize=7, loc="lower left")
-        ax.set_xlabel("spring stiffness k [N/m]")
-        ax.set_ylabel("step h [s]")
-    for ax in list(axes.flat)[len(methods) :]:
-        ax.axis("off")
-    patches = [Patch(color=c) for c in ("#2ca02c", "#ffbf40", "#d62728")]
-    names = ["stable and accurate (bob positions within 1 mm)", "stable but inaccurate", "unstable (energy x10 within 1 s)"]
-    if any(np.any(g == FAILED) for g in res.maps.values()):
-        patches.append(Patch(facecolor="white", edgecolor="0.5"))
-        names.append("failed (reason in the run's failures)")
-    fig.legend(patches, names, loc="outside lower center", ncol=len(names), fontsize=9, frameon=False)
-    fig.suptitle("Fixed-step methods on the elastic pendulum (theta = 0.3 rad, springs at rest length, 1 s)", fontsize=11)
-    from ..viz.save import save_figure
-
-    return save_figure(fig, path, dpi=110)
-
-
-def _plot_steps(res: StabilityResult, path: Path) -> Path:
-    plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, layout="constrained")
-    ks = sorted({r["k"] for r in res.step_counts})
-    for ax, start in zip(axes, ("quasi-static", "rest-length"), strict=False):
-        for m, mk in zip(("RK45", "DOP853", "Radau", "cvodes-bdf"), "osD^", strict=False):
-            pts = [(r["k"], r["steps"]) for r in res.step_counts if r["start"] == start and r["method"] == m]
-            if pts:
-                ax.loglog(*zip(*pts, strict=False), "-", marker=mk, label=m)
-        if ks:
-            ref = [r["steps"] for r in res.step_counts if r["method"] == "RK45" and r["start"] == start]
-            if ref:
-                guide = ref[-1] * np.sqrt(np.array(ks) / ks[-1])
-                ax.loglog(ks, guide, "k:", lw=1, label="~ sqrt(k)")
-        what = "quasi-static lengths" if start == "quasi-static" else "rest length"
-        ax.set_title(f"start: springs at {what} (rtol = atol = 1e-6, 1 s)", fontsize=10)
-        ax.set_xlabel("spring stiffness k [N/m]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    axes[0].set_ylabel("accepted steps over 1 s")
-    from ..viz.save import save_figure
-
-    return save_figure(fig, path, dpi=110)
-
-
-def _plot_energy(res: StabilityResult, path: Path) -> Path:
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 4.2), layout="constrained")
-    for label, (t, dE) in res.energy.items():
-        ax.plot(t, dE, label=label, lw=1.2)
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("energy change E(t) - E(0) [J]")
-    ax.set_title("Undamped springs, k = 1e4 N/m, rest-length start: symplectic vs dissipative methods", fontsize=10)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    from ..viz.save import save_figure
-
-    return save_figure(fig, path, dpi=110)
