@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from test_properties import SPECIAL, outcome, run_property
 
 import pendulab as pl
+from pendulab.integrate.taylor.availability import MIN_TOL
 
 gym = pytest.importorskip("gymnasium")
 pytest.importorskip("heyoka")
@@ -47,7 +48,7 @@ def test_gym_env_accepts_exactly_the_admissible_settings(request):
             and dt <= 10.0  # the default 10 s episode needs at least one step
             and _positive_ok(torque)
             and _positive_ok(tol)
-            and tol < 1.0
+            and MIN_TOL <= tol < 1.0  # heyoka (the default integrator) refuses tolerances below double epsilon
             and isinstance(noise, (int, float))
             and not isinstance(noise, bool)
             and math.isfinite(noise)
@@ -101,3 +102,11 @@ def test_gym_reset_state_is_checked_as_simulate_checks_it(request):
         np.testing.assert_array_equal(env.unwrapped.state, x0)
 
     run_property(request, prop, 60)
+
+
+@pytest.mark.parametrize("tol", [5e-324, 1e-100, 1e-17])
+def test_gym_env_refuses_a_tolerance_below_double_epsilon(tol):
+    """Found by the property above under CI's derandomized examples: tol = 5e-324 compiled an unbounded Taylor order
+    (7 GB and minutes, uninterruptible); every heyoka integrator is now built from a key that refuses it."""
+    with pytest.raises(ValueError, match=r"tol must be at least 2.22e-16"):
+        DoublePendulumEnv("rigid", "pendubot", tol=tol)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...model.builders import build_elastic, build_rigid
 from ...model.model import model_functions
-from .availability import heyoka_module
+from .availability import check_tolerance_floor, heyoka_module
 from .translate import TaylorSystem, translate
 
 
@@ -63,7 +63,14 @@ def structure_key(
     Returns
     -------
     StructureKey
+
+    Raises
+    ------
+    ValueError
+        ``tol`` below double-precision epsilon (:func:`.availability.check_tolerance_floor`): every heyoka
+        integrator is built from a key, so no path compiles an unbounded Taylor order.
     """
+    check_tolerance_floor("tol", tol)
     zp = tuple(int(i) for i in np.flatnonzero(np.asarray(p) == 0.0))
     return StructureKey(kind, zp, tuple(sorted(int(i) for i in zero_inputs)), float(tol), bool(compact_mode), bool(high_accuracy))
 
