@@ -65,6 +65,13 @@ MAX_EPISODE_STEPS = 10**9
 DEFAULT_RENDER_FPS = 100
 
 
+#: Largest reset spread [rad, rad/s]: beyond it a "reset near hanging" starts anywhere at any speed, and a
+#: spread of 1e300 rad/s made the first step overflow to NaN.
+MAX_RESET_NOISE = 100.0
+#: Largest torque limit [N.m]: a pendulum of kilograms and metres needs tens; at 1e300 N.m the reward's squared
+#: torque overflowed to -inf.
+MAX_TORQUE_LIMIT = 1e6
+
 def horizon(dt: float, episode_length: Any = None, max_episode_steps: Any = None) -> int:
     """Steps of an episode: ``max_episode_steps``, else ``round(episode_length / dt)`` (default 10 s).
 
@@ -97,7 +104,13 @@ def horizon(dt: float, episode_length: Any = None, max_episode_steps: Any = None
     length = positive_float("episode_length", episode_length, "s")
     if length < dt * (1 - 1e-9):
         raise ValueError(f"episode_length must be at least one sample dt = {dt} s, got {episode_length!r}")
-    from_length = max(int(round(length / dt)), 1)
+    ratio = length / dt
+    if not ratio <= MAX_EPISODE_STEPS + 0.5:  # also catches inf (dt = 5e-324)
+        raise ValueError(
+            f"episode_length / dt = {length:g} s / {dt:g} s is {ratio:.3g} steps; "
+            f"at most {MAX_EPISODE_STEPS} steps of one episode"
+        )
+    from_length = max(int(round(ratio)), 1)
     if steps is not None and steps != from_length:
         raise ValueError(
             f"max_episode_steps={max_episode_steps!r} and episode_length={episode_length!r} s disagree at dt = {dt} s "
@@ -141,7 +154,7 @@ class DoublePendulumEnv(gymnasium.Env):
     velocity_scale : float
         ``ws`` [rad/s] dividing the rates in the observation.
     reset_noise : float
-        Half-width of the uniform noise of a reset on angles [rad] and angular rates [rad/s].
+        Half-width of the uniform noise of a reset on angles [rad] and angular rates [rad/s], in [0, 100].
     render_mode : {"rgb_array"} or None
         ``"rgb_array"``: :meth:`render` returns an RGB frame.
     render_size : int
@@ -205,11 +218,19 @@ class DoublePendulumEnv(gymnasium.Env):
         self.backend = backend
         self.dt = positive_float("dt", dt, "s")
         self.action_scale = positive_float("torque_limit", torque_limit, "N.m")
+        if self.action_scale > MAX_TORQUE_LIMIT:
+            raise ValueError(
+                f"torque_limit must be at most {MAX_TORQUE_LIMIT:g} N.m (beyond it the reward's squared torque overflows), "
+                f"got {torque_limit!r}"
+            )
         self.max_episode_steps = horizon(self.dt, episode_length, max_episode_steps)
         self.velocity_scale = positive_float("velocity_scale", velocity_scale, "rad/s")
-        if not (isinstance(reset_noise, (int, float)) and math.isfinite(reset_noise) and reset_noise >= 0):
-            raise ValueError(f"reset_noise must be a finite number >= 0 [rad, rad/s], got {reset_noise!r}")
-        self.reset_noise = float(reset_noise)
+        if not (isinstance(reset_noise, (int, float)) and math.isfinite(reset_noise) and 0 <= reset_noise <= MAX_RESET_NOISE):
+            raise ValueError(
+                f"reset_noise must be a number in [0, {MAX_RESET_NOISE:g}] [rad, rad/s] (a spread about hanging at rest), "
+                f"got {reset_noise!r}"
+            )
+        self.reset_noise = float(reset_noise) + 0.0  # + 0.0: -0.0 becomes 0.0 (NumPy's uniform(0.0, -0.0) raises)
         tol = relative_tolerance("tol", tol)
         self.tol = tol
         self.reward_fn = make_reward(reward, self.model)
