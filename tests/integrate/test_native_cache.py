@@ -171,13 +171,22 @@ def test_two_processes_building_the_same_library_do_not_corrupt_each_other(built
     assert not list((cache / "native").glob(".*"))  # no temporary left behind
 
 
-def _alive(pid: int) -> bool:
-    """True while ``pid`` runs (a zombie, killed but not reaped by a container's init, counts as gone)."""
+def _stat(pid: int) -> tuple[str, str] | None:
+    """(state, start time) of ``pid`` from /proc, or None when there is no such process."""
     try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     except (FileNotFoundError, ProcessLookupError, IndexError):
+        return None
+    return fields[0], fields[19]  # fields 3 and 22 of proc(5), counted after the command name
+
+
+def _alive(pid: int, start: str | None = None) -> bool:
+    """True while ``pid`` runs: a zombie (killed but not reaped by a container's init) counts as gone, and so does
+    another process that reused the number (pid_max is 32768 here; a loaded host recycles pids within seconds)."""
+    stat = _stat(pid)
+    if stat is None or stat[0] in ("Z", "X"):
         return False
-    return state not in ("Z", "X")
+    return start is None or stat[1] == start
 
 
 @pytest.mark.skipif(not Path("/proc").is_dir() or os.name != "posix", reason="reads /proc; POSIX signals")
@@ -205,6 +214,7 @@ def test_ctrl_c_during_a_build_kills_the_compiler_and_its_children(tmp_path):
             pytest.fail("the fake compiler never started")
         driver, child = (int((pids / n).read_text()) for n in ("driver", "child"))
         assert _alive(driver) and _alive(child)
+        started = {pid: _stat(pid)[1] for pid in (driver, child)}
         proc.send_signal(signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=60)
     finally:
@@ -212,10 +222,10 @@ def test_ctrl_c_during_a_build_kills_the_compiler_and_its_children(tmp_path):
             proc.kill()
     assert "interrupted" in stdout, stderr
     for _ in range(200):  # SIGKILL is asynchronous: give the kernel a moment to tear the group down
-        if not (_alive(driver) or _alive(child)):
+        if not (_alive(driver, started[driver]) or _alive(child, started[child])):
             break
         time.sleep(0.05)
-    assert not _alive(driver) and not _alive(child)  # no orphaned compiler
+    assert not _alive(driver, started[driver]) and not _alive(child, started[child])  # no orphaned compiler
     native = cache / "native"
     assert not list(native.glob(f"*{shared_library_suffix()}")) and not list(native.glob(".*"))  # nothing half-built left
 
