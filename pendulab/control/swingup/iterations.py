@@ -64,13 +64,8 @@ def build_hook(hook: Callable[[str], None]) -> Iterator[None]:
     TypeError
         ``hook`` is not callable.
     """
-    if not callable(hook):
-        raise TypeError(f"hook must be callable, got {type(hook).__name__}")
-    _BUILD_HOOKS.append(hook)
-    try:
+    with _registered(_BUILD_HOOKS, hook):
         yield
-    finally:
-        _BUILD_HOOKS.remove(hook)
 
 
 class IterationCallback(ca.Callback):
@@ -193,13 +188,8 @@ def iteration_hook(hook: Callable[[], bool | None]) -> Iterator[None]:
     TypeError
         ``hook`` is not callable.
     """
-    if not callable(hook):
-        raise TypeError(f"hook must be callable, got {type(hook).__name__}")
-    _HOOKS.append(hook)
-    try:
+    with _registered(_HOOKS, hook):
         yield
-    finally:
-        _HOOKS.remove(hook)
 
 
 class _Budget:
@@ -334,3 +324,15 @@ def watch_sigint() -> Iterator[SigintWatch]:
         yield flag
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _registered(hooks: list[Callable[..., Any]], hook: Callable[..., Any]) -> Iterator[None]:
+    """Keep ``hook`` in ``hooks`` for the block (``TypeError`` when it is not callable)."""
+    if not callable(hook):
+        raise TypeError(f"hook must be callable, got {type(hook).__name__}")
+    hooks.append(hook)
+    try:
+        yield
+    finally:
+        hooks.remove(hook)
