@@ -154,7 +154,7 @@ def _seed(model: Model, name: str, u: np.ndarray, grad_v: ca.Function) -> np.nda
             # Centre of mass on the joint: the link balances at any angle; keep the named one.
             q[j] = 0.0 if side == "down" else math.pi
             continue
-        s = tau / a if a > 0.0 else math.copysign(math.inf, tau)
+        s = float(tau) / float(a) if a > 0.0 else math.copysign(math.inf, tau)  # floats: an overflow is inf, not a warning
         if abs(s) > 1.0:
             raise ValueError(
                 f"u = {u.tolist()}: the generalized torque {tau:.6g} N.m on link {j + 1} exceeds the largest "
