@@ -202,6 +202,13 @@ def _interrupted(req: RunRequest, exc: BaseException) -> bool:
     return req.budget.interrupted or "KeyboardInterrupt" in str(exc) or "interrupted" in str(exc).lower()
 
 
+def _raise_if_interrupted(req: RunRequest) -> None:
+    """A call that returned although Ctrl-C arrived inside it: CasADi's collocation rootfinder swallows the
+    KeyboardInterrupt and returns its last iterate (seen under load), so the flag is the only trace."""
+    if req.budget.interrupted:
+        raise KeyboardInterrupt
+
+
 def run_casadi(req: RunRequest) -> RunResult:
     """Runner of the CasADi family (see the module docstring).
 
@@ -235,12 +242,15 @@ def run_casadi(req: RunRequest) -> RunResult:
     # Budgets are checked between calls: with a wall-time budget, or a step budget the user set for an
     # error-controlled method (CVODES' max_num_steps counts per output interval), one call per interval.
     budgeted = req.budget.max_wall_time is not None or (req.budget.explicit_steps and not spec.fixed_step)
-    per_interval = restart or budgeted
+    # CasADi's collocation rootfinder swallows a Ctrl-C and carries on: a whole-grid call would run to its end
+    # (tens of seconds), so it goes interval by interval and the interrupt flag is checked after each call.
+    per_interval = restart or budgeted or plugin == "collocation"
     if sched is not None and not per_interval:
         fine = np.linspace(0.0, t[-1], n_int * n_sub + 1)
         F = _build(req, model.kind, plugin, tuple(fine[1:].tolist()), opts)
         try:
             xf = np.asarray(F(x0=req.x0, u=np.repeat(sched, n_sub, axis=0).T, p=model.p)["xf"]).T
+            _raise_if_interrupted(req)
         except RuntimeError as exc:
             if _interrupted(req, exc):
                 raise KeyboardInterrupt from None
@@ -268,6 +278,7 @@ def _run_intervals(req: RunRequest, plugin: str, opts: dict, n_sub: int, stats: 
         u_k = np.tile(U[k], (n_sub, 1)).T
         try:
             X[k + 1] = np.asarray(F(x0=X[k], u=u_k, p=model.p)["xf"])[:, -1]
+            _raise_if_interrupted(req)
         except RuntimeError as exc:
             if _interrupted(req, exc):
                 raise KeyboardInterrupt from None
