@@ -10,6 +10,7 @@ no compiler exists (used by a test of this rule).
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -38,6 +39,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "needs_cc: builds C code (an FMU or the native library); skipped without a C compiler")
+    # A shell starts a background job with SIGINT ignored and every child inherits that, so the Ctrl-C tests
+    # would test nothing (and fail). Give this process (each xdist worker runs this hook) Python's own handler;
+    # exec resets a handled signal to the default, so the commands the tests start get a normal Ctrl-C too.
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
