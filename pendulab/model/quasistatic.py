@@ -14,7 +14,7 @@ scene hierarchy. Everything comes from ``model.functions["rhs"]``.
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, lru_cache
 from typing import Any
 
 import casadi as ca
@@ -42,6 +42,13 @@ def _solver() -> tuple[ca.Function, ca.Function]:
     solve = ca.Function("quasi_static_r", [rm0, thm, omm, um, pm], [rs], ["r0", "theta", "omega", "u", "p"], ["r"])
     residual = ca.Function("qs_res", [r, theta, omega, u, p], [radial_acc])
     return solve, residual
+
+
+@lru_cache(maxsize=8)
+def _mapped(n: int) -> tuple[ca.Function, ca.Function]:
+    """The solver and its residual over ``n`` points (a trajectory is usually evaluated more than once)."""
+    solve, residual = _solver()
+    return solve.map(n), residual.map(n)
 
 
 def _check_elastic(model: Any) -> None:
@@ -83,8 +90,10 @@ def quasi_static_lengths(model: Any, theta: Any, omega: Any, u: Any = None) -> n
     n = th.shape[0]
     solve, residual = _solver()
     args = (th.T, om.T, uc, model.p)
-    r = np.asarray(solve.map(n)(np.tile(r0, (n, 1)).T, *args))
-    res = np.abs(np.asarray(residual.map(n)(r, *args)))
+    if n > 1:  # building a map costs milliseconds: a single point calls the functions themselves
+        solve, residual = _mapped(n)
+    r = np.asarray(solve(np.tile(r0, (n, 1)).T, *args))
+    res = np.abs(np.asarray(residual(r, *args)))
     pr = model.params
     # Residual scale: spring force per unit mass at a stretch of one rest length (so the
     # test accepts length errors below ~1e-9 L whatever the masses and stiffnesses).
