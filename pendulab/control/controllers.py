@@ -7,7 +7,7 @@ branch to :func:`make_controller` returning an object that keeps the
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from .feedback import SampledController, actuated_inputs, balance_controller, en
 from .tracking import swingup_reference, tvlqr, tvlqr_tracker
 
 if TYPE_CHECKING:
+    from .estimation import StateEstimator
     from .swingup.tasks import Task
 
 __all__ = ["CONTROLLERS", "TASK_CONTROLLERS", "make_controller", "controller_for_task"]
@@ -38,6 +39,7 @@ def make_controller(
     reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     actuation: str = "full",
     nmpc_solver: str = "sqp",
+    estimator: str | StateEstimator | None = None,
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller for ``model`` and its natural start state.
 
@@ -67,6 +69,10 @@ def make_controller(
         Driven torques of ``lqr``, ``tvlqr`` and ``nmpc`` (``swingup`` needs both).
     nmpc_solver : {"sqp", "ipopt", "fatrop"}
         NLP solver of ``nmpc``.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        Feed the controller a state estimate instead of the measurement
+        (:class:`~pendulab.control.robust.EstimatedController`; names built by
+        :func:`~pendulab.control.robust.build_estimator` at ``sample_time`` from the start state).
 
     Returns
     -------
@@ -88,6 +94,34 @@ def make_controller(
     if not isinstance(name, str):
         raise TypeError(f"name must be a controller name (one of {list(CONTROLLERS)}), got {type(name).__name__}")
     h = positive_float("sample_time", sample_time)
+    ctrl, x0 = _make_plain(name, model, h, u_max, t_ref, reference, actuation, nmpc_solver)
+    return _with_estimator(ctrl, x0, model, estimator, u_max), x0
+
+
+def _with_estimator(
+    ctrl: SampledController, x0: np.ndarray, model: Model, estimator: Any, u_max: float | None
+) -> SampledController:
+    """``ctrl`` itself, or wrapped to see the estimate of ``estimator`` (a name or an object)."""
+    if estimator is None:
+        return ctrl
+    from .robust import EstimatedController, build_estimator
+
+    limit = np.array([np.inf if u_max is None else float(u_max) if n in ctrl.input_names else 0.0 for n in INPUT_NAMES])
+    est = build_estimator(estimator, model, float(ctrl.sample_time), x0=x0, torque_limit=limit)
+    return EstimatedController(ctrl, est)
+
+
+def _make_plain(
+    name: str,
+    model: Model,
+    h: float,
+    u_max: float,
+    t_ref: float,
+    reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+    actuation: str,
+    nmpc_solver: str,
+) -> tuple[SampledController, np.ndarray]:
+    """The named controller without an estimator (see :func:`make_controller`)."""
     if name == "lqr":
         x0 = upright_state(model)
         x0[0] += 0.1
@@ -115,11 +149,16 @@ def make_controller(
 
 
 #: Names accepted by :func:`controller_for_task`.
-TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
+TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc", "robust")
 
 
 def controller_for_task(
-    name: str, task: Task | str, *, sample_time: float | None = None, nmpc_solver: str = "sqp"
+    name: str,
+    task: Task | str,
+    *,
+    sample_time: float | None = None,
+    nmpc_solver: str = "sqp",
+    estimator: str | StateEstimator | None = None,
 ) -> tuple[SampledController, np.ndarray]:
     """A named controller designed for a swing-up task, and the task's start state.
 
@@ -128,9 +167,11 @@ def controller_for_task(
 
     Parameters
     ----------
-    name : {"lqr", "tvlqr", "swingup", "nmpc"}
+    name : {"lqr", "tvlqr", "swingup", "nmpc", "robust"}
         ``lqr``: discrete LQR balance about upright (no swing-up: from hanging it
-        is expected to fail; it is the baseline); ``tvlqr``: TVLQR along the
+        is expected to fail; it is the baseline); ``robust`` (the leaderboard tasks
+        ``swingup_pendubot`` / ``swingup_acrobot`` only, 2 ms): the score-designed plan's TVLQR fed by
+        a delay-identifying EKF (:func:`pendulab.control.robust.robust_controller`); ``tvlqr``: TVLQR along the
         task's plan (:meth:`~pendulab.control.swingup.tasks.Task.plan`, computed
         once per task), handing over to LQR balance; ``swingup``: energy pumping with the
         task's driven torques, then LQR balance; ``nmpc``: tracking NMPC of the
@@ -143,6 +184,9 @@ def controller_for_task(
         Controller sample time [s]; default the task's ``dt`` (``nmpc``: 0.02 s).
     nmpc_solver : {"sqp", "ipopt", "fatrop"}
         NLP solver of ``nmpc``.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        Feed the controller a state estimate (see :func:`make_controller`); for ``robust``
+        it replaces the default delay-identifying estimator.
 
     Returns
     -------
@@ -168,12 +212,32 @@ def controller_for_task(
     if name not in TASK_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(TASK_CONTROLLERS)}, got {name!r}")
     task = resolve_task(task)
+    pb, model = task.problem, task.model
+    if name == "robust":
+        from .realai.spec import DT
+        from .robust import robust_controller
+
+        lb = task.name
+        if lb not in ("pendubot", "acrobot"):
+            raise ValueError(
+                f"robust is designed for the leaderboard tasks swingup_pendubot and swingup_acrobot, got task {task.name!r}"
+            )
+        if sample_time is not None and abs(positive_float("sample_time", sample_time) - DT) > 1e-12:
+            raise ValueError(f"robust runs at the leaderboard's {DT} s; sample_time must be {DT} or None, got {sample_time!r}")
+        est = None
+        if estimator is not None:
+            from .realai.spec import leaderboard_model
+            from .robust import build_estimator
+
+            limit = np.array([pb.torque_limit if n in actuated_inputs(pb.actuation) else 0.0 for n in INPUT_NAMES])
+            est = build_estimator(estimator, leaderboard_model(lb), DT, x0=pb.start, torque_limit=limit)
+        return robust_controller(lb, estimator=est), pb.start
     if name == "nmpc":
         from .nmpc import nmpc_for_task
 
-        return nmpc_for_task(task, sample_time=0.02 if sample_time is None else sample_time, solver=nmpc_solver)
+        ctrl0, x0 = nmpc_for_task(task, sample_time=0.02 if sample_time is None else sample_time, solver=nmpc_solver)
+        return _with_estimator(ctrl0, x0, model, estimator, pb.torque_limit), x0
     h = positive_float("sample_time", task.dt if sample_time is None else sample_time)
-    pb, model = task.problem, task.model
     if name == "lqr":
         ctrl: SampledController = balance_controller(model, h, design="discrete", actuation=pb.actuation, u_max=pb.torque_limit)
     elif name == "tvlqr":
@@ -185,4 +249,4 @@ def controller_for_task(
         ctrl = energy_swingup(model, h, u_max=pb.torque_limit, actuation=pb.actuation)
     else:
         raise ValueError(f"controller must be one of {list(TASK_CONTROLLERS)}, got {name!r}")
-    return ctrl, pb.start
+    return _with_estimator(ctrl, pb.start, model, estimator, pb.torque_limit), pb.start

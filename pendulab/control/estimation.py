@@ -1,0 +1,502 @@
+"""State estimation from the CasADi model: an extended Kalman filter with delay and torque-response models, and a filter bank.
+
+* :class:`ExtendedKalmanFilter`: discrete-time EKF on the model's classic RK4 step at the sample time
+  (Jacobians by CasADi AD, compiled once as CasADi Functions: no hand-typed derivatives). Measurement model:
+  a chosen subset of states with Gaussian noise of given sigmas. A known measurement delay of ``n`` samples is
+  handled by keeping the applied-torque history: the filter estimates the state at the measurement's time,
+  then rolls the model forward over the delay with the torques already sent. A first-order torque response
+  ``u_applied = u_last + k (u_cmd - u_last)`` (clipped at the torque limit) maps commands to applied torques.
+  Optionally the state is augmented with a random-walk disturbance torque on each joint (offset-free
+  estimation: model errors, friction, torque pulses).
+* :class:`MultipleModelEstimator`: where the delay and the response ``k`` are unknown, a bank of hypotheses
+  ``(n, k)`` scored by their Gaussian innovation likelihood over an identification window from the known start
+  state; then the EKF of the most likely hypothesis takes over.
+
+Both keep one small interface, :class:`StateEstimator`: ``reset()``, ``update(t, y, u) -> x_hat``, where ``u``
+is the torque (tau1, tau2) commanded over the interval that ends at ``t`` (``None`` on the first call). A
+controller is wrapped with :class:`pendulab.control.robust.EstimatedController`.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import casadi as ca
+import numpy as np
+
+from .._checks import bounded_int, check_model, positive_float
+from ..model.model import INPUT_NAMES, Model
+
+__all__ = ["StateEstimator", "ExtendedKalmanFilter", "MultipleModelEstimator", "delay_steps", "MAX_DELAY_STEPS"]
+
+#: Longest measurement delay [samples] a filter keeps a torque history for.
+MAX_DELAY_STEPS: int = 200
+
+
+@runtime_checkable
+class StateEstimator(Protocol):
+    """What a controller wrapper, cosim master or gym observation pipeline needs from an estimator.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Not used (a ``Protocol``).
+    """
+
+    def reset(self) -> None:
+        """Forget the run: back to the prior at the start state."""
+
+    def update(self, t: float, y: np.ndarray, u: np.ndarray | None = None) -> np.ndarray:
+        """State estimate (nx,) at ``t`` [s] from measurement ``y`` and torque ``u`` (2,) [N.m] commanded since the last call."""
+
+
+def delay_steps(delay: float, sample_time: float) -> int:
+    """Samples of a measurement delay, ``int(delay / sample_time)`` as RealAIGym's simulator counts them (to 1e-9).
+
+    Parameters
+    ----------
+    delay : float
+        Delay [s], >= 0.
+    sample_time : float
+        [s].
+
+    Returns
+    -------
+    int
+        Whole samples of delay.
+
+    Raises
+    ------
+    ValueError
+        Negative or non-finite ``delay``, or more than :data:`MAX_DELAY_STEPS` samples.
+    """
+    d = float(delay)
+    if not np.isfinite(d) or d < 0.0:
+        raise ValueError(f"delay must be a finite number of seconds >= 0, got {delay!r}")
+    n = int(d / sample_time + 1e-9)
+    return bounded_int("delay [samples]", n, low=0, high=MAX_DELAY_STEPS, why="the filter keeps one torque per sample of delay")
+
+
+def _std_vector(name: str, value: Any, n: int, *, allow_zero: bool) -> np.ndarray:
+    """A vector of n standard deviations (a scalar is broadcast), checked."""
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ValueError(f"{name} must be a scalar or have shape ({n},), got shape {a.shape}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0.0) or (not allow_zero and np.any(a == 0.0)):
+        what = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be finite standard deviations {what}, got {a.tolist()!r}")
+    return a
+
+
+def _discrete_functions(model: Model, h: float, n_dist: int, n_roll: int) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """One RK4 step of ``z = (x, d)`` with its Jacobian, the plain step, and a rollout of ``n_roll`` steps."""
+    nx = model.nx
+    p = ca.DM(model.p)
+    z = ca.SX.sym("z", nx + n_dist)
+    u = ca.SX.sym("u", len(INPUT_NAMES))
+    x, d = z[:nx], z[nx:]
+    ue = u + d if n_dist else u
+
+    def f(xx: ca.SX) -> ca.SX:
+        return model.functions["rhs"](xx, ue, p)
+
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    x_next = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    z_next = ca.vertcat(x_next, d) if n_dist else x_next
+    step_jac = ca.Function("ekf_step_jac", [z, u], [z_next, ca.jacobian(z_next, z)], {"cse": True})
+    step = ca.Function("ekf_step", [z, u], [z_next], {"cse": True})
+    roll = step.mapaccum("ekf_rollout", n_roll) if n_roll > 0 else step
+    return step_jac, step, roll
+
+
+class ExtendedKalmanFilter:
+    """Discrete-time extended Kalman filter of a pendulab model (rigid or elastic), with delay and torque response.
+
+    Process model: classic RK4 at ``sample_time`` with the applied torque held (as RealAIGym's simulator and
+    :func:`pendulab.evaluate.realai.simulate.rk4_rollout` step), plus white process noise. With
+    ``disturbance=True`` the state is augmented by ``d`` (2,) [N.m], a random-walk torque added to (tau1, tau2).
+
+    Parameters
+    ----------
+    model : Model
+        Design model (its parameters are used as they are).
+    sample_time : float
+        Filter step [s] = the interval between :meth:`update` calls.
+    measured : sequence of str, optional
+        Names of the measured states (default: all, in state order); ``y`` holds them in this order.
+    measurement_std : float or array_like, shape (len(measured),)
+        Measurement noise sigmas [state units], > 0 (angles measured exactly still need a small sigma, e.g. 1e-4).
+    process_std : float or array_like, shape (nx,)
+        Process noise sigmas per sample [state units], >= 0.
+    delay : float
+        Known measurement delay [s] of the whole state: ``y(t_k) = x(t_k - n h)``, ``n = int(delay / h)``.
+    response : float
+        Torque response ``k`` in (0, 2]: ``u_applied = u_last + k (u_cmd - u_last)``; 1 = applied as commanded.
+    torque_limit : float or array_like, shape (2,), optional
+        Limit [N.m] the plant clips applied torques to (per joint; 0 for a passive joint). Default: none.
+    disturbance : bool
+        Augment the state with a disturbance torque per joint.
+    disturbance_std : float or array_like, shape (2,)
+        Random-walk sigmas of ``d`` per sample [N.m]; 0 on a joint fixes its ``d`` at 0.
+    x0 : array_like, shape (nx,), optional
+        Prior mean (default: the model's rest state, hanging).
+    x0_std : float or array_like, shape (nx,)
+        Prior sigmas [state units].
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a Model.
+    ValueError
+        Unknown state names, wrong shapes, negative (or, for measurements, zero) sigmas, a non-positive
+        ``sample_time``, a negative delay, ``response`` outside (0, 2].
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        sample_time: float,
+        *,
+        measured: Sequence[str] | None = None,
+        measurement_std: Any = 1e-3,
+        process_std: Any = 1e-3,
+        delay: float = 0.0,
+        response: float = 1.0,
+        torque_limit: Any = None,
+        disturbance: bool = False,
+        disturbance_std: Any = 0.05,
+        x0: Any = None,
+        x0_std: Any = 1e-3,
+    ) -> None:
+        self.model = check_model(model)
+        self.sample_time = positive_float("sample_time", sample_time, "[s]")
+        names = model.state_names
+        if measured is None:
+            measured = names
+        if isinstance(measured, str) or not all(isinstance(n, str) for n in measured) or len(measured) == 0:
+            raise ValueError(f"measured must be a non-empty sequence of state names from {list(names)}, got {measured!r}")
+        unknown = [n for n in measured if n not in names]
+        if unknown or len(set(measured)) != len(measured):
+            raise ValueError(f"measured must name distinct states of {list(names)}, got {list(measured)!r}")
+        self.measured = tuple(measured)
+        self._idx = np.array([names.index(n) for n in self.measured])
+        nx, nd = model.nx, (len(INPUT_NAMES) if disturbance else 0)
+        self.nz = nx + nd
+        self.disturbance = bool(disturbance)
+        r = _std_vector("measurement_std", measurement_std, len(self.measured), allow_zero=False)
+        q = _std_vector("process_std", process_std, nx, allow_zero=True)
+        qd = _std_vector("disturbance_std", disturbance_std, len(INPUT_NAMES), allow_zero=True) if nd else np.zeros(0)
+        self.R = np.diag(r**2)
+        self.Q = np.diag(np.concatenate([q, qd]) ** 2)
+        self.H = np.zeros((len(self.measured), self.nz))
+        self.H[np.arange(len(self.measured)), self._idx] = 1.0
+        self._angles = np.array([i for i, n in enumerate(self.measured) if n.startswith("theta")], dtype=int)
+        self.x0 = model.state() if x0 is None else model.check_state(x0, "x0").astype(float)
+        x0s = _std_vector("x0_std", x0_std, nx, allow_zero=False)
+        self.P0 = np.diag(np.concatenate([x0s, np.full(nd, 0.5)]) ** 2)
+        if torque_limit is None:
+            self.torque_limit = np.full(len(INPUT_NAMES), np.inf)
+        else:
+            self.torque_limit = _std_vector("torque_limit", torque_limit, len(INPUT_NAMES), allow_zero=True)
+        self._roll_n = 0
+        self.set_hypothesis(delay_steps(delay, self.sample_time), response)
+        self.reset()
+
+    # -- configuration ------------------------------------------------------------------
+    def set_hypothesis(self, n_delay: int, response: float) -> None:
+        """Set the delay [samples] and torque response ``k`` the filter assumes (the bank's choice).
+
+        Parameters
+        ----------
+        n_delay : int
+            Measurement delay [samples], 0 ... :data:`MAX_DELAY_STEPS`.
+        response : float
+            Torque response ``k`` in (0, 2].
+
+        Raises
+        ------
+        ValueError
+            Out of range.
+        """
+        n = bounded_int("n_delay", n_delay, low=0, high=MAX_DELAY_STEPS, why="the filter keeps one torque per sample of delay")
+        k = float(response)
+        if not (np.isfinite(k) and 0.0 < k <= 2.0):
+            raise ValueError(f"response must be a torque response k in (0, 2], got {response!r}")
+        self.n_delay, self.response = n, k
+        if n > self._roll_n or not hasattr(self, "_step_jac"):
+            self._roll_n = max(n, 1)
+            self._step_jac, self._step, self._roll = _discrete_functions(
+                self.model, self.sample_time, self.nz - self.model.nx, self._roll_n
+            )
+
+    # -- the estimator interface ----------------------------------------------------------
+    def reset(self, x0: Any = None) -> None:
+        """Back to the prior (mean ``x0`` or the constructor's, zero disturbance), empty torque history.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (nx,), optional
+            New prior mean.
+        """
+        x = self.x0 if x0 is None else self.model.check_state(x0, "x0").astype(float)
+        self.z = np.concatenate([x, np.zeros(self.nz - self.model.nx)])
+        self.P = self.P0.copy()
+        self.k = 0  # updates so far
+        self.u_applied = np.zeros(len(INPUT_NAMES))
+        self._hist: deque[np.ndarray] = deque(maxlen=max(self.n_delay, 1) + 1)
+        self.x_hat = x.copy()
+        self.nis = np.nan  # normalized innovation squared of the last update
+
+    def apply_command(self, u: Any) -> np.ndarray:
+        """Record a commanded torque: the applied one after the response model and the limit.
+
+        Parameters
+        ----------
+        u : array_like, shape (2,)
+            Commanded (tau1, tau2) [N.m].
+
+        Returns
+        -------
+        ndarray, shape (2,)
+            Applied torque [N.m].
+        """
+        uc = np.asarray(u, dtype=float).reshape(-1)
+        if uc.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(uc)):
+            raise ValueError(f"u must be finite torques (tau1, tau2) [N.m] of shape (2,), got {np.asarray(u).tolist()!r}")
+        ua = self.u_applied + self.response * (uc - self.u_applied)
+        self.u_applied = np.clip(ua, -self.torque_limit, self.torque_limit)
+        self._hist.append(self.u_applied.copy())
+        return self.u_applied
+
+    def update(self, t: float, y: Any, u: Any = None) -> np.ndarray:
+        """One filter step: predict over the last interval, correct with ``y``, roll forward over the delay.
+
+        Parameters
+        ----------
+        t : float
+            Time [s] of the measurement (for the record; the filter counts samples).
+        y : array_like, shape (len(measured),) or (nx,)
+            Measured states (a full state vector is accepted and the measured entries taken).
+        u : array_like, shape (2,), optional
+            Torques (tau1, tau2) [N.m] commanded over the interval that ends now; ``None`` on the first call.
+
+        Returns
+        -------
+        ndarray, shape (nx,)
+            Estimate of the current state (after delay compensation).
+
+        Raises
+        ------
+        ValueError
+            Wrong shape or non-finite ``y`` or ``u``.
+        """
+        ym = self._measurement(y)
+        if u is not None and self.k > 0:
+            self.apply_command(u)
+        n = self.n_delay
+        # The measurement belongs to sample k - n; before the delay has passed it is the start state at rest.
+        if self.k - n >= 1:
+            u_lag = self._hist[-(n + 1)] if len(self._hist) >= n + 1 else np.zeros(len(INPUT_NAMES))
+            zn, A = self._step_jac(self.z, u_lag)
+            self.z = np.asarray(zn).reshape(-1)
+            A = np.asarray(A)
+            self.P = A @ self.P @ A.T + self.Q
+        innov = ym - self.H @ self.z
+        if self._angles.size:
+            innov[self._angles] = (innov[self._angles] + np.pi) % (2 * np.pi) - np.pi
+        S = self.H @ self.P @ self.H.T + self.R
+        PHt = self.P @ self.H.T
+        gain = np.linalg.solve(S, PHt.T).T
+        self.z = self.z + gain @ innov
+        IKH = np.eye(self.nz) - gain @ self.H
+        self.P = IKH @ self.P @ IKH.T + gain @ self.R @ gain.T  # Joseph form: stays symmetric positive
+        self.nis = float(innov @ np.linalg.solve(S, innov))
+        self.k += 1
+        m = min(n, self.k - 1, len(self._hist))
+        if m > 0:
+            U = np.zeros((len(INPUT_NAMES), self._roll_n))
+            U[:, :m] = np.array(list(self._hist)[-m:]).T
+            X = np.asarray(self._roll(self.z, U))
+            self.x_hat = X[: self.model.nx, m - 1].copy()
+        else:
+            self.x_hat = self.z[: self.model.nx].copy()
+        return self.x_hat
+
+    @property
+    def d_hat(self) -> np.ndarray:
+        """Estimated disturbance torque (tau1, tau2) [N.m] (zeros without ``disturbance``)."""
+        return self.z[self.model.nx :].copy() if self.disturbance else np.zeros(len(INPUT_NAMES))
+
+    def _measurement(self, y: Any) -> np.ndarray:
+        a = np.asarray(y, dtype=float).reshape(-1)
+        if a.shape == (self.model.nx,) and len(self.measured) != self.model.nx:
+            a = a[self._idx]
+        if a.shape != (len(self.measured),) or not np.all(np.isfinite(a)):
+            raise ValueError(
+                f"y must be finite measurements of {list(self.measured)} (or a full state of {self.model.nx}), "
+                f"got {np.asarray(y).tolist()!r}"
+            )
+        return a
+
+
+class MultipleModelEstimator:
+    """A bank of delay and torque-response hypotheses, picked by innovation likelihood, then one EKF.
+
+    From the known start state ``x0`` (at rest), each response hypothesis ``k_j`` runs the model open loop with
+    the torques actually commanded; hypothesis ``(n, k_j)`` predicts the measurement ``x_j(t_{i-n})``. Over the
+    first ``window`` seconds the Gaussian log-likelihood of every hypothesis accumulates (measurement sigmas of
+    the filter); the estimate meanwhile is the current state of the leading hypothesis. At the window's end the
+    leading hypothesis is locked and the EKF (:class:`ExtendedKalmanFilter`, with that delay and response) takes
+    over, started from the hypothesis' state at the measurement's time.
+
+    Parameters
+    ----------
+    model : Model
+        Design model.
+    sample_time : float
+        [s].
+    delays : sequence of float
+        Candidate measurement delays [s] (e.g. 0 ... 0.04 s every 2 ms).
+    responses : sequence of float
+        Candidate torque responses ``k`` in (0, 2].
+    window : float
+        Identification window [s] from the start.
+    **ekf_options
+        Passed to :class:`ExtendedKalmanFilter` (``measured``, ``measurement_std``, ``process_std``,
+        ``torque_limit``, ``disturbance``, ``x0`` ...).
+
+    Raises
+    ------
+    ValueError
+        Empty or invalid candidate lists, non-positive ``window``, or what the EKF raises.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        sample_time: float,
+        *,
+        delays: Sequence[float] = (0.0,),
+        responses: Sequence[float] = (1.0,),
+        window: float = 0.2,
+        **ekf_options: Any,
+    ) -> None:
+        for key in ("delay", "response"):
+            if key in ekf_options:
+                raise ValueError(
+                    f"{key} is chosen by the bank; give the candidates as {key}s=..., not {key}={ekf_options[key]!r}"
+                )
+        self.ekf = ExtendedKalmanFilter(model, sample_time, **ekf_options)
+        h = self.ekf.sample_time
+        if isinstance(delays, (int, float)) or len(delays) == 0:
+            raise ValueError(f"delays must be a non-empty sequence of delays [s], got {delays!r}")
+        if isinstance(responses, (int, float)) or len(responses) == 0:
+            raise ValueError(f"responses must be a non-empty sequence of torque responses k, got {responses!r}")
+        self.delays = np.array(sorted({delay_steps(d, h) for d in delays}), dtype=int)
+        ks = [float(k) for k in responses]
+        if not all(np.isfinite(k) and 0.0 < k <= 2.0 for k in ks):
+            raise ValueError(f"responses must be torque responses k in (0, 2], got {list(responses)!r}")
+        self.responses = np.array(ks)
+        self.window_steps = max(1, int(round(positive_float("window", window, "[s]") / h)))
+        self.model = model
+        self.sample_time = h
+        self.ekf.set_hypothesis(int(self.delays.max()), 1.0)  # compile the longest rollout once
+        self._bank_step = self.ekf._step.map(len(self.responses)) if len(self.responses) > 1 else self.ekf._step
+        self.reset()
+
+    @property
+    def hypothesis(self) -> tuple[float, float]:
+        """The leading (or locked) hypothesis: delay [s] and torque response ``k``."""
+        i, j = np.unravel_index(int(np.argmax(self.loglik)), self.loglik.shape)
+        return float(self.delays[i] * self.sample_time), float(self.responses[j])
+
+    @property
+    def locked(self) -> bool:
+        """True once the identification window is over and the EKF runs."""
+        return self._locked
+
+    @property
+    def d_hat(self) -> np.ndarray:
+        """The EKF's disturbance estimate [N.m] (zeros before the lock)."""
+        return self.ekf.d_hat if self._locked else np.zeros(len(INPUT_NAMES))
+
+    def reset(self) -> None:
+        """Back to the start state, every hypothesis equally likely."""
+        self.ekf.reset()
+        nx, J = self.model.nx, len(self.responses)
+        self._X = np.tile(self.ekf.x0[:, None], (1, J))  # current open-loop states, one column per response
+        self._traj: list[np.ndarray] = [self._X.copy()]  # their history, one (nx, J) per sample
+        self._ua = np.zeros((len(INPUT_NAMES), J))
+        self._u_cmd: list[np.ndarray] = []
+        self.loglik = np.zeros((len(self.delays), J))
+        self._locked = False
+        self.k = 0
+        self._w = 1.0 / np.diag(self.ekf.R)
+        self.x_hat = self.ekf.x0.copy()
+        del nx
+
+    def update(self, t: float, y: Any, u: Any = None) -> np.ndarray:
+        """One step of the bank (inside the window) or of the locked EKF.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : array_like
+            Measurement (as :meth:`ExtendedKalmanFilter.update`).
+        u : array_like, shape (2,), optional
+            Torques commanded over the interval that ends now (``None`` on the first call).
+
+        Returns
+        -------
+        ndarray, shape (nx,)
+            Current-state estimate.
+        """
+        if self._locked:
+            self.x_hat = self.ekf.update(t, y, u)
+            return self.x_hat
+        ym = self.ekf._measurement(y)
+        if u is not None and self.k > 0:
+            uc = np.asarray(u, dtype=float).reshape(-1)
+            if uc.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(uc)):
+                raise ValueError(f"u must be finite torques (tau1, tau2) [N.m] of shape (2,), got {np.asarray(u).tolist()!r}")
+            self._u_cmd.append(uc)
+            lim = self.ekf.torque_limit[:, None]
+            self._ua = np.clip(self._ua + self.responses[None, :] * (uc[:, None] - self._ua), -lim, lim)
+            self._X = np.asarray(self._bank_step(self._X, self._ua)).reshape(self.model.nx, -1)
+            self._traj.append(self._X.copy())
+        i_now = len(self._traj) - 1
+        idx = self.ekf._idx
+        for a, n in enumerate(self.delays):
+            pred = self._traj[max(i_now - n, 0)][idx]  # (ny, J)
+            r = ym[:, None] - pred
+            self.loglik[a] -= 0.5 * (self._w[:, None] * r * r).sum(axis=0)
+        self.k += 1
+        a, j = np.unravel_index(int(np.argmax(self.loglik)), self.loglik.shape)
+        self.x_hat = self._X[:, j].copy()
+        if self.k >= self.window_steps:
+            self._lock(int(a), int(j))
+        return self.x_hat
+
+    def _lock(self, a: int, j: int) -> None:
+        """Hand over to the EKF with hypothesis (delays[a], responses[j]), its state at the measurement's time."""
+        n, k = int(self.delays[a]), float(self.responses[j])
+        ekf = self.ekf
+        ekf.set_hypothesis(n, k)
+        i_now = len(self._traj) - 1
+        ekf.reset(self._traj[max(i_now - n, 0)][:, j])
+        ekf.k = self.k
+        # Replay the applied torques of hypothesis j so the EKF's history and torque state match the bank's.
+        ekf.u_applied = np.zeros(len(INPUT_NAMES))
+        ekf._hist = deque(maxlen=max(n, 1) + 1)
+        for uc in self._u_cmd:
+            ekf.apply_command(uc)
+        ekf.x_hat = self._X[:, j].copy()
+        self._locked = True
