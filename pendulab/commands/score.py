@@ -36,10 +36,13 @@ def register(subparsers: Any) -> None:
             "DIR/records.json after every batch of runs (--resume continues from it), then DIR/scorecard.md, "
             "DIR/scorecard.png and DIR/scorecard.json. --realai scores the controller on RealAIGym's simulation "
             "leaderboard instead; --leaderboard writes the leaderboard of every controller on every task "
-            "(--out docs/leaderboard.md regenerates the shipped page)."
+            "(--out docs/leaderboard.md regenerates the shipped page). --protocol robustness-v2 | v3 runs RealAIGym's "
+            "robustness-v2 or v3 protocol (docs/realai.md)."
         ),
     )
-    p.add_argument("--controller", default=None, metavar="NAME", help="lqr | tvlqr | swingup | nmpc (--realai: also best)")
+    p.add_argument(
+        "--controller", default=None, metavar="NAME", help="lqr | tvlqr | swingup | nmpc (--realai, --protocol: also best)"
+    )
     p.add_argument(
         "--task", default=None, metavar="TASK", help="swing-up task name (pendulab swingup --list); --realai: pendubot | acrobot"
     )
@@ -61,12 +64,29 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--max-wall-time", default=None, metavar="S", help="wall-time budget [s] of the scorecard's runs")
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    p.add_argument(
+        "--protocol",
+        default=None,
+        choices=PROTOCOLS,
+        help="a RealAIGym protocol on --task pendubot | acrobot: v2 (the simulation leaderboard, = --realai), "
+        "robustness-v2 (the robustness leaderboard v2: 722 runs, journaled, --resume, --workers, --seed, --quick), "
+        "v3 (the ICRA 2025 global protocol)",
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="--protocol robustness-v2 on a reduced grid (levels 0, 10, 20 of each category, 2 velocity-noise "
+        "repetitions, 5 perturbation runs; 77 runs): a smoke test, not a score to publish",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--realai", action="store_true", help="RealAIGym simulation leaderboard score (pendubot | acrobot)")
     mode.add_argument("--leaderboard", action="store_true", help="regenerate the leaderboard (all controllers x tasks)")
     p.set_defaults(func=run_score)
 
+
+#: RealAIGym protocols of ``--protocol`` (``v2`` is ``--realai``).
+PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
 
 #: Options of the scorecard that the other modes do not take (an error there, not ignored).
 _SCORECARD_ONLY = (
@@ -112,6 +132,16 @@ def run_score(args: argparse.Namespace) -> int:
     """
     from ..evaluate.scorecard import MAX_RUNS
 
+    if args.protocol not in (None, "v2") and args.realai:
+        raise CLIError(f"--realai is --protocol v2; it does not combine with --protocol {args.protocol}")
+    if args.protocol is not None and args.leaderboard:
+        raise CLIError("--protocol does not apply to --leaderboard (it scores every controller on every task)")
+    if args.quick and args.protocol != "robustness-v2":
+        raise CLIError("--quick applies to --protocol robustness-v2 only")
+    if args.protocol in ("robustness-v2", "v3"):
+        if args.controller is None or args.task is None:
+            raise CLIError(f"--protocol {args.protocol} needs --controller and --task")
+        return _run_protocol(args)
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     runs = _int("--runs", args.runs, 1, MAX_RUNS, "runs per level of each stochastic category", 20)
     if args.leaderboard:
@@ -125,7 +155,7 @@ def run_score(args: argparse.Namespace) -> int:
         return 0
     if args.controller is None or args.task is None:
         raise CLIError("--controller and --task are required (or --leaderboard)")
-    if args.realai:
+    if args.realai or args.protocol == "v2":
         _reject(
             args, "--realai (one deterministic leaderboard run)", (*_SCORECARD_ONLY, ("workers", "--workers"), ("runs", "--runs"))
         )
@@ -219,6 +249,94 @@ def _resume(path: Path, settings: dict[str, Any]) -> tuple:
         raise CLIError(f"--resume: {path} was written with other settings ({what}); use another --out or drop --resume")
     print(f"--resume: {len(records)} runs already recorded in {path}", file=sys.stderr)
     return records
+
+
+def _protocol_task(args: argparse.Namespace) -> str:
+    from ..control.swingup.tasks import short_name
+
+    task = short_name(args.task)
+    if task not in ("pendubot", "acrobot"):
+        raise CLIError(f"--task {args.task!r}: --protocol {args.protocol} expects pendubot or acrobot")
+    return task
+
+
+def _run_protocol(args: argparse.Namespace) -> int:
+    """``--protocol robustness-v2`` and ``--protocol v3``."""
+    common = (("runs", "--runs"), ("categories", "--categories"), ("max_wall_time", "--max-wall-time"))
+    if args.protocol == "v3":
+        _reject(args, "--protocol v3", (*common, ("workers", "--workers"), ("resume", "--resume")))
+        return _run_v3(args)
+    _reject(args, "--protocol robustness-v2", common)
+    task = _protocol_task(args)
+    from ..evaluate.realai.robustness import CATEGORIES, CONTROLLERS, QUICK_LEVELS, robustness_v2
+
+    if args.controller not in CONTROLLERS:
+        raise CLIError(f"--controller {args.controller!r}: --protocol robustness-v2 expects one of {list(CONTROLLERS)}")
+    workers = _int("--workers", args.workers, 1, 1024, "worker processes")
+    seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of numpy's legacy RandomState (upstream's np.random.seed)", 0)
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}"
+    journal = out / "runs.json"
+    if args.resume and not journal.is_file():
+        print(f"--resume: no {journal}; starting a new run", file=sys.stderr)
+    quick = {"levels": QUICK_LEVELS, "repetitions": 2, "perturbation_repetitions": 5} if args.quick else {}
+    bar = ProgressBar(f"robustness-v2 {args.controller} on {task}", not args.no_progress)
+    try:
+        res = robustness_v2(
+            task, args.controller, seed=seed, workers=workers, progress=bar, journal=journal, resume=args.resume, **quick
+        )
+    except ValueError as exc:
+        if "journal" in str(exc):
+            raise CLIError(f"--resume: {exc}") from None
+        raise
+    finally:
+        bar.close()
+    from ..viz.robustness import plot_robustness
+
+    plot_robustness(res, out / "robustness.png")
+    summary = res.to_dict()
+    # Last: a robustness.json means every other output of the run is complete.
+    atomic_write_text(out / "robustness.json", json.dumps(summary, indent=1) + "\n")
+    print(f"wrote {out / 'robustness.json'}, robustness.png, runs.json", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, indent=1))
+        return 0
+    grid = "" if res.complete else " (reduced grid: --quick)"
+    print(f"RealAIGym robustness v2, {task} / {args.controller}{grid}: score {res.score:.3f}")
+    for c in CATEGORIES:
+        print(f"  {c:<18} {100 * res.rates[c]:5.1f} %")
+    best = summary["published_best"]
+    print(f"published best: {best['name']} {best['score']:.3f}")
+    print(
+        f"{len(res.records)} runs, {res.wall_time:.1f} s; controller call median {1e6 * res.ctrl_time_median:.0f} us, "
+        f"max {1e3 * res.ctrl_time_max:.2f} ms (period {1e3 * res.sample_time:g} ms)"
+    )
+    return 0
+
+
+def _run_v3(args: argparse.Namespace) -> int:
+    task = _protocol_task(args)
+    seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of the v3 protocol's resets", 0)
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}"
+    try:
+        from ..evaluate.realai.v3 import v3_score
+    except ImportError as exc:
+        raise CLIError(f"--protocol v3 is not available in this installation ({exc})") from None
+    bar = ProgressBar(f"v3 {args.controller} on {task}", not args.no_progress)
+    try:
+        res = v3_score(task, args.controller, seed=seed, progress=bar, out=out)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    finally:
+        bar.close()
+    summary = res.to_dict()
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "v3.json", json.dumps(summary, indent=1) + "\n")
+    print(f"wrote {out / 'v3.json'}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        print(f"RealAIGym v3 (simulation), {task} / {args.controller}: score {res.score:.3f}")
+    return 0
 
 
 def _run_realai(args: argparse.Namespace) -> int:
