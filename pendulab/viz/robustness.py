@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -13,9 +14,25 @@ import numpy as np  # noqa: E402
 from ..evaluate.realai.robustness import CATEGORY_LABELS, RobustnessResult  # noqa: E402
 from .save import save_figure  # noqa: E402
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
 __all__ = ["plot_robustness"]
 
 _MODEL_RANGE = "grid point: Ir 0…1e-4 kg m², m r, I, m2 ×0.75…×1.25,\nb −0.1…0.1 N m s/rad, cf −0.2…0.2 N m"
+
+
+_TITLES = {
+    "measurement_noise": "velocity measurement noise",
+    "u_noise": "torque noise",
+    "u_responsiveness": "torque responsiveness",
+    "delay": "measurement delay",
+}
+
+
+def _not_run(ax: Axes, title: str) -> None:
+    ax.set_axis_off()
+    ax.set_title(f"{title}: not run", fontsize=9)
 
 
 def plot_robustness(result: RobustnessResult, path: str | Path) -> Path:
@@ -42,15 +59,21 @@ def plot_robustness(result: RobustnessResult, path: str | Path) -> Path:
     # Model parameters: success map, one row per parameter, one column per grid point.
     ax = axes[0, 0]
     names = list(lr["model"])
-    idx = sorted({r["level_index"] for r in result.records if r["category"] == "model"})
-    grid = np.array([lr["model"][n] for n in names])
-    ax.imshow(grid, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto", interpolation="nearest")
-    ax.set_yticks(range(len(names)), names, fontsize=8)
-    ax.set_xticks(range(len(idx)), [str(i) if (len(idx) < 8 or i % 5 == 0) else "" for i in idx], fontsize=8)
-    ax.set_xlabel(_MODEL_RANGE, fontsize=7)
-    ax.set_title(f"model parameters: {100 * rates.get('model', 0):.1f} % (green = success)", fontsize=9)
+    if not names:
+        _not_run(ax, "model parameters")
+    else:
+        idx = sorted({r["level_index"] for r in result.records if r["category"] == "model"})
+        grid = np.array([lr["model"][n] for n in names])
+        ax.imshow(grid, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto", interpolation="nearest")
+        ax.set_yticks(range(len(names)), names, fontsize=8)
+        ax.set_xticks(range(len(idx)), [str(i) if (len(idx) < 8 or i % 5 == 0) else "" for i in idx], fontsize=8)
+        ax.set_xlabel(_MODEL_RANGE, fontsize=7)
+        ax.set_title(f"model parameters: {100 * rates.get('model', 0):.1f} % (green = success)", fontsize=9)
     for k, cat in enumerate(("measurement_noise", "u_noise", "u_responsiveness", "delay")):
         ax = axes.flat[k + 1]
+        if not lr[cat]:
+            _not_run(ax, _TITLES[cat])
+            continue
         x = np.asarray(lv[cat], dtype=float)
         y = 100 * np.asarray(lr[cat], dtype=float)
         width = 0.8 * (np.min(np.diff(x)) if len(x) > 1 else 1.0)
@@ -59,15 +82,18 @@ def plot_robustness(result: RobustnessResult, path: str | Path) -> Path:
         ax.bar(x, np.maximum(y, 1.5), width=width, color=np.where(ok, "tab:green", "tab:red"))
         if noise:
             ax.axhline(50, color="k", ls="--", lw=0.8)
-            ax.text(x[0], 53, "level passes above 50 % of 10 runs", fontsize=7)
+            ax.text(x[0], 53, "a level passes above 50 % of its runs", fontsize=7)
         ax.set_ylim(0, 105)
         ax.set_xlabel(CATEGORY_LABELS[cat])
         ax.set_ylabel("success [%]")
-        ax.set_title(f"{cat.replace('_', ' ')}: {100 * rates.get(cat, 0):.1f} %", fontsize=9)
+        ax.set_title(f"{_TITLES[cat]}: {100 * rates.get(cat, 0):.1f} %", fontsize=9)
     # Perturbations: success of each run against its largest pulse on the driven joint.
     ax = axes[1, 2]
     act = 0 if result.task == "pendubot" else 1
     pr = [r for r in result.records if r["category"] == "perturbation"]
+    if not pr:
+        _not_run(ax, "perturbations")
+        return save_figure(fig, path)
     amp = np.array([np.max(np.abs(r["amplitude"][act])) for r in pr])
     succ = np.array([r["success"] for r in pr], dtype=bool)
     ax.scatter(amp[succ], np.ones(succ.sum()), color="tab:green", label="success", s=18)

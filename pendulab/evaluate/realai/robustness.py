@@ -284,6 +284,9 @@ def plan_runs(
     levels: Sequence[int] | None = None,
     repetitions: int = REPETITIONS,
     perturbation_repetitions: int = PERTURBATION_REPETITIONS,
+    categories: Sequence[str] | None = None,
+    model_params: Sequence[str] | None = None,
+    u_noise_repetitions: int = REPETITIONS,
 ) -> list[RunSpec]:
     """Every run of the protocol in the benchmark's order.
 
@@ -299,6 +302,12 @@ def plan_runs(
         ``check_unoise_robustness``, whose default is 10.
     perturbation_repetitions : int
         Runs of the perturbation category (upstream: 50).
+    categories : sequence of str, optional
+        Categories to run (upstream's ``compute_*_robustness`` flags); default all of :data:`CATEGORIES`.
+    model_params : sequence of str, optional
+        Model parameters to vary (upstream's ``mpar_vars``), in :data:`~.plant.MODEL_VARIATIONS` order; default all ten.
+    u_noise_repetitions : int
+        Repetitions of each torque-noise level (10 in upstream's protocol, whatever ``repetitions`` is).
 
     Returns
     -------
@@ -308,9 +317,12 @@ def plan_runs(
     Raises
     ------
     ValueError
-        Bad ``levels`` or repetition counts.
+        Bad ``levels``, repetition counts, categories or model parameters.
     """
     grid = protocol_grid(task)
+    cats = _check_names("categories", categories, CATEGORIES)
+    params = _check_names("model_params", model_params, MODEL_VARIATIONS)
+    u_noise_repetitions = bounded_int("u_noise_repetitions", u_noise_repetitions, high=MAX_REPETITIONS, why="runs per level")
     repetitions = bounded_int("repetitions", repetitions, high=MAX_REPETITIONS, why="runs per noise level")
     perturbation_repetitions = bounded_int(
         "perturbation_repetitions", perturbation_repetitions, high=MAX_REPETITIONS, why="perturbation runs"
@@ -326,19 +338,35 @@ def plan_runs(
     def add(cat: str, param: str, li: int, level: float, rep: int) -> None:
         plan.append(RunSpec(len(plan), cat, param, li, float(level), rep))
 
-    for name in MODEL_VARIATIONS:
-        for li in keep:
-            add("model", name, li, grid["model"][name][li], 0)
-    for cat, reps in (("measurement_noise", repetitions), ("u_noise", REPETITIONS)):
-        for li in keep:
-            for r in range(reps):
-                add(cat, "", li, grid[cat][li], r)
+    if "model" in cats:
+        for name in params:
+            for li in keep:
+                add("model", name, li, grid["model"][name][li], 0)
+    for cat, reps in (("measurement_noise", repetitions), ("u_noise", u_noise_repetitions)):
+        if cat in cats:
+            for li in keep:
+                for r in range(reps):
+                    add(cat, "", li, grid[cat][li], r)
     for cat in ("u_responsiveness", "delay"):
-        for li in keep:
-            add(cat, "", li, grid[cat][li], 0)
-    for r in range(perturbation_repetitions):
-        add("perturbation", "", r, math.nan, 0)
+        if cat in cats:
+            for li in keep:
+                add(cat, "", li, grid[cat][li], 0)
+    if "perturbation" in cats:
+        for r in range(perturbation_repetitions):
+            add("perturbation", "", r, math.nan, 0)
     return plan
+
+
+def _check_names(what: str, names: Sequence[str] | None, known: tuple[str, ...]) -> tuple[str, ...]:
+    """A selection of ``known`` names, in ``known``'s order (the benchmark's), checked."""
+    if names is None:
+        return known
+    if isinstance(names, str) or not isinstance(names, Sequence):
+        raise TypeError(f"{what} must be a sequence of names (some of {list(known)}), got {type(names).__name__}")
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise ValueError(f"{what} must be a non-empty selection of {list(known)}, got {list(names)!r}")
+    return tuple(n for n in known if n in names)
 
 
 def random_gauss_perturbation(
@@ -760,9 +788,9 @@ class RobustnessResult:
         """
         out: dict[str, Any] = {"model": {k: [float(b) for b in v] for k, v in self.successes["model"].items()}}
         for cat in ("measurement_noise", "u_noise"):
-            out[cat] = [float(np.mean(v)) for v in self.successes[cat]]
+            out[cat] = [float(np.mean(v)) for v in self.successes.get(cat, [])]
         for cat in ("u_responsiveness", "delay", "perturbation"):
-            out[cat] = [float(b) for b in self.successes[cat]]
+            out[cat] = [float(b) for b in self.successes.get(cat, [])]
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -783,7 +811,7 @@ class RobustnessResult:
             "controller": self.controller,
             "seed": self.seed,
             "complete": self.complete,
-            "score": float(self.score),
+            "score": None if math.isnan(self.score) else float(self.score),
             "rates": {k: float(v) for k, v in self.rates.items()},
             "successes": self.successes,
             "level_rates": self.level_rates(),
@@ -798,7 +826,7 @@ class RobustnessResult:
             },
             "published": {k: {"rates": [v / 100 for v in r], "score": s} for k, (r, s) in pub.items()},
             "published_best": {"name": best_name, "score": best},
-            "beats_published": bool(self.score > best),
+            "beats_published": bool(self.complete and self.score > best),
         }
 
 
@@ -820,6 +848,14 @@ def _levels(plan: Sequence[RunSpec]) -> dict[str, Any]:
     return lv
 
 
+#: Settings a journal may lack (written before they existed): the full protocol's values.
+_JOURNAL_DEFAULTS: Mapping[str, Any] = {
+    "categories": list(CATEGORIES),
+    "model_params": list(MODEL_VARIATIONS),
+    "u_noise_repetitions": REPETITIONS,
+}
+
+
 def _read_journal(path: Path, settings: Mapping[str, Any]) -> dict[int, dict[str, Any]]:
     if not path.is_file():
         return {}
@@ -828,7 +864,8 @@ def _read_journal(path: Path, settings: Mapping[str, Any]) -> dict[int, dict[str
         recs = {int(r["index"]): r for r in data["records"]}
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ValueError(f"journal {path} is not a robustness-v2 journal ({exc})") from None
-    differ = {k: (data.get("settings", {}).get(k), v) for k, v in settings.items() if data.get("settings", {}).get(k) != v}
+    stored = {**_JOURNAL_DEFAULTS, **data.get("settings", {})}
+    differ = {k: (stored.get(k), v) for k, v in settings.items() if stored.get(k) != v}
     if differ:
         what = ", ".join(f"{k} {old!r} there, {new!r} now" for k, (old, new) in differ.items())
         raise ValueError(f"journal {path} was written with other settings ({what}); use another journal or resume=False")
@@ -847,6 +884,9 @@ def robustness_v2(
     levels: Sequence[int] | None = None,
     repetitions: int = REPETITIONS,
     perturbation_repetitions: int = PERTURBATION_REPETITIONS,
+    categories: Sequence[str] | None = None,
+    model_params: Sequence[str] | None = None,
+    u_noise_repetitions: int = REPETITIONS,
 ) -> RobustnessResult:
     """Score a controller on the RealAIGym robustness leaderboard v2 protocol.
 
@@ -872,6 +912,9 @@ def robustness_v2(
         Repetitions per measurement-noise level (upstream 10; torque noise: always 10, as upstream).
     perturbation_repetitions : int
         Perturbation runs (upstream 50).
+    categories, model_params, u_noise_repetitions
+        A reduced protocol (tests, comparisons): see :func:`plan_runs`. Without all six
+        categories the score is NaN (``None`` in :meth:`RobustnessResult.to_dict`).
 
     Returns
     -------
@@ -895,7 +938,10 @@ def robustness_v2(
     if resume and journal is None:
         raise ValueError("resume=True needs a journal path")
     w0 = time.perf_counter()
-    plan = plan_runs(task, levels=levels, repetitions=repetitions, perturbation_repetitions=perturbation_repetitions)
+    plan = plan_runs(
+        task, levels=levels, repetitions=repetitions, perturbation_repetitions=perturbation_repetitions,
+        categories=categories, model_params=model_params, u_noise_repetitions=u_noise_repetitions,
+    )  # fmt: skip
     name, ctrl = resolve_controller(task, controller)
     _hold_ratio(ctrl)
     settings = {
@@ -906,6 +952,9 @@ def robustness_v2(
         "levels": None if levels is None else sorted({int(v) for v in levels}),
         "repetitions": int(repetitions),
         "perturbation_repetitions": int(perturbation_repetitions),
+        "categories": list(_check_names("categories", categories, CATEGORIES)),
+        "model_params": list(_check_names("model_params", model_params, MODEL_VARIATIONS)),
+        "u_noise_repetitions": int(u_noise_repetitions),
     }
     jpath = None if journal is None else Path(journal)
     done: dict[int, dict[str, Any]] = _read_journal(jpath, settings) if (resume and jpath is not None) else {}
@@ -940,8 +989,12 @@ def robustness_v2(
     records = [done[s.index] for s in plan]
     successes = level_successes(records)
     rates = category_rates(successes)
-    complete = levels is None and repetitions == REPETITIONS and perturbation_repetitions == PERTURBATION_REPETITIONS
+    complete = (
+        levels is None and repetitions == REPETITIONS and perturbation_repetitions == PERTURBATION_REPETITIONS
+        and categories is None and model_params is None and u_noise_repetitions == REPETITIONS
+    )  # fmt: skip
+    score = robustness_score(rates) if all(c in rates for c in CATEGORIES) else math.nan
     return RobustnessResult(
-        task, name, seed, rates, robustness_score(rates), successes, _levels(plan), records,
+        task, name, seed, rates, score, successes, _levels(plan), records,
         time.perf_counter() - w0, float(ctrl.sample_time), complete,
     )  # fmt: skip

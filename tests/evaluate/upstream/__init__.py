@@ -1,0 +1,1 @@
+"""An independent restatement of RealAIGym's robustness-v2 benchmark, for tests (see ``reference.py``)."""
