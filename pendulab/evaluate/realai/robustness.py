@@ -148,6 +148,7 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
     "lqr": _task_controller("lqr"),
     "swingup": _task_controller("swingup"),
     "nmpc": _task_controller("nmpc"),
+    "robust": _task_controller("robust"),
 }
 
 
