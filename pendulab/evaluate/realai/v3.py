@@ -540,7 +540,9 @@ def run_v3(
 
 
 #: Controller names :func:`v3_score` accepts.
-V3_CONTROLLERS: tuple[str, ...] = ("global", "best", "tvlqr", "swingup", "lqr", "nmpc")
+V3_CONTROLLERS: tuple[str, ...] = ("global", "replan", "replan_delayed", "best", "tvlqr", "swingup", "lqr", "nmpc")
+#: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
+REPLAN_DELAY: float = 0.5
 
 
 def _build(task: str, controller: str) -> SampledController:
@@ -552,6 +554,10 @@ def _build(task: str, controller: str) -> SampledController:
         from ...control.global_swingup import global_controller
 
         return global_controller(task)
+    if controller in ("replan", "replan_delayed"):
+        from ...control.global_swingup import replanning_controller
+
+        return replanning_controller(task, plan_delay=REPLAN_DELAY if controller == "replan_delayed" else 0.0)
     if controller == "best":
         return best_controller(task)
     if controller in V3_CONTROLLERS:
