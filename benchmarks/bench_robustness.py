@@ -26,6 +26,8 @@ from pendulab.evaluate.realai.robustness import CATEGORIES, PUBLISHED_ROBUSTNESS
 
 #: Issue 21's numbers: pendulab's controllers through upstream's benchmark code (full grids, unseeded): score only.
 ISSUE_21 = {("tvlqr", "pendubot"): 0.748, ("tvlqr", "acrobot"): 0.679, ("best", "pendubot"): 0.779, ("best", "acrobot"): 0.619}
+#: Directory suffix of runs with ``--every-step`` (the controller called every 2 ms, as upstream calls its controllers).
+EVERY = "@2ms"
 SHORT = {
     "model": "model",
     "measurement_noise": "vel. noise",
@@ -36,23 +38,38 @@ SHORT = {
 }
 
 
-def run(controller: str, task: str, out_dir: Path, workers: int, seed: int) -> None:
+def run(controller: str, task: str, out_dir: Path, workers: int, seed: int, every_step: bool = False) -> None:
     """Run (or resume) one full protocol and write robustness.json, robustness.png."""
     from pendulab._io import atomic_write_text
     from pendulab.viz.robustness import plot_robustness
 
-    out = out_dir / f"robustness-v2-{controller}-{task}"
+    out = out_dir / f"robustness-v2-{controller}{EVERY if every_step else ''}-{task}"
     bar = tqdm(desc=f"robustness-v2 {controller} {task}", unit="run", file=sys.stderr, mininterval=30)
 
     def progress(done: int, total: int) -> None:
         bar.total = total
         bar.update(done - bar.n)
 
-    res = robustness_v2(task, controller, seed=seed, workers=workers, progress=progress, journal=out / "runs.json", resume=True)
+    res = robustness_v2(
+        task,
+        controller,
+        seed=seed,
+        workers=workers,
+        progress=progress,
+        journal=out / "runs.json",
+        resume=True,
+        every_step=every_step,
+    )
     bar.close()
     plot_robustness(res, out / "robustness.png")
     atomic_write_text(out / "robustness.json", json.dumps(res.to_dict(), indent=1) + "\n")
     print(f"{controller} {task}: score {res.score:.3f}, {res.wall_time:.0f} s", file=sys.stderr)
+
+
+def _label(c: str) -> str:
+    if c.endswith(EVERY):
+        return f"pendulab `{c[: -len(EVERY)]}` called every 2 ms"
+    return f"pendulab `{c}`"
 
 
 def _row(name: str, rates: dict, score: float | str, extra: str = "") -> str:
@@ -83,8 +100,10 @@ def report(controllers: list[str], tasks: list[str], out_dir: Path, results: Pat
             + " | score | runs, wall time, controller time per call |",
             "|---|" + "---|" * len(CATEGORIES) + "---|---|",
         ]
-        for c in controllers:
+        for c in [*controllers, *(f"{c}{EVERY}" for c in controllers)]:
             out = out_dir / f"robustness-v2-{c}-{task}"
+            if c.endswith(EVERY) and not out.is_dir():
+                continue
             if (out / "robustness.json").is_file():
                 d = json.loads((out / "robustness.json").read_text())
                 ct = d["controller_time"]
@@ -92,13 +111,13 @@ def report(controllers: list[str], tasks: list[str], out_dir: Path, results: Pat
                     f"{d['runs']} runs, {d['wall_time']:.0f} s; median {1e6 * ct['median_per_call']:.0f} µs, "
                     f"max {1e3 * ct['max_per_call']:.1f} ms (period {1e3 * ct['sample_time']:.0f} ms)"
                 )
-                lines.append(_row(f"pendulab `{c}` (seed {d['seed']})", d["rates"], d["score"], extra))
+                lines.append(_row(f"{_label(c)} (seed {d['seed']})", d["rates"], d["score"], extra))
             elif (out / "runs.json").is_file():
                 from pendulab.evaluate.realai.robustness import category_rates, level_successes
 
                 recs = json.loads((out / "runs.json").read_text())["records"]
                 rates = category_rates(level_successes(recs))
-                lines.append(_row(f"pendulab `{c}` (unfinished)", rates, "–", f"{len(recs)} of 722 runs finished"))
+                lines.append(_row(f"{_label(c)} (unfinished)", rates, "–", f"{len(recs)} of 722 runs finished"))
             else:
                 lines.append(f"| pendulab `{c}` | not run | | | | | | | |")
             if (c, task) in ISSUE_21:
@@ -122,11 +141,12 @@ def main() -> None:
     ap.add_argument("--out-dir", type=Path, default=Path("pendulab-out/score"))
     ap.add_argument("--results", type=Path, default=Path("benchmarks/results/robustness_v2.md"))
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--every-step", action="store_true", help="call the controllers every 2 ms step (upstream's loop)")
     a = ap.parse_args()
     if not a.report_only:
         for task in a.tasks:
             for c in a.controllers:
-                run(c, task, a.out_dir, a.workers, a.seed)
+                run(c, task, a.out_dir, a.workers, a.seed, a.every_step)
     report(a.controllers, a.tasks, a.out_dir, a.results, a.seed, a.workers)
 
 

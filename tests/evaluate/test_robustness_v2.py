@@ -260,3 +260,12 @@ def test_controller_resolution_and_bad_input():
 def test_cli_protocol_errors(argv, message, capsys):
     assert main(["score", *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_controller_on_its_grid_or_every_step():
+    _, lqr = resolve_controller("pendubot", "lqr")  # 10 ms sample time
+    kw = {"levels": [0], "categories": ["delay"], "workers": 1}
+    held = robustness_v2("pendubot", lqr, **kw).records[0]
+    fresh = robustness_v2("pendubot", lqr, every_step=True, **kw).records[0]
+    # 5000 steps of 2 ms: 1000 calls on a 10 ms grid, 5000 when called every step as upstream calls its controllers.
+    assert (held["calls"], fresh["calls"]) == (1000, 5000)
