@@ -171,3 +171,22 @@ def test_v3_score_writes_outputs_and_checks_input(tmp_path) -> None:
         v3_score("cartpole", "global")
     with pytest.raises(TypeError, match="task"):
         v3_score(3, "global")
+
+
+def test_v3_result_outputs(tmp_path) -> None:
+    import json
+
+    from pendulab.evaluate.realai.v3_figure import plot_v3
+
+    res = run_v3("acrobot", DampingEntry(1), seed=0, n_steps=2500)  # 5 s: one reset (~3.96 s)
+    d = res.to_dict()
+    json.dumps(d)  # JSON-ready
+    assert d["score"] == res.uptime / 60.0 and d["protocol"] == "v3" and d["published_best"]["score"] == 0.658
+    # One reset interval of 0.2 s (+ one step), segments before and after it.
+    assert len(d["intervals"]) == 2 and d["intervals"][1]["reset_end"] - d["intervals"][1]["start"] == pytest.approx(0.202)
+    rows = res.write_csv(tmp_path / "v3.csv").read_text().splitlines()
+    assert len(rows) == 2501 and rows[0].startswith("t,theta1")
+    # 101 rows flagged as reset (0.202 s at 2 ms).
+    assert sum(int(r.rsplit(",", 1)[1]) for r in rows[1:]) == 101
+    png = plot_v3(res, tmp_path / "v3.png")
+    assert png.stat().st_size > 10_000
