@@ -82,7 +82,7 @@ def plot_robustness(result: RobustnessResult, path: str | Path) -> Path:
         ax.bar(x, np.maximum(y, 1.5), width=width, color=np.where(ok, "tab:green", "tab:red"))
         if noise:
             ax.axhline(50, color="k", ls="--", lw=0.8)
-            ax.text(x[0], 53, "a level passes above 50 % of its runs", fontsize=7)
+            ax.text(x[0], 53, "a level passes above 50 % of its runs", fontsize=7, bbox={"fc": "white", "alpha": 0.8, "lw": 0})
         ax.set_ylim(0, 105)
         ax.set_xlabel(CATEGORY_LABELS[cat])
         ax.set_ylabel("success [%]")
