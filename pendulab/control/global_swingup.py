@@ -356,6 +356,8 @@ class ReplanningSwingUp:
         Leave a plan when the wrapped tracking error ``|x - x_ref|^2`` exceeds this.
     retry : float
         Wait before re-trying a failed solve [s].
+    min_time : bool
+        Try a time-optimal plan (free horizon in [0.3, ``horizon``]) first, the effort-optimal one on failure.
     max_iter : int
         IPOPT iteration cap of one solve (deterministic, unlike a wall-time budget); a capped solve counts as failed.
     max_solve_time : float
@@ -374,6 +376,7 @@ class ReplanningSwingUp:
     replan_error: float = 1.0
     retry: float = 0.1
     max_iter: int = 150
+    min_time: bool = False
     max_solve_time: float = 60.0
     plan_times: list[float] = field(default_factory=list)
     n_failed: int = 0
@@ -430,22 +433,31 @@ class ReplanningSwingUp:
             0.0,
         )
         fb = self.fallback
-        pb = SwingUpProblem(
-            fb.model, self.actuation, fb.u_max, x0=tuple(float(v) for v in start), goal=goal, horizon=self.horizon
-        )
-        try:
-            res = solve_transcription(
-                pb,
-                "radau",
-                N=self.n_intervals,
-                tolerance=None,
-                refine=False,
-                ipopt_options={"print_level": 0, "sb": "yes", "max_iter": self.max_iter},
-                max_wall_time=self.max_solve_time,
+        x0 = tuple(float(v) for v in start)
+        attempts = []
+        if self.min_time:  # time-optimal first (bang-bang within 90 % of the limit), free horizon up to ``horizon``
+            attempts.append(
+                dict(horizon=0.8 * self.horizon, free_horizon=True, horizon_bounds=(0.3, self.horizon), objective="time")
             )
-            ok = bool(res.success)
-        except (ValueError, RuntimeError):
-            ok = False
+        attempts.append(dict(horizon=self.horizon))
+        ok = False
+        for kw in attempts:
+            pb = SwingUpProblem(fb.model, self.actuation, fb.u_max, x0=x0, goal=goal, **kw)
+            try:
+                res = solve_transcription(
+                    pb,
+                    "radau",
+                    N=self.n_intervals,
+                    tolerance=None,
+                    refine=False,
+                    ipopt_options={"print_level": 0, "sb": "yes", "max_iter": self.max_iter},
+                    max_wall_time=self.max_solve_time,
+                )
+                ok = bool(res.success)
+            except (ValueError, RuntimeError):
+                ok = False
+            if ok:
+                break
         if ok:
             self._tracker = tvlqr(res, dt=fb.sample_time)
             self._t_plan = t + self.plan_delay
@@ -498,7 +510,7 @@ REPLAN_DEFAULTS: dict[str, tuple[float, int]] = {"pendubot": (1.2, 40), "acrobot
 
 
 def replanning_controller(
-    task: str, *, plan_delay: float = 0.0, horizon: float | None = None, **options: float
+    task: str, *, plan_delay: float = 0.0, horizon: float | None = None, min_time: bool = False, **options: float
 ) -> ReplanningSwingUp:
     """The re-planning global swing-up on a RealAIGym leaderboard task's plant (2 ms, 6 N.m).
 
@@ -510,6 +522,8 @@ def replanning_controller(
         Start each plan from the state predicted this far ahead [s] (0: idealised instantaneous planning).
     horizon : float, optional
         Plan horizon [s]; default :data:`REPLAN_DEFAULTS`.
+    min_time : bool
+        Try a time-optimal plan first (see :class:`ReplanningSwingUp`).
     **options : float
         Overrides of the fallback (:func:`global_swingup`).
 
@@ -528,4 +542,4 @@ def replanning_controller(
         raise ValueError(f"plan_delay must be a finite non-negative time [s], got {plan_delay!r}")
     h_default, n_int = REPLAN_DEFAULTS[task]
     h = h_default if horizon is None else positive_float("horizon", horizon, "[s]")
-    return ReplanningSwingUp(fb, task, horizon=h, n_intervals=n_int, plan_delay=delay)
+    return ReplanningSwingUp(fb, task, horizon=h, n_intervals=n_int, plan_delay=delay, min_time=bool(min_time))
