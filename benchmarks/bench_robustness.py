@@ -66,6 +66,23 @@ def run(controller: str, task: str, out_dir: Path, workers: int, seed: int, ever
     print(f"{controller} {task}: score {res.score:.3f}, {res.wall_time:.0f} s", file=sys.stderr)
 
 
+def seed_spread(controllers: list[str], task: str, out_dir: Path, workers: int, seeds: tuple[int, ...] = (1, 2)) -> None:
+    """The velocity-noise category alone with other seeds: how much the majority-of-10 rule depends on the draws."""
+    from pendulab.evaluate.realai.robustness import resolve_controller
+
+    path = out_dir / "robustness-v2-seeds.json"
+    data = json.loads(path.read_text()) if path.is_file() else {}
+    for c in controllers:
+        _, ctrl = resolve_controller(task, c)
+        for seed in seeds:
+            r = robustness_v2(task, ctrl, seed=seed, workers=workers, categories=["measurement_noise"])
+            data[f"{c}-{task}-seed{seed}"] = {
+                "rate": r.rates["measurement_noise"],
+                "level_rates": r.level_rates()["measurement_noise"],
+            }
+            path.write_text(json.dumps(data, indent=1) + "\n")
+
+
 def _label(c: str) -> str:
     if c.endswith(EVERY):
         return f"pendulab `{c[: -len(EVERY)]}` called every 2 ms"
@@ -124,9 +141,34 @@ def report(controllers: list[str], tasks: list[str], out_dir: Path, results: Pat
                 lines.append(
                     f"| pendulab `{c}`, upstream's code (issue 21) | | | | | | | {ISSUE_21[(c, task)]:.3f} | as quoted |"
                 )
+        spread = out_dir / "robustness-v2-seeds.json"
+        if spread.is_file():
+            sd = json.loads(spread.read_text())
+            for c in controllers:
+                got = {k.rsplit("seed", 1)[1]: v["rate"] for k, v in sd.items() if k.startswith(f"{c}-{task}-seed")}
+                if got:
+                    seeds = ", ".join(f"seed {k}: {100 * v:.1f}" for k, v in sorted(got.items()))
+                    lines.append(f"| pendulab `{c}`, velocity noise with other seeds | | {seeds} | | | | | | `--seed-spread` |")
         for name, (rates, score) in PUBLISHED_ROBUSTNESS[task].items():
             lines.append(_row(f"published `{name}`", {c: r / 100 for c, r in zip(CATEGORIES, rates, strict=True)}, score))
         lines.append("")
+    lines += [
+        "## Notes",
+        "",
+        "* The runner is checked run for run against upstream's own `benchmarker` on reduced grids (same seed, same "
+        "controller: identical successes, final states of the stabilized runs within 4e-13; "
+        "`tests/evaluate/test_robustness_v2.py`), so the differences to the issue's numbers are not the protocol's.",
+        "* Issue 21 quotes only totals of unseeded upstream runs. `tvlqr` acrobot agrees (0.679); the others do "
+        "not decompose consistently with these rates (deterministic categories included), so they come from "
+        "another controller adaptor or plan version, and the noise categories from other draws.",
+        "* `called every 2 ms`: the controller is called every step, as upstream's simulator calls its controllers "
+        "(`robustness_v2(every_step=True)`, `--every-step`), instead of on its own 10 ms grid with the output held. "
+        "Fresh noisy measurements every 2 ms average out; one held sample drives 10 ms.",
+        "* Controller time: the median per call is the controller's cost (~10 µs); the maximum is the shared "
+        "machine's scheduling (the per-run maxima have a median of 12-18 ms for the same 10 µs controller at nice 10 "
+        "on 2 cores shared by 4 jobs), not the controller.",
+        "",
+    ]
     results.parent.mkdir(parents=True, exist_ok=True)
     results.write_text("\n".join(lines) + "\n")
     print(f"wrote {results}", file=sys.stderr)
@@ -142,8 +184,11 @@ def main() -> None:
     ap.add_argument("--results", type=Path, default=Path("benchmarks/results/robustness_v2.md"))
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--every-step", action="store_true", help="call the controllers every 2 ms step (upstream's loop)")
+    ap.add_argument("--seed-spread", action="store_true", help="velocity-noise category with seeds 1 and 2 (pendubot)")
     a = ap.parse_args()
-    if not a.report_only:
+    if a.seed_spread:
+        seed_spread(a.controllers, "pendubot", a.out_dir, a.workers)
+    elif not a.report_only:
         for task in a.tasks:
             for c in a.controllers:
                 run(c, task, a.out_dir, a.workers, a.seed, a.every_step)
