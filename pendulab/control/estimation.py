@@ -368,6 +368,11 @@ class MultipleModelEstimator:
         Candidate torque responses ``k`` in (0, 2].
     window : float
         Identification window [s] from the start.
+    accel_std : float
+        Model-error allowance [rad/s^2 or m/s^2] of the open-loop predictions: the measurement ``t`` seconds from
+        the start gets ``0.5 accel_std t^2`` added to its position sigmas and ``accel_std t`` to its rate sigmas
+        (the same for every hypothesis), so the early samples (the onset of motion, which fixes the delay) weigh
+        most and model errors accumulated later do not pick the delay.
     **ekf_options
         Passed to :class:`ExtendedKalmanFilter` (``measured``, ``measurement_std``, ``process_std``,
         ``torque_limit``, ``disturbance``, ``x0`` ...).
@@ -386,6 +391,7 @@ class MultipleModelEstimator:
         delays: Sequence[float] = (0.0,),
         responses: Sequence[float] = (1.0,),
         window: float = 0.2,
+        accel_std: float = 0.0,
         **ekf_options: Any,
     ) -> None:
         for key in ("delay", "response"):
@@ -405,6 +411,14 @@ class MultipleModelEstimator:
             raise ValueError(f"responses must be torque responses k in (0, 2], got {list(responses)!r}")
         self.responses = np.array(ks)
         self.window_steps = max(1, int(round(positive_float("window", window, "[s]") / h)))
+        a = float(accel_std)
+        if not (np.isfinite(a) and a >= 0.0):
+            raise ValueError(f"accel_std must be a finite model-error allowance >= 0 [rad/s^2], got {accel_std!r}")
+        self.accel_std = a
+        rate = np.array([n.startswith(("omega", "v")) for n in self.ekf.measured])
+        t_w = np.arange(self.window_steps + 1) * h
+        grow = np.where(rate[None, :], a * t_w[:, None], 0.5 * a * t_w[:, None] ** 2)  # (window + 1, ny)
+        self._w_t = 1.0 / (np.sqrt(np.diag(self.ekf.R))[None, :] + grow) ** 2  # likelihood weights by prediction time
         self.model = model
         self.sample_time = h
         self.ekf.set_hypothesis(int(self.delays.max()), 1.0)  # compile the longest rollout once
@@ -430,17 +444,16 @@ class MultipleModelEstimator:
     def reset(self) -> None:
         """Back to the start state, every hypothesis equally likely."""
         self.ekf.reset()
-        nx, J = self.model.nx, len(self.responses)
-        self._X = np.tile(self.ekf.x0[:, None], (1, J))  # current open-loop states, one column per response
+        J = len(self.responses)
+        z0 = np.concatenate([self.ekf.x0, np.zeros(self.ekf.nz - self.model.nx)])  # zero disturbance while identifying
+        self._X = np.tile(z0[:, None], (1, J))  # current open-loop states, one column per response
         self._traj: list[np.ndarray] = [self._X.copy()]  # their history, one (nx, J) per sample
         self._ua = np.zeros((len(INPUT_NAMES), J))
         self._u_cmd: list[np.ndarray] = []
         self.loglik = np.zeros((len(self.delays), J))
         self._locked = False
         self.k = 0
-        self._w = 1.0 / np.diag(self.ekf.R)
         self.x_hat = self.ekf.x0.copy()
-        del nx
 
     def update(self, t: float, y: Any, u: Any = None) -> np.ndarray:
         """One step of the bank (inside the window) or of the locked EKF.
@@ -470,17 +483,18 @@ class MultipleModelEstimator:
             self._u_cmd.append(uc)
             lim = self.ekf.torque_limit[:, None]
             self._ua = np.clip(self._ua + self.responses[None, :] * (uc[:, None] - self._ua), -lim, lim)
-            self._X = np.asarray(self._bank_step(self._X, self._ua)).reshape(self.model.nx, -1)
+            self._X = np.asarray(self._bank_step(self._X, self._ua)).reshape(self.ekf.nz, -1)
             self._traj.append(self._X.copy())
         i_now = len(self._traj) - 1
         idx = self.ekf._idx
+        w = self._w_t[min(i_now, len(self._w_t) - 1)]
         for a, n in enumerate(self.delays):
-            pred = self._traj[max(i_now - n, 0)][idx]  # (ny, J)
-            r = ym[:, None] - pred
-            self.loglik[a] -= 0.5 * (self._w[:, None] * r * r).sum(axis=0)
+            i_pred = max(i_now - n, 0)
+            r = ym[:, None] - self._traj[i_pred][idx]  # (ny, J)
+            self.loglik[a] -= 0.5 * (w[:, None] * r * r).sum(axis=0)  # Gaussian log-density (same sigmas for all)
         self.k += 1
         a, j = np.unravel_index(int(np.argmax(self.loglik)), self.loglik.shape)
-        self.x_hat = self._X[:, j].copy()
+        self.x_hat = self._X[: self.model.nx, j].copy()
         if self.k >= self.window_steps:
             self._lock(int(a), int(j))
         return self.x_hat
@@ -491,12 +505,12 @@ class MultipleModelEstimator:
         ekf = self.ekf
         ekf.set_hypothesis(n, k)
         i_now = len(self._traj) - 1
-        ekf.reset(self._traj[max(i_now - n, 0)][:, j])
+        ekf.reset(self._traj[max(i_now - n, 0)][: self.model.nx, j])
         ekf.k = self.k
         # Replay the applied torques of hypothesis j so the EKF's history and torque state match the bank's.
         ekf.u_applied = np.zeros(len(INPUT_NAMES))
         ekf._hist = deque(maxlen=max(n, 1) + 1)
         for uc in self._u_cmd:
             ekf.apply_command(uc)
-        ekf.x_hat = self._X[:, j].copy()
+        ekf.x_hat = self._X[: self.model.nx, j].copy()
         self._locked = True

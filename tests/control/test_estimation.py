@@ -197,3 +197,24 @@ def test_bad_update_and_bank_arguments():
         MultipleModelEstimator(m, DT, delay=0.01)
     with pytest.raises(ValueError, match="window"):
         MultipleModelEstimator(m, DT, window=0.0)
+    with pytest.raises(ValueError, match="accel_std"):
+        MultipleModelEstimator(m, DT, accel_std=-1.0)
+
+
+def test_bank_with_disturbance_states_and_model_error_allowance(plant):
+    """The bank runs with the augmented (x, d) filter and a model-error allowance; the delay is still found."""
+    m, step = plant
+    mm = MultipleModelEstimator(
+        m, DT, delays=[DT * i for i in range(21)], measurement_std=[1e-4, 1e-4, 0.5, 0.5], x0=np.zeros(4),
+        disturbance=True, accel_std=25.0,
+    )  # fmt: skip
+    n, x, hist, u_last = 8, np.zeros(4), [np.zeros(4)], None
+    for k in range(150):
+        xh = mm.update(k * DT, hist[max(len(hist) - 1 - n, 0)], u_last)
+        u_last = _torque(k)
+        x_now, x = x, step(x, u_last)
+        hist.append(x.copy())
+    assert mm.locked and mm.hypothesis == pytest.approx((n * DT, 1.0))
+    # No disturbance acts: the estimate stays on the state (noise-free run; the d states only add slack).
+    assert np.abs(xh - x_now).max() < 1e-3
+    assert np.abs(mm.d_hat).max() < 0.05  # N.m: a fraction of the 1 ... 4 N.m excitation
