@@ -49,7 +49,7 @@ def make(task: str, name: str):
     return controller_for_task(name, leaderboard_task(task))[0]
 
 
-def run_case(task, controller, *, noise=0.0, unoise=0.0, response=1.0, delay=0.0, seed=0, timings=None):
+def run_case(task, controller, *, noise=0.0, unoise=0.0, response=1.0, delay=0.0, seed=0, timings=None, cpu=None):
     """One 10 s run with one disturbance; returns (success, final relative state)."""
     model = leaderboard_model(task)
     rng = np.random.default_rng(seed)
@@ -69,10 +69,12 @@ def run_case(task, controller, *, noise=0.0, unoise=0.0, response=1.0, delay=0.0
         if noise > 0:
             xm[2:] += rng.normal(0.0, noise, 2)
         if k % ratio == 0:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             held = np.clip(full_input(controller, controller(t, xm)), -limit, limit)
             if timings is not None:
                 timings.append(time.perf_counter() - t0)
+            if cpu is not None:
+                cpu.append(time.thread_time() - c0)
         u = last + response * (held - last)
         if unoise > 0:
             u = u + rng.normal(0.0, unoise, 2)
@@ -125,6 +127,7 @@ def main() -> None:
     ap.add_argument("--categories", default="measurement_noise,delay")
     ap.add_argument("--out", default="pendulab-out/bench_estimation")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--timing", action="store_true", help="per-call time percentiles of one nominal and one 40 ms-delay run")
     ap.add_argument("--task", default="pendubot")
     ap.add_argument("--controller", default="robust")
     ap.add_argument("--category", default="delay", choices=list(LEVELS))
@@ -133,6 +136,19 @@ def main() -> None:
     args = ap.parse_args()
     if args.protocol:
         protocol(args)
+        return
+    if args.timing:
+        for name in ("best", args.controller):
+            ctrl = make(args.task, name)
+            for kw in ({}, {"delay": 0.04}):
+                tm: list[float] = []
+                cpu: list[float] = []
+                run_case(args.task, ctrl, timings=tm, cpu=cpu, **kw)
+                q = np.percentile(np.array(tm) * 1e3, [50, 99, 99.9, 100])
+                qc = np.percentile(np.array(cpu) * 1e3, [50, 99, 99.9, 100])
+                print(json.dumps({"controller": name, "task": args.task, **kw, "ms_p50_p99_p999_max": np.round(q, 3).tolist(),
+                                  "calls_over_2ms": int(np.sum(np.array(tm) > 2e-3)), "calls": len(tm),
+                                  "cpu_ms_p50_p99_p999_max": np.round(qc, 3).tolist()}))  # fmt: skip
         return
     ctrl = make(args.task, args.controller)
     levels = LEVELS[args.category][:: max(1, 21 // args.levels)]
