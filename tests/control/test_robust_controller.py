@@ -48,17 +48,18 @@ CASES = [("pendubot", {"delay": 0.04}), ("acrobot", {"delay": 0.03}), ("acrobot"
 
 @pytest.mark.parametrize(("task", "kw"), CASES)
 def test_robust_succeeds_where_tvlqr_fails(task, kw):
-    assert not _run(task, best_controller(task), **kw)  # the plain 2 ms TVLQR (``best``) on the raw measurement
     ctrl = robust_controller(task)
+    assert not _run(task, ctrl.controller, **kw)  # its own 2 ms TVLQR tracker on the raw measurement fails
     assert _run(task, ctrl, **kw)
     if "delay" in kw:
         assert ctrl.estimator.hypothesis[0] == pytest.approx(kw["delay"])  # the bank found the delay
 
 
 def test_robust_nominal_matches_best():
-    """Without disturbances the estimate is the state (to round-off of the filter): same swing-up as ``best``."""
-    ctrl = robust_controller("pendubot")
+    """Without disturbances the bank finds no delay and the EKF follows the state: the swing-up of ``best`` succeeds."""
+    ctrl = robust_controller("pendubot", inner="best")
     assert _run("pendubot", ctrl)
+    assert _run("pendubot", best_controller("pendubot"))
     assert ctrl.estimator.hypothesis == (0.0, 1.0)
 
 
@@ -121,6 +122,8 @@ def test_bad_estimator_and_robust_arguments():
         controller_for_task("robust", "swingup_pendubot", sample_time=0.01)
     with pytest.raises(ValueError, match="task must be one of"):
         robust_controller("cartpole")
+    with pytest.raises(ValueError, match="inner must be"):
+        robust_controller("pendubot", inner="nmpc")
     with pytest.raises(TypeError, match="controller must be a SampledController"):
         EstimatedController(object(), build_estimator("ekf", model, 0.01))
     with pytest.raises(TypeError, match="estimator must have reset"):
