@@ -49,7 +49,22 @@ class StateEstimator(Protocol):
         """Forget the run: back to the prior at the start state."""
 
     def update(self, t: float, y: np.ndarray, u: np.ndarray | None = None) -> np.ndarray:
-        """State estimate (nx,) at ``t`` [s] from measurement ``y`` and torque ``u`` (2,) [N.m] commanded since the last call."""
+        """State estimate from a measurement and the torque commanded since the last call.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : ndarray
+            Measurement.
+        u : ndarray, shape (2,), optional
+            (tau1, tau2) [N.m] commanded over the interval that ends at ``t``; None on the first call.
+
+        Returns
+        -------
+        ndarray, shape (nx,)
+            Current-state estimate.
+        """
 
 
 def delay_steps(delay: float, sample_time: float) -> int:
@@ -266,6 +281,11 @@ class ExtendedKalmanFilter:
         -------
         ndarray, shape (2,)
             Applied torque [N.m].
+
+        Raises
+        ------
+        ValueError
+            ``u`` is not two finite torques.
         """
         uc = np.asarray(u, dtype=float).reshape(-1)
         if uc.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(uc)):
@@ -471,6 +491,11 @@ class MultipleModelEstimator:
         -------
         ndarray, shape (nx,)
             Current-state estimate.
+
+        Raises
+        ------
+        ValueError
+            Wrong shape or non-finite ``y`` or ``u``.
         """
         if self._locked:
             self.x_hat = self.ekf.update(t, y, u)
