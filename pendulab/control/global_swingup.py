@@ -114,7 +114,18 @@ class GlobalSwingUp:
         self.caught = False
 
     def cost(self, x: np.ndarray) -> float:
-        """The catch test's LQR cost-to-go ``e' P e`` (angles wrapped)."""
+        """The catch test's LQR cost-to-go ``e' P e`` (angles wrapped).
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            State (absolute angles) [rad, rad/s].
+
+        Returns
+        -------
+        float
+            Cost-to-go of the deviation from upright.
+        """
         return self.balance.cost(x)
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
@@ -129,7 +140,18 @@ class GlobalSwingUp:
         return np.array([self.pump(x)])
 
     def pump(self, x: np.ndarray) -> float:
-        """Pumping torque of the actuated joint [N.m] at state ``x`` (saturated)."""
+        """Pumping (or braking) torque of the actuated joint, saturated.
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            State (absolute angles) [rad, rad/s].
+
+        Returns
+        -------
+        float
+            Torque [N.m].
+        """
         th1, th2, w1, w2 = x
         deficit = self._e_up - float(self._energy(x, self._p)[0])
         if self.acrobot:
@@ -204,6 +226,8 @@ def global_swingup(
         Torque limit [N.m].
     k_energy, kp, kd, alpha, catch_level, release_level : float, optional
         See :class:`GlobalSwingUp`; defaults :data:`GLOBAL_DEFAULTS`.
+    pfl : bool
+        Command the pumping law as an acceleration (partial feedback linearization); False: as a torque.
 
     Returns
     -------

@@ -228,7 +228,20 @@ class ProtocolController:
         controller.reset()
 
     def get_control_output_(self, x: np.ndarray, t: float) -> np.ndarray:
-        """Torques (tau1, tau2) [N.m] at upstream state ``x`` (relative angles) and time ``t`` [s]."""
+        """Torques of the entry, upstream's call.
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            Upstream state ``(q1, q2, dq1, dq2)``, ``q2`` relative [rad, rad/s].
+        t : float
+            Time [s].
+
+        Returns
+        -------
+        ndarray, shape (2,)
+            (tau1, tau2) [N.m], held on the controller's sample grid.
+        """
         if self._last_t is None or t - self._last_t > 1.5 * DT:
             self._k = 0  # first call, or the first after a reset: sample now
         if self._k % self.ratio == 0:
