@@ -325,7 +325,7 @@ def _run_v3(args: argparse.Namespace) -> int:
     try:
         res = v3_score(task, args.controller, seed=seed, progress=bar, out=out)
     except ValueError as exc:
-        raise CLIError(str(exc)) from None
+        raise CLIError(f"--protocol v3 (--controller {args.controller!r}): {exc}") from None
     finally:
         bar.close()
     summary = res.to_dict()
