@@ -161,6 +161,9 @@ def report(controllers: list[str], tasks: list[str], out_dir: Path, results: Pat
         "* Issue 21 quotes only totals of unseeded upstream runs. `tvlqr` acrobot agrees (0.679); the others do "
         "not decompose consistently with these rates (deterministic categories included), so they come from "
         "another controller adaptor or plan version, and the noise categories from other draws.",
+        "* Other rows: `nice python benchmarks/bench_robustness.py --controllers tvlqr --every-step` (called every "
+        "2 ms) and `... --controllers tvlqr best --seed-spread` (the velocity-noise category alone, pendubot, seeds 1 "
+        "and 2: its spread is the draws' effect on the majority-of-10 rule near 50 % success).",
         "* `called every 2 ms`: the controller is called every step, as upstream's simulator calls its controllers "
         "(`robustness_v2(every_step=True)`, `--every-step`), instead of on its own 10 ms grid with the output held. "
         "Fresh noisy measurements every 2 ms average out; one held sample drives 10 ms.",
