@@ -142,7 +142,7 @@ def robust_estimator(
 
 #: The tracker each task's robust controller feeds: the one that holds up best under model errors with the exact
 #: state (robustness v2, seed 0, benchmarks/results/robustness_v2.md: model-parameter rate 77 % ``best`` vs 69 %
-#: TVLQR at 2 ms on pendubot, 52 % vs 75 % on acrobot).
+#: for TVLQR on the task's plan called every 2 ms on pendubot, 52 % vs 75 % on acrobot; here designed at 2 ms).
 ROBUST_INNER: dict[str, str] = {"pendubot": "best", "acrobot": "tvlqr"}
 
 
