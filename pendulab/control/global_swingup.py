@@ -531,8 +531,9 @@ class ReplanningSwingUp:
 #: reset-like states (uniform configuration, rates in +-3 rad/s) solved within 150 IPOPT iterations (1.0 s: 7/10).
 #: Acrobot: 1.5 s solved 9/10 but failed often in the protocol (v3 seed 2: 0.369); 2.0 s: 9/10, no failure in
 #: the protocol run, seed 2: 0.582 (benchmarks/results/v3.md).
-#: Third entry: try a time-optimal plan first (pendubot, seed 0: 0.745 against 0.709 effort-optimal only).
-REPLAN_DEFAULTS: dict[str, tuple[float, int, bool]] = {"pendubot": (1.2, 40, True), "acrobot": (2.0, 30, False)}
+#: Third entry: try a time-optimal plan first (v3 seeds 0-2: pendubot 0.747 against 0.717 effort-optimal only,
+#: acrobot 0.636 against 0.610).
+REPLAN_DEFAULTS: dict[str, tuple[float, int, bool]] = {"pendubot": (1.2, 40, True), "acrobot": (2.0, 30, True)}
 
 
 def replanning_controller(
