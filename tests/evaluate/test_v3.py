@@ -1,4 +1,4 @@
-"""RealAIGym v3 protocol: pendulab's run against the vendored upstream loop, the score formula, the global controller."""
+"""RealAIGym v3 protocol: pendulab's run against the restated upstream loop, the score formula, the global controller."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from upstream_v3 import reference as up
+import v3_reference as ref  # tests/evaluate/v3_reference.py (pytest puts tests/evaluate on sys.path)
 
 from pendulab.control.global_swingup import global_controller, verify_catch_level
 from pendulab.control.realai.spec import leaderboard_model
@@ -42,21 +42,38 @@ class DampingEntry:
 @pytest.mark.parametrize("task, joint", [("pendubot", 0), ("acrobot", 1)])
 def test_v3_run_reproduces_upstream_loop(task: str, joint: int) -> None:
     n = 4500  # 9 s: two resets (at ~3.75 s and ~7.5 s) and their PID transfers
-    wrapper, T, X, U, up_time = up.run_v3(DampingEntry(joint), task, seed=3, n_steps=n)
+    want = ref.run_v3(DampingEntry(joint), task, seed=3, n_steps=n)
     res = run_v3(task, DampingEntry(joint), seed=3, n_steps=n)
     # Same schedule, drawn in upstream's order from the same seed: bitwise.
-    np.testing.assert_array_equal(res.reset_times, wrapper.reset_times[:15])
-    np.testing.assert_array_equal(res.reset_states, wrapper.random_states[:15])
+    np.testing.assert_array_equal(res.reset_times, want.reset_times[:15])
+    np.testing.assert_array_equal(res.reset_states, want.reset_states[:15])
     # Same reset intervals: the timer accumulates the same floats.
-    assert [tuple(iv) for iv in wrapper.disturbance_intervals] == res.intervals
+    assert want.intervals == res.intervals
     assert len(res.intervals) == 2
-    np.testing.assert_array_equal(res.t, T)
+    np.testing.assert_array_equal(res.t, want.t)
     # RHS in absolute vs relative angles and M^-1 by inversion vs CasADi: round-off ~1e-15 per step,
     # not amplified by the dissipative entry and the PID over 4500 steps.
-    np.testing.assert_allclose(to_relative(res.x), X, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(res.u, U, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(to_relative(res.x), want.x, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.u, want.u, rtol=0, atol=1e-9)
     # The uptime: the same samples above the line (no state within 1e-9 of it).
-    assert res.uptime == pytest.approx(up_time, abs=1e-12)
+    assert res.uptime == pytest.approx(want.uptime, abs=1e-12)
+
+
+@pytest.mark.parametrize("task, joint", [("pendubot", 0), ("acrobot", 1)])
+def test_restated_v3_loop_equals_real_upstream(task: str, joint: int) -> None:
+    """The oracle itself against upstream's own package (a local checkout named by the environment)."""
+    n = 4500  # 9 s, two resets, as above
+    got = ref.real_upstream_run(DampingEntry(joint), task, seed=3, n_steps=n)
+    if got is None:
+        pytest.skip("PENDULAB_UPSTREAM_DOUBLE_PENDULUM does not name upstream's src/python")
+    want = ref.run_v3(DampingEntry(joint), task, seed=3, n_steps=n)
+    # Same formulas in the same operation order and the same global-generator calls: bitwise.
+    np.testing.assert_array_equal(got.reset_times, want.reset_times)
+    np.testing.assert_array_equal(got.reset_states, want.reset_states)
+    assert got.intervals == want.intervals and len(got.intervals) == 2
+    np.testing.assert_array_equal(got.x, want.x)
+    np.testing.assert_array_equal(got.u, want.u)
+    assert got.uptime == want.uptime
 
 
 def test_v3_run_of_a_pendulab_controller_matches_upstream_until_chaos() -> None:
@@ -67,10 +84,10 @@ def test_v3_run_of_a_pendulab_controller_matches_upstream_until_chaos() -> None:
         return ProtocolController("pendubot", global_controller("pendubot"))
 
     n = 1500  # 3 s before the first reset: pumping is chaotic, round-off (1e-16) grows ~1e3 per second
-    _, _, X, U, _ = up.run_v3(entry(), "pendubot", seed=0, n_steps=n)
+    want = ref.run_v3(entry(), "pendubot", seed=0, n_steps=n)
     res = run_v3("pendubot", entry(), seed=0, n_steps=n)
     # Chaotic amplification of round-off over 3 s stays well below 1e-6 (measured ~1e-11).
-    np.testing.assert_allclose(to_relative(res.x), X, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(to_relative(res.x), want.x, rtol=0, atol=1e-6)
 
 
 def test_reset_schedule_matches_upstream_draw_order() -> None:
