@@ -68,7 +68,7 @@ def run(controller: str, task: str, out_dir: Path, workers: int, seed: int, ever
 
 def seed_spread(controllers: list[str], task: str, out_dir: Path, workers: int, seeds: tuple[int, ...] = (1, 2)) -> None:
     """The velocity-noise category alone with other seeds: how much the majority-of-10 rule depends on the draws."""
-    from pendulab.evaluate.realai.robustness import resolve_controller
+    from pendulab.evaluate.realai.controllers import resolve_controller
 
     path = out_dir / "robustness-v2-seeds.json"
     data = json.loads(path.read_text()) if path.is_file() else {}

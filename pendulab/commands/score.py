@@ -268,7 +268,8 @@ def _run_protocol(args: argparse.Namespace) -> int:
         return _run_v3(args)
     _reject(args, "--protocol robustness-v2", common)
     task = _protocol_task(args)
-    from ..evaluate.realai.robustness import CATEGORIES, CONTROLLERS, QUICK_LEVELS, robustness_v2
+    from ..evaluate.realai.controllers import CONTROLLERS
+    from ..evaluate.realai.robustness import CATEGORIES, QUICK_LEVELS, robustness_v2
 
     if args.controller not in CONTROLLERS:
         raise CLIError(f"--controller {args.controller!r}: --protocol robustness-v2 expects one of {list(CONTROLLERS)}")

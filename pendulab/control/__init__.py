@@ -1,4 +1,4 @@
-"""Control design: python-control bridge, controllability, LQR, sampled controllers, tracking, swing-up and NMPC.
+"""Control design: python-control bridge, controllability, LQR, sampled controllers, tracking, swing-up, NMPC, estimation.
 
 One definition per concept: :mod:`.lqr` holds the LQR design (continuous or
 discrete), the TVLQR Riccati recursion, the ZOH discretization and the angle
@@ -19,6 +19,7 @@ from .balance import ROAResult, balanced, format_roa, region_of_attraction, simu
 from .bridge import to_nlsys, to_statespace
 from .controllability import ReportRow, controllability_report, controllable_subspace, finite_gramian, format_report
 from .controllers import CONTROLLERS, TASK_CONTROLLERS, controller_for_task, make_controller
+from .estimation import ExtendedKalmanFilter, MultipleModelEstimator, StateEstimator
 from .feedback import (
     EnergySwingUp,
     LinearStateFeedback,
@@ -29,8 +30,10 @@ from .feedback import (
     energy_swingup,
     upright_state,
 )
+from .global_swingup import GlobalSwingUp, ReplanningSwingUp, global_controller, replanning_controller
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
 from .nmpc import NMPCController, NMPCOptions, nmpc_controller, nmpc_for_task
+from .robust import EstimatedController, robust_controller
 from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, solve_transcription, swing_up
 from .swingup.episode import SuccessRate, closed_loop_success_rate
 from .swingup.errors import ErrorEstimate, estimate_error, estimate_error_arrays
@@ -48,6 +51,15 @@ from .tracking import (
 
 __all__ = [
     "CONTROLLERS",
+    "EstimatedController",
+    "ExtendedKalmanFilter",
+    "GlobalSwingUp",
+    "MultipleModelEstimator",
+    "ReplanningSwingUp",
+    "StateEstimator",
+    "global_controller",
+    "replanning_controller",
+    "robust_controller",
     "TASK_CONTROLLERS",
     "ErrorEstimate",
     "NMPCController",

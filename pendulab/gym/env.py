@@ -72,6 +72,7 @@ MAX_RESET_NOISE = 100.0
 #: torque overflowed to -inf.
 MAX_TORQUE_LIMIT = 1e6
 
+
 def horizon(dt: float, episode_length: Any = None, max_episode_steps: Any = None) -> int:
     """Steps of an episode: ``max_episode_steps``, else ``round(episode_length / dt)`` (default 10 s).
 

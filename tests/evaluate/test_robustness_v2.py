@@ -11,15 +11,14 @@ from upstream import reference as ref  # tests/evaluate/upstream (pytest puts te
 
 from pendulab.cli import main
 from pendulab.evaluate.realai.plant import MODEL_VARIATIONS, PARAM_NAMES, nominal_params, protocol_rhs_python, vary
+from pendulab.evaluate.realai.controllers import CONTROLLERS, resolve_controller
 from pendulab.evaluate.realai.robustness import (
     CATEGORIES,
-    CONTROLLERS,
     PUBLISHED_ROBUSTNESS,
     category_rates,
     plan_runs,
     protocol_grid,
     random_gauss_perturbation,
-    resolve_controller,
     robustness_score,
     robustness_v2,
 )

@@ -1,7 +1,10 @@
-"""RealAIGym simulation leaderboard v2: the faithful simulation and the criteria.
+"""RealAIGym's three simulation protocols, reproduced faithfully: leaderboard v2, robustness v2 and v3.
 
 * :mod:`.criteria`: the five criteria, the v2 score (:func:`~.criteria.score_v2`) and the published entries (:data:`PUBLISHED`);
-* :mod:`.simulate`: the leaderboard run (RK4 at 2 ms, 10 s, 6 N.m, zero damping) and :class:`RealAIResult`.
+* :mod:`.simulate`: the leaderboard run (RK4 at 2 ms, 10 s, 6 N.m, zero damping) and :class:`RealAIResult`;
+* :mod:`.robustness` (with the protocol plant :mod:`.plant`): robustness v2, :func:`robustness_v2`;
+* :mod:`.v3`: the v3 global protocol (60 s, 15 random resets), :func:`v3_score`;
+* :mod:`.controllers`: the one table of controller names every protocol accepts.
 
 The leaderboard's numbers (step, horizon, torque limit, norms) are the task a
 controller is designed for: :mod:`pendulab.control.realai.spec`; the
@@ -14,28 +17,35 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from ...control.controllers import TASK_CONTROLLERS, controller_for_task
 from ...control.feedback import SampledController
-from ...control.realai.design import best_controller
-from ...control.realai.spec import TASKS, leaderboard_task
+from ...control.realai.spec import TASKS
 from ...control.swingup.tasks import short_name
+from .controllers import CONTROLLERS, resolve_controller
 from .criteria import CRITERIA, PUBLISHED, score_v2, to_relative
+from .robustness import RobustnessResult, robustness_v2
 from .simulate import RealAIResult, rk4_rollout, run_leaderboard
+from .v3 import V3Result, v3_score
 
 __all__ = [
     "CONTROLLER_NAMES",
+    "CONTROLLERS",
     "CRITERIA",
     "PUBLISHED",
     "RealAIResult",
+    "RobustnessResult",
+    "V3Result",
     "realai_score",
+    "resolve_controller",
     "rk4_rollout",
+    "robustness_v2",
     "run_leaderboard",
     "score_v2",
     "to_relative",
+    "v3_score",
 ]
 
-#: Controller names :func:`realai_score` accepts: "best" and the task controllers.
-CONTROLLER_NAMES: tuple[str, ...] = ("best", *TASK_CONTROLLERS)
+#: Controller names every protocol accepts (the keys of :data:`CONTROLLERS`).
+CONTROLLER_NAMES: tuple[str, ...] = tuple(CONTROLLERS)
 
 
 def realai_score(
@@ -51,13 +61,12 @@ def realai_score(
     ----------
     task : {"pendubot", "acrobot"}
         Leaderboard task (``swingup_pendubot``, ``swingup_acrobot`` are aliases).
-    controller : str or SampledController
-        ``"best"`` (the project's best swing-up: TVLQR at 2 ms along the shipped
-        score-designed plan), a name of
-        :data:`pendulab.control.controllers.TASK_CONTROLLERS` (built by
-        :func:`~pendulab.control.controllers.controller_for_task` on the task
-        ``swingup_<task>`` at its 10 ms sample time; designed on the damped task
-        model, run on the undamped leaderboard plant), or a controller object.
+    controller : str, SampledController or callable
+        A name of :data:`CONTROLLERS` (``"best"``: TVLQR at 2 ms along the shipped score-designed plan;
+        ``"robust"``: ``best`` fed by the delay-identifying estimator; the task controllers of
+        :func:`~pendulab.control.controllers.controller_for_task`, designed on the damped task model and run
+        on the undamped leaderboard plant; ``"global"``, ``"replan"``), a controller object or a factory
+        (:func:`~.controllers.resolve_controller`).
     csv_path : str or Path, optional
         Also write the run (t, theta1, theta2, omega1, omega2, tau1, tau2; absolute angles; every 2 ms).
     progress : callable, optional
@@ -80,16 +89,7 @@ def realai_score(
     task = short_name(task)
     if task not in TASKS:
         raise ValueError(f"task must be one of {list(TASKS)} (or swingup_pendubot, swingup_acrobot), got {task!r}")
-    if isinstance(controller, str):
-        name = controller
-        if name == "best":
-            ctrl: SampledController = best_controller(task)
-        elif name in TASK_CONTROLLERS:
-            ctrl, _ = controller_for_task(name, leaderboard_task(task))
-        else:
-            raise ValueError(f"controller must be one of {list(CONTROLLER_NAMES)} or a SampledController, got {name!r}")
-    else:
-        ctrl, name = controller, type(controller).__name__
+    name, ctrl = resolve_controller(task, controller)
     result = run_leaderboard(task, ctrl, name, progress=progress)
     if csv_path is not None:
         result.write_csv(csv_path)

@@ -51,18 +51,16 @@ import numpy as np
 
 from ..._checks import bounded_int
 from ..._io import atomic_write_text
-from ...control.controllers import controller_for_task
 from ...control.feedback import SampledController, full_input
-from ...control.realai.design import best_controller
-from ...control.realai.spec import DT, TORQUE_LIMIT, check_task, leaderboard_task
+from ...control.realai.spec import DT, TORQUE_LIMIT, check_task
 from ...control.swingup.tasks import short_name
 from ...ensemble.pool import default_workers, map_runs
+from .controllers import resolve_controller
 from .plant import MODEL_VARIATIONS, actuated_joint, nominal_params, params_vector, protocol_rhs_python, vary
 
 __all__ = [
     "CATEGORIES",
     "CATEGORY_LABELS",
-    "CONTROLLERS",
     "PUBLISHED_ROBUSTNESS",
     "RobustnessResult",
     "RunSpec",
@@ -71,7 +69,6 @@ __all__ = [
     "plan_runs",
     "protocol_grid",
     "random_gauss_perturbation",
-    "resolve_controller",
     "robustness_score",
     "robustness_v2",
     "run_protocol_episode",
@@ -127,75 +124,6 @@ PUBLISHED_ROBUSTNESS: Mapping[str, Mapping[str, tuple[tuple[float, ...], float]]
         "ilqr_riccati_gains": ((4.8, 9.5, 9.5, 52.4, 4.8, 2.0), 0.138),
     },
 }
-
-
-# -- controllers -----------------------------------------------------------------------------------------------------
-
-
-def _task_controller(name: str) -> Callable[[str], SampledController]:
-    def make(task: str) -> SampledController:
-        ctrl, _ = controller_for_task(name, leaderboard_task(task))
-        return ctrl
-
-    make.__name__ = name
-    return make
-
-
-#: Controller names -> factory ``task -> SampledController`` (the one table; add an entry to plug a new name in).
-CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
-    "best": best_controller,
-    "tvlqr": _task_controller("tvlqr"),
-    "lqr": _task_controller("lqr"),
-    "swingup": _task_controller("swingup"),
-    "nmpc": _task_controller("nmpc"),
-    "robust": _task_controller("robust"),
-}
-
-
-def _is_controller(obj: Any) -> bool:
-    return callable(obj) and hasattr(obj, "sample_time") and hasattr(obj, "input_names") and hasattr(obj, "reset")
-
-
-def resolve_controller(task: str, controller: str | SampledController | Callable[[str], Any]) -> tuple[str, SampledController]:
-    """A controller for a leaderboard task from a name, an object or a factory.
-
-    Parameters
-    ----------
-    task : {"pendubot", "acrobot"}
-        Leaderboard task.
-    controller : str, SampledController or callable
-        A name of :data:`CONTROLLERS`; a :class:`~pendulab.control.feedback.SampledController`
-        (``reset()``, ``__call__(t, x)``, ``sample_time``, ``input_names``); or a factory
-        ``task -> SampledController`` (or ``-> (SampledController, x0)``, as the scorecard's).
-
-    Returns
-    -------
-    name : str
-        The name (the factory's or the class's ``__name__`` for objects).
-    controller : SampledController
-        Built for ``task``.
-
-    Raises
-    ------
-    ValueError
-        Unknown name.
-    TypeError
-        Neither a name, a controller nor a factory, or a factory returning something else.
-    """
-    if isinstance(controller, str):
-        if controller not in CONTROLLERS:
-            raise ValueError(f"controller must be one of {list(CONTROLLERS)} or a SampledController, got {controller!r}")
-        return controller, CONTROLLERS[controller](task)
-    if _is_controller(controller):
-        return type(controller).__name__, controller  # type: ignore[return-value]
-    if callable(controller):
-        made = controller(task)
-        if isinstance(made, tuple) and len(made) == 2:
-            made = made[0]
-        if not _is_controller(made):
-            raise TypeError(f"a controller factory must return a SampledController, got {type(made).__name__}")
-        return getattr(controller, "__name__", type(controller).__name__), made
-    raise TypeError(f"controller must be a name, a SampledController or a factory task -> controller, got {type(controller)}")
 
 
 # -- grid, plan, random draws -------------------------------------------------------------------------------------

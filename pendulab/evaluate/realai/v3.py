@@ -1,7 +1,7 @@
 """The RealAIGym v3 (ICRA 2025 competition) simulation protocol: 60 s, 15 resets to random configurations, uptime score.
 
-What upstream does (github.com/dfki-ric-underactuated-lab/double_pendulum, commit 1e8544e; a minimal copy
-is vendored as the test oracle in ``tests/evaluate/upstream_v3/``):
+What upstream does (github.com/dfki-ric-underactuated-lab/double_pendulum, commit 1e8544e; restated
+independently, not copied, as the test oracle ``tests/evaluate/v3_reference.py``):
 
 * ``leaderboard/{pendubot,acrobot}/simulation_v3/sim_parameters.py``: design C.1, **model 1.1** (model 1.0
   with rotor inertia, damping and Coulomb friction zero), torque limit ``[6, 0]`` / ``[0, 6]`` for scoring,
@@ -49,6 +49,7 @@ from ..._io import atomic_open, atomic_write_text
 from ...control.feedback import SampledController, full_input
 from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
 from ...model.model import INPUT_NAMES, Model
+from .controllers import resolve_controller
 from .simulate import rk4_rollout
 
 __all__ = [
@@ -552,33 +553,6 @@ def run_v3(
     )
 
 
-#: Controller names :func:`v3_score` accepts.
-V3_CONTROLLERS: tuple[str, ...] = ("global", "replan", "replan_delayed", "best", "tvlqr", "swingup", "lqr", "nmpc")
-#: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
-REPLAN_DELAY: float = 0.5
-
-
-def _build(task: str, controller: str) -> SampledController:
-    from ...control.controllers import controller_for_task
-    from ...control.realai.design import best_controller
-    from ...control.realai.spec import leaderboard_task
-
-    if controller == "global":
-        from ...control.global_swingup import global_controller
-
-        return global_controller(task)
-    if controller in ("replan", "replan_delayed"):
-        from ...control.global_swingup import replanning_controller
-
-        return replanning_controller(task, plan_delay=REPLAN_DELAY if controller == "replan_delayed" else 0.0)
-    if controller == "best":
-        return best_controller(task)
-    if controller in V3_CONTROLLERS:
-        ctrl, _ = controller_for_task(controller, leaderboard_task(task))
-        return ctrl
-    raise ValueError(f"controller must be one of {list(V3_CONTROLLERS)} or a SampledController, got {controller!r}")
-
-
 def v3_score(
     task: str,
     controller: str | SampledController = "global",
@@ -593,10 +567,10 @@ def v3_score(
     ----------
     task : {"pendubot", "acrobot"}
         Leaderboard task (``swingup_pendubot``/``swingup_acrobot`` are aliases).
-    controller : str or SampledController
-        ``"global"`` (:func:`pendulab.control.global_swingup.global_controller`), ``"best"`` (the v2
-        score-designed TVLQR), a task controller name (``tvlqr``, ``swingup``, ``lqr``, ``nmpc``; built by
-        :func:`~pendulab.control.controllers.controller_for_task`), or a controller object.
+    controller : str, SampledController or callable
+        A name of :data:`pendulab.evaluate.realai.controllers.CONTROLLERS` (``"global"``: energy pumping and a
+        verified LQR catch; ``"replan"``: online re-planning, not real time; ``"best"``, ``"robust"``, the task
+        controllers), a controller object or a factory (:func:`~.controllers.resolve_controller`).
     seed : int
         Seed of the reset schedule (:func:`reset_schedule`).
     progress : callable, optional
@@ -621,11 +595,7 @@ def v3_score(
     if not isinstance(task, str):
         raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")
     task = check_task(short_name(task))
-    if isinstance(controller, str):
-        name = controller
-        ctrl = _build(task, controller)
-    else:
-        ctrl, name = controller, type(controller).__name__
+    name, ctrl = resolve_controller(task, controller)
     result = run_v3(task, ctrl, name, seed=seed, progress=progress)
     if out is not None:
         from .v3_figure import plot_v3

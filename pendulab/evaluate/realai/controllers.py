@@ -1,0 +1,109 @@
+"""The one table of controllers the RealAIGym protocols accept by name, and how a name, object or factory becomes one.
+
+Every protocol (leaderboard v2 :func:`~pendulab.evaluate.realai.realai_score`, robustness v2
+:func:`~pendulab.evaluate.realai.robustness.robustness_v2`, v3 :func:`~pendulab.evaluate.realai.v3.v3_score`)
+and ``pendulab score --protocol ...`` resolve controllers here, so a new controller plugs in with one entry.
+Each factory takes the leaderboard task (``"pendubot"`` or ``"acrobot"``) and designs on pendulab's own model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ...control.controllers import controller_for_task
+from ...control.feedback import SampledController
+from ...control.realai.design import best_controller
+from ...control.realai.spec import leaderboard_task
+
+__all__ = ["CONTROLLERS", "REPLAN_DELAY", "resolve_controller"]
+
+#: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
+REPLAN_DELAY: float = 0.5
+
+
+def _task_controller(name: str) -> Callable[[str], SampledController]:
+    def make(task: str) -> SampledController:
+        ctrl, _ = controller_for_task(name, leaderboard_task(task))
+        return ctrl
+
+    make.__name__ = name
+    return make
+
+
+def _global(task: str) -> SampledController:
+    from ...control.global_swingup import global_controller  # imported on use: builds on the swing-up solver
+
+    return global_controller(task)
+
+
+def _replan(task: str) -> SampledController:
+    from ...control.global_swingup import replanning_controller
+
+    return replanning_controller(task)
+
+
+def _replan_delayed(task: str) -> SampledController:
+    from ...control.global_swingup import replanning_controller
+
+    return replanning_controller(task, plan_delay=REPLAN_DELAY)
+
+
+#: Controller names -> factory ``task -> SampledController`` (add an entry to plug a new name in).
+CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
+    "best": best_controller,
+    "tvlqr": _task_controller("tvlqr"),
+    "lqr": _task_controller("lqr"),
+    "swingup": _task_controller("swingup"),
+    "nmpc": _task_controller("nmpc"),
+    "robust": _task_controller("robust"),
+    "global": _global,
+    "replan": _replan,
+    "replan_delayed": _replan_delayed,
+}
+
+
+def _is_controller(obj: Any) -> bool:
+    return callable(obj) and hasattr(obj, "sample_time") and hasattr(obj, "input_names") and hasattr(obj, "reset")
+
+
+def resolve_controller(task: str, controller: str | SampledController | Callable[[str], Any]) -> tuple[str, SampledController]:
+    """A controller for a leaderboard task from a name, an object or a factory.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+    controller : str, SampledController or callable
+        A name of :data:`CONTROLLERS`; a :class:`~pendulab.control.feedback.SampledController`
+        (``reset()``, ``__call__(t, x)``, ``sample_time``, ``input_names``); or a factory
+        ``task -> SampledController`` (or ``-> (SampledController, x0)``, as the scorecard's).
+
+    Returns
+    -------
+    name : str
+        The name (the factory's or the class's ``__name__`` for objects).
+    controller : SampledController
+        Built for ``task``.
+
+    Raises
+    ------
+    ValueError
+        Unknown name.
+    TypeError
+        Neither a name, a controller nor a factory, or a factory returning something else.
+    """
+    if isinstance(controller, str):
+        if controller not in CONTROLLERS:
+            raise ValueError(f"controller must be one of {list(CONTROLLERS)} or a SampledController, got {controller!r}")
+        return controller, CONTROLLERS[controller](task)
+    if _is_controller(controller):
+        return type(controller).__name__, controller  # type: ignore[return-value]
+    if callable(controller):
+        made = controller(task)
+        if isinstance(made, tuple) and len(made) == 2:
+            made = made[0]
+        if not _is_controller(made):
+            raise TypeError(f"a controller factory must return a SampledController, got {type(made).__name__}")
+        return getattr(controller, "__name__", type(controller).__name__), made
+    raise TypeError(f"controller must be a name, a SampledController or a factory task -> controller, got {type(controller)}")
