@@ -30,9 +30,10 @@ from .feedback import (
     energy_swingup,
     upright_state,
 )
-from .global_swingup import GlobalSwingUp, ReplanningSwingUp, global_controller, replanning_controller
+from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import LQRDesign, UncontrollableError, actuation_name, discrete_tvlqr, lqr_balance, wrap_state_error, zoh
 from .nmpc import NMPCController, NMPCOptions, nmpc_controller, nmpc_for_task
+from .replanning import ReplanningSwingUp, replanning_controller
 from .robust import EstimatedController, robust_controller
 from .swingup import GUESSES, OBJECTIVES, TRANSCRIPTIONS, SwingUpProblem, SwingUpResult, solve_transcription, swing_up
 from .swingup.episode import SuccessRate, closed_loop_success_rate

@@ -10,8 +10,8 @@ import pytest
 from upstream import reference as ref  # tests/evaluate/upstream (pytest puts tests/evaluate on sys.path)
 
 from pendulab.cli import main
-from pendulab.evaluate.realai.plant import MODEL_VARIATIONS, PARAM_NAMES, nominal_params, protocol_rhs_python, vary
 from pendulab.evaluate.realai.controllers import CONTROLLERS, resolve_controller
+from pendulab.evaluate.realai.plant import MODEL_VARIATIONS, PARAM_NAMES, nominal_params, protocol_rhs_python, vary
 from pendulab.evaluate.realai.robustness import (
     CATEGORIES,
     PUBLISHED_ROBUSTNESS,

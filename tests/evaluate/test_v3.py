@@ -168,7 +168,7 @@ def test_global_controller_brakes_a_spinning_pendulum(task: str, removed: float)
 @pytest.mark.parametrize("task", ["pendubot"])  # the acrobot path is the same code (its TVLQR design costs ~5 s)
 def test_replanning_controller_swings_up_from_a_reset_like_state(task: str) -> None:
     """From a configuration with the velocities a reset leaves, one plan + TVLQR reaches and holds upright."""
-    from pendulab.control.global_swingup import replanning_controller
+    from pendulab.control.replanning import replanning_controller
 
     c = replanning_controller(task)
     model = leaderboard_model(task)

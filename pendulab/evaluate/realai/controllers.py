@@ -38,13 +38,13 @@ def _global(task: str) -> SampledController:
 
 
 def _replan(task: str) -> SampledController:
-    from ...control.global_swingup import replanning_controller
+    from ...control.replanning import replanning_controller
 
     return replanning_controller(task)
 
 
 def _replan_delayed(task: str) -> SampledController:
-    from ...control.global_swingup import replanning_controller
+    from ...control.replanning import replanning_controller
 
     return replanning_controller(task, plan_delay=REPLAN_DELAY)
 

@@ -33,24 +33,38 @@ told about resets, as upstream entries are not.
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..._checks import bounded_int
-from ..._io import atomic_open, atomic_write_text
+from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
 from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
 from ...model.model import INPUT_NAMES, Model
 from .controllers import resolve_controller
 from .simulate import rk4_rollout
+from .v3_definition import (
+    N_RESETS,
+    N_STEPS_V3,
+    PID_DT,
+    PID_GAINS,
+    PLANT_LIMIT,
+    PUBLISHED_V3,
+    RESET_LENGTH,
+    T_FINAL_V3,
+    _end_height,
+    _to_absolute,
+    count_swingups,
+    reset_schedule,
+    uptime,
+)
+from .v3_result import V3Result
 
 __all__ = [
     "T_FINAL_V3",
@@ -68,123 +82,8 @@ __all__ = [
     "v3_score",
 ]
 
+
 #: Episode length [s].
-T_FINAL_V3: float = 60.0
-#: RK4 steps: ``int(60 / 0.02)`` animation frames of ``int(0.02 / 0.002)`` steps.
-N_STEPS_V3: int = int(T_FINAL_V3 / 0.02) * int(0.02 / DT)
-#: Resets per episode (``n_disturbances``).
-N_RESETS: int = 15
-#: A reset lasts until its timer exceeds this [s].
-RESET_LENGTH: float = 0.2
-#: Reset PID (kp [N.m/rad], ki [N.m/(rad s)], kd [N.m s/rad]) and its own step [s] (``dt=0.001`` default).
-PID_GAINS: tuple[float, float, float] = (10.0, 0.1, 1.0)
-PID_DT: float = 0.001
-#: Torque limit of the simulated plant on both joints during the whole run [N.m] (``mpar_nolim``).
-PLANT_LIMIT: float = 6.0
-#: Best published v3 simulation scores (ICRA 2025 competition leaderboard, as quoted in issue 21).
-PUBLISHED_V3: dict[str, dict[str, float]] = {"pendubot": {"vimppi": 0.799}, "acrobot": {"ar_eapo": 0.658}}
-#: A swing-up counts again only after this dead time [s] (``get_number_of_swingups``).
-SWINGUP_DEADTIME: float = 1.0
-
-
-def reset_schedule(seed: int, n_resets: int = N_RESETS, t_max: float = T_FINAL_V3) -> tuple[np.ndarray, np.ndarray]:
-    """The random reset configurations and times, drawn as ``GlobalPolicyTestingControllerV2.__init__`` draws them.
-
-    Parameters
-    ----------
-    seed : int
-        Seed of ``np.random.RandomState`` (upstream: the global state after ``np.random.seed(seed)``).
-    n_resets : int
-        ``n_disturbances``.
-    t_max : float
-        Episode length [s].
-
-    Returns
-    -------
-    states : ndarray, shape (10 n_resets + 1, 4)
-        Upstream's relative configurations ``(q1, q2, 0, 0)``, ``q`` uniform in ``[-pi, pi)`` [rad];
-        reset ``i`` drives toward ``states[i]``.
-    times : ndarray, shape (n_resets + 1,)
-        Reset times [s], the last ``inf``.
-
-    Raises
-    ------
-    ValueError
-        ``seed`` outside ``[0, 2**32 - 1]`` or ``n_resets`` outside ``[1, 1000]``.
-    TypeError
-        ``seed`` or ``n_resets`` not an integer.
-    """
-    seed = bounded_int("seed", seed, low=0, high=2**32 - 1, why="a numpy RandomState seed")
-    n = bounded_int("n_resets", n_resets, low=1, high=1000, why="upstream draws 10 n + 1 states")
-    rs = np.random.RandomState(seed)
-    states = rs.uniform(0.0, 2 * np.pi, (10 * n + 1, 4))
-    states -= np.pi
-    states.T[2:] *= 0.0
-    avg = t_max / float(n + 1)
-    times = np.linspace(avg, t_max - avg, n) + 2.0 * (rs.rand(n) - 0.5)
-    return states, np.append(times, [np.inf], axis=0)
-
-
-def _to_absolute(x_rel: np.ndarray) -> np.ndarray:
-    """Upstream's (q1, q2, dq1, dq2), q2 relative -> pendulab's (theta1, theta2, omega1, omega2)."""
-    return np.array([x_rel[0], x_rel[0] + x_rel[1], x_rel[2], x_rel[2] + x_rel[3]], dtype=float)
-
-
-def _end_height(model: Model, x: np.ndarray) -> np.ndarray:
-    """End-effector height above the pivot [m] of absolute states ``x`` (N, 4)."""
-    p = model.params
-    return -p.L1 * np.cos(x[:, 0]) - p.L2 * np.cos(x[:, 1])
-
-
-def uptime(t: np.ndarray, height: np.ndarray, threshold: float) -> float:
-    """``get_uptime``: the sum of ``diff(t, prepend=0)`` over the samples whose end effector is above ``threshold``.
-
-    Parameters
-    ----------
-    t : ndarray, shape (N,)
-        Sample times [s] (the scored CSV's, starting at 0).
-    height : ndarray, shape (N,)
-        End-effector height [m].
-    threshold : float
-        ``0.9 (l1 + l2)`` [m].
-
-    Returns
-    -------
-    float
-        Uptime [s].
-    """
-    dt = np.diff(np.asarray(t, dtype=float), prepend=0.0)
-    return float(np.sum(dt[np.asarray(height) > threshold]))
-
-
-def count_swingups(t: np.ndarray, height: np.ndarray, threshold: float, deadtime: float = SWINGUP_DEADTIME) -> int:
-    """``get_number_of_swingups`` (method "height"): rising edges above ``threshold``, at least ``deadtime`` apart.
-
-    Parameters
-    ----------
-    t : ndarray, shape (N,)
-        Sample times [s].
-    height : ndarray, shape (N,)
-        End-effector height [m].
-    threshold : float
-        [m].
-    deadtime : float
-        [s].
-
-    Returns
-    -------
-    int
-        Number of swing-ups.
-    """
-    last_up_time, last_up, n = -deadtime, False, 0
-    for tk, up in zip(t, np.asarray(height) > threshold, strict=True):
-        if up and not last_up and (tk - last_up_time) > deadtime:
-            n += 1
-            last_up_time = tk
-        last_up = bool(up)
-    return n
-
-
 class ProtocolController:
     """A pendulab sampled controller as an upstream entry: ``get_control_output_(x_rel, t) -> (tau1, tau2)``.
 
@@ -253,166 +152,6 @@ class ProtocolController:
         self._k += 1
         self._last_t = t
         return self._held.copy()
-
-
-@dataclass
-class V3Result:
-    """One v3 run: trajectory, reset schedule, uptime and score.
-
-    Attributes
-    ----------
-    task, controller : str
-        Task and controller name.
-    seed : int
-        Schedule seed.
-    t : ndarray, shape (N,)
-        Scored sample times [s] (N = 30000: 0 ... 59.998).
-    x : ndarray, shape (N, 4)
-        pendulab states (absolute angles) [rad, rad/s].
-    u : ndarray, shape (N, 2)
-        Applied torques (tau1, tau2) [N.m], held over [t_k, t_k + 2 ms].
-    reset_times : ndarray, shape (n_resets,)
-        Scheduled reset times [s].
-    reset_states : ndarray, shape (n_resets, 4)
-        The configurations the resets drive toward (upstream's relative angles, zero rates).
-    intervals : list of (float, float)
-        Actual reset intervals (PID active) [s].
-    uptime : float
-        [s].
-    score : float
-        ``uptime / 60``.
-    n_swingups : int
-        Swing-ups counted as upstream counts them.
-    threshold : float
-        Height line ``0.9 (L1 + L2)`` [m].
-    call_times : ndarray
-        Wall time of each controller call [s].
-    wall_time : float
-        Wall time of the run [s].
-    """
-
-    task: str
-    controller: str
-    seed: int
-    t: np.ndarray = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    u: np.ndarray = field(repr=False)
-    reset_times: np.ndarray = field(repr=False)
-    reset_states: np.ndarray = field(repr=False)
-    intervals: list[tuple[float, float]] = field(repr=False)
-    uptime: float
-    score: float
-    n_swingups: int
-    threshold: float
-    call_times: np.ndarray = field(repr=False)
-    wall_time: float = 0.0
-
-    @property
-    def height(self) -> np.ndarray:
-        """End-effector height [m] at each sample."""
-        return _end_height(leaderboard_model(self.task), self.x)
-
-    def interval_uptimes(self) -> list[dict[str, float]]:
-        """Uptime per segment between resets (before the first reset, then from each reset's start).
-
-        Returns
-        -------
-        list of dict
-            ``start``, ``end`` [s], ``reset_end`` (end of the reset PID phase, None for the first segment),
-            ``uptime`` [s] and ``fraction`` (uptime / segment length).
-        """
-        starts = [0.0, *(a for a, _ in self.intervals)]
-        ends = [*(a for a, _ in self.intervals), float(self.t[-1]) + DT]
-        dt = np.diff(self.t, prepend=0.0)
-        up = self.height > self.threshold
-        out = []
-        for i, (a, b) in enumerate(zip(starts, ends, strict=True)):
-            sel = (self.t >= a) & (self.t < b) & up
-            value = float(np.sum(dt[sel]))
-            out.append(
-                {
-                    "start": a,
-                    "end": b,
-                    "reset_end": None if i == 0 else float(self.intervals[i - 1][1]),
-                    "uptime": value,
-                    "fraction": value / (b - a) if b > a else 0.0,
-                }
-            )
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary.
-
-        Returns
-        -------
-        dict
-            protocol, task, controller, seed, score, uptime [s], n_swingups, per-interval uptimes, controller
-            per-call time (median, max, count, against the 2 ms period), the best published entry and
-            ``beats_published``, the reset schedule and the run's wall time.
-        """
-        name, best = max(PUBLISHED_V3[self.task].items(), key=lambda kv: kv[1])
-        ct = np.asarray(self.call_times, dtype=float)
-        return {
-            "protocol": "v3",
-            "task": self.task,
-            "controller": self.controller,
-            "seed": int(self.seed),
-            "score": float(self.score),
-            "uptime": float(self.uptime),
-            "n_swingups": int(self.n_swingups),
-            "intervals": self.interval_uptimes(),
-            "controller_time": {
-                "median_s": float(np.median(ct)) if ct.size else None,
-                "max_s": float(np.max(ct)) if ct.size else None,
-                "calls": int(ct.size),
-                "period_s": DT,
-                "median_fits_period": bool(ct.size and np.median(ct) <= DT),
-            },
-            "published_best": {"name": name, "score": best},
-            "beats_published": bool(self.score > best),
-            "reset_times": [float(v) for v in self.reset_times],
-            "reset_states_relative": [[float(v) for v in row[:2]] for row in self.reset_states],
-            "simulation": {
-                "integrator": "rk4",
-                "dt": DT,
-                "t_final": T_FINAL_V3,
-                "plant_torque_limit": [PLANT_LIMIT, PLANT_LIMIT],
-                "entry_torque_limit": [TORQUE_LIMIT if i == TASKS[self.task] else 0.0 for i in range(2)],
-                "n_resets": N_RESETS,
-                "reset_length": RESET_LENGTH,
-                "upstream": "dfki-ric-underactuated-lab/double_pendulum@1e8544e leaderboard/*/simulation_v3",
-            },
-            "wall_time_s": float(self.wall_time),
-        }
-
-    def write_csv(self, path: str | Path) -> Path:
-        """Write ``t, theta1, theta2, omega1, omega2, tau1, tau2, height, reset`` (one row per 2 ms step), atomically.
-
-        Parameters
-        ----------
-        path : str or Path
-            CSV file (parent directories are created).
-
-        Returns
-        -------
-        Path
-            The file written.
-        """
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        in_reset = np.zeros(len(self.t), dtype=bool)
-        for a, b in self.intervals:
-            in_reset |= (self.t >= a) & (self.t < b)
-        h = self.height
-        with atomic_open(p, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t", "theta1", "theta2", "omega1", "omega2", "tau1", "tau2", "height", "reset"])
-            for k in range(len(self.t)):
-                w.writerow(
-                    [repr(float(self.t[k])), *(repr(float(v)) for v in self.x[k]), *(repr(float(v)) for v in self.u[k])]
-                    + [repr(float(h[k])), int(in_reset[k])]
-                )
-        return p
 
 
 def _gravity_compensation(model: Model) -> Callable[[np.ndarray], np.ndarray]:

@@ -1,0 +1,137 @@
+"""The v3 protocol's definition: horizon, resets, reset PID, published scores, the reset schedule and the uptime score."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..._checks import bounded_int
+from ...control.realai.spec import DT
+from ...model.model import Model
+
+__all__ = [
+    "T_FINAL_V3",
+    "N_STEPS_V3",
+    "N_RESETS",
+    "RESET_LENGTH",
+    "PID_GAINS",
+    "PUBLISHED_V3",
+    "reset_schedule",
+    "uptime",
+    "count_swingups",
+]
+
+
+T_FINAL_V3: float = 60.0
+#: RK4 steps: ``int(60 / 0.02)`` animation frames of ``int(0.02 / 0.002)`` steps.
+N_STEPS_V3: int = int(T_FINAL_V3 / 0.02) * int(0.02 / DT)
+#: Resets per episode (``n_disturbances``).
+N_RESETS: int = 15
+#: A reset lasts until its timer exceeds this [s].
+RESET_LENGTH: float = 0.2
+#: Reset PID (kp [N.m/rad], ki [N.m/(rad s)], kd [N.m s/rad]) and its own step [s] (``dt=0.001`` default).
+PID_GAINS: tuple[float, float, float] = (10.0, 0.1, 1.0)
+PID_DT: float = 0.001
+#: Torque limit of the simulated plant on both joints during the whole run [N.m] (``mpar_nolim``).
+PLANT_LIMIT: float = 6.0
+#: Best published v3 simulation scores (ICRA 2025 competition leaderboard, as quoted in issue 21).
+PUBLISHED_V3: dict[str, dict[str, float]] = {"pendubot": {"vimppi": 0.799}, "acrobot": {"ar_eapo": 0.658}}
+#: A swing-up counts again only after this dead time [s] (``get_number_of_swingups``).
+SWINGUP_DEADTIME: float = 1.0
+
+
+def reset_schedule(seed: int, n_resets: int = N_RESETS, t_max: float = T_FINAL_V3) -> tuple[np.ndarray, np.ndarray]:
+    """The random reset configurations and times, drawn as ``GlobalPolicyTestingControllerV2.__init__`` draws them.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of ``np.random.RandomState`` (upstream: the global state after ``np.random.seed(seed)``).
+    n_resets : int
+        ``n_disturbances``.
+    t_max : float
+        Episode length [s].
+
+    Returns
+    -------
+    states : ndarray, shape (10 n_resets + 1, 4)
+        Upstream's relative configurations ``(q1, q2, 0, 0)``, ``q`` uniform in ``[-pi, pi)`` [rad];
+        reset ``i`` drives toward ``states[i]``.
+    times : ndarray, shape (n_resets + 1,)
+        Reset times [s], the last ``inf``.
+
+    Raises
+    ------
+    ValueError
+        ``seed`` outside ``[0, 2**32 - 1]`` or ``n_resets`` outside ``[1, 1000]``.
+    TypeError
+        ``seed`` or ``n_resets`` not an integer.
+    """
+    seed = bounded_int("seed", seed, low=0, high=2**32 - 1, why="a numpy RandomState seed")
+    n = bounded_int("n_resets", n_resets, low=1, high=1000, why="upstream draws 10 n + 1 states")
+    rs = np.random.RandomState(seed)
+    states = rs.uniform(0.0, 2 * np.pi, (10 * n + 1, 4))
+    states -= np.pi
+    states.T[2:] *= 0.0
+    avg = t_max / float(n + 1)
+    times = np.linspace(avg, t_max - avg, n) + 2.0 * (rs.rand(n) - 0.5)
+    return states, np.append(times, [np.inf], axis=0)
+
+
+def _to_absolute(x_rel: np.ndarray) -> np.ndarray:
+    """Upstream's (q1, q2, dq1, dq2), q2 relative -> pendulab's (theta1, theta2, omega1, omega2)."""
+    return np.array([x_rel[0], x_rel[0] + x_rel[1], x_rel[2], x_rel[2] + x_rel[3]], dtype=float)
+
+
+def _end_height(model: Model, x: np.ndarray) -> np.ndarray:
+    """End-effector height above the pivot [m] of absolute states ``x`` (N, 4)."""
+    p = model.params
+    return -p.L1 * np.cos(x[:, 0]) - p.L2 * np.cos(x[:, 1])
+
+
+def uptime(t: np.ndarray, height: np.ndarray, threshold: float) -> float:
+    """``get_uptime``: the sum of ``diff(t, prepend=0)`` over the samples whose end effector is above ``threshold``.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times [s] (the scored CSV's, starting at 0).
+    height : ndarray, shape (N,)
+        End-effector height [m].
+    threshold : float
+        ``0.9 (l1 + l2)`` [m].
+
+    Returns
+    -------
+    float
+        Uptime [s].
+    """
+    dt = np.diff(np.asarray(t, dtype=float), prepend=0.0)
+    return float(np.sum(dt[np.asarray(height) > threshold]))
+
+
+def count_swingups(t: np.ndarray, height: np.ndarray, threshold: float, deadtime: float = SWINGUP_DEADTIME) -> int:
+    """``get_number_of_swingups`` (method "height"): rising edges above ``threshold``, at least ``deadtime`` apart.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times [s].
+    height : ndarray, shape (N,)
+        End-effector height [m].
+    threshold : float
+        [m].
+    deadtime : float
+        [s].
+
+    Returns
+    -------
+    int
+        Number of swing-ups.
+    """
+    last_up_time, last_up, n = -deadtime, False, 0
+    for tk, up in zip(t, np.asarray(height) > threshold, strict=True):
+        if up and not last_up and (tk - last_up_time) > deadtime:
+            n += 1
+            last_up_time = tk
+        last_up = bool(up)
+    return n
