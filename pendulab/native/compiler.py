@@ -13,6 +13,7 @@ import platform
 import shutil
 import signal
 import subprocess
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -184,10 +185,10 @@ def _run_compiler(cmd: Sequence[str]) -> tuple[int, str]:
     would orphan them, so on POSIX it runs in its own process group and the whole group is killed.
     """
     posix = os.name == "posix"
-    proc = subprocess.Popen(
-        list(cmd), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=posix
-    )  # fmt: skip
+    proc, interrupted = _start(cmd, posix)
     try:
+        if interrupted:
+            raise KeyboardInterrupt
         _, stderr = proc.communicate()
     except BaseException:
         _kill_tree(proc, posix)
@@ -196,6 +197,28 @@ def _run_compiler(cmd: Sequence[str]) -> tuple[int, str]:
         if proc.returncode is None:  # pragma: no cover - communicate() returned without reaping
             _kill_tree(proc, posix)
     return proc.returncode, stderr or ""
+
+
+def _start(cmd: Sequence[str], posix: bool) -> tuple[subprocess.Popen, bool]:
+    """Start the compiler with Ctrl-C held back until the process object exists; (process, Ctrl-C arrived meanwhile).
+
+    A KeyboardInterrupt raised inside ``Popen`` (after the fork, before it returns: seen under load) would leave a
+    running compiler nobody can kill, so the main thread records a SIGINT during the start and reports it instead.
+    """
+
+    def start() -> subprocess.Popen:
+        return subprocess.Popen(list(cmd), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=posix)
+
+    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if not callable(previous):  # another thread, a handler set outside Python, or ignored: nothing to hold back
+        return start(), False
+    arrived: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: arrived.append(signum))
+    try:
+        proc = start()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    return proc, bool(arrived)
 
 
 def _kill_tree(proc: subprocess.Popen, posix: bool) -> None:

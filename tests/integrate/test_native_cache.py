@@ -249,3 +249,24 @@ def test_damaged_library_without_a_compiler_says_it_is_damaged_and_where(built, 
     assert proc.returncode != 0  # a clean error (the damaged file is never loaded), not a crash
     assert proc.returncode > 0 and "CompilerNotFoundError" in proc.stderr
     assert f"the cached file {lib} does not match its SHA-256 digest" in proc.stderr and "no C compiler" in proc.stderr
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir() or os.name != "posix", reason="reads /proc; POSIX signals")
+def test_ctrl_c_while_the_compiler_starts_still_kills_it(tmp_path, monkeypatch):
+    # Under load the Ctrl-C can land after the fork, inside Popen: the compiler runs but no process object exists yet.
+    from pendulab.native import compiler
+
+    real_popen = subprocess.Popen
+    started: list[subprocess.Popen] = []
+
+    def popen_hit_by_ctrl_c(*args, **kwargs):
+        proc = real_popen(*args, **kwargs)
+        started.append(proc)
+        os.kill(os.getpid(), signal.SIGINT)  # delivered before Popen returns
+        return proc
+
+    monkeypatch.setattr(compiler.subprocess, "Popen", popen_hit_by_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        compiler._run_compiler(["sleep", "600"])
+    (proc,) = started
+    assert proc.returncode is not None and not _alive(proc.pid)  # killed and reaped, not orphaned
