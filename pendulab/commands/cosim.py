@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import relative_tolerance
+from .._checks import bounded_int, relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
 
@@ -64,6 +64,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--param", nargs="*", default=[], metavar="NAME=VALUE", help="FMU parameters (also used for the controller design)"
     )
     p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
+    p.add_argument(
+        "--estimator",
+        choices=("ekf", "mmae"),
+        default=None,
+        help="feed the controller a state estimate of the measurement (docs/estimation.md)",
+    )
+    p.add_argument(
+        "--measurement-noise",
+        default=None,
+        metavar="SIGMA",
+        help="std [rad/s] of Gaussian noise on omega1, omega2 seen by the controller",
+    )
+    p.add_argument("--measurement-delay", default=None, metavar="N", help="measurement delay [controller samples]")
+    p.add_argument("--measurement-seed", default=None, metavar="S", help="seed of the measurement noise (default 0)")
     p.add_argument("--solver", choices=("dopri5", "rodas4"), help="embedded solver (default: the FMU's)")
     p.add_argument("--tolerance", type=float, help="embedded solver relative tolerance in (0, 1) (default: the FMU's)")
     p.add_argument("--u-max", type=float, default=None, help="torque limit [N.m] (default 20; not with --task)")
@@ -140,19 +154,54 @@ def _load_task(name: str) -> Any:
 
 
 class _Counted:
-    """A sampled controller that reports each call to a progress bar (same protocol, same outputs)."""
+    """A sampled controller that reports each call to a progress bar and keeps the state it was given."""
 
     def __init__(self, ctrl: Any, bar: Any) -> None:
         self.ctrl, self.bar = ctrl, bar
         self.sample_time, self.input_names = ctrl.sample_time, ctrl.input_names
+        self.u_max = getattr(ctrl, "u_max", None)
+        self.seen: list[tuple[float, np.ndarray]] = []
 
     def reset(self) -> None:
         self.ctrl.reset()
+        self.seen = []
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        self.seen.append((t, np.array(x, dtype=float)))
         u = self.ctrl(t, x)
         self.bar.iterate(1, "sample")
         return u
+
+
+def _measurement(args: argparse.Namespace) -> Any:
+    """The measurement model of --measurement-noise/-delay/-seed (None without noise and delay)."""
+    from ..evaluate.measurement import MeasurementModel
+
+    noise, delay, seed = args.measurement_noise, args.measurement_delay, args.measurement_seed
+    if seed is not None and noise is None:
+        raise CLIError("--measurement-seed applies with --measurement-noise only")
+    if noise is None and delay is None:
+        return None
+    try:
+        sigma = 0.0 if noise is None else float(noise)
+    except ValueError:
+        raise CLIError(f"--measurement-noise must be a standard deviation >= 0 [rad/s], got {noise!r}") from None
+    try:
+        seed = bounded_int("--measurement-seed", 0 if seed is None else seed, low=0, high=2**63 - 1, why="a numpy seed")
+        return MeasurementModel(sigma, 0 if delay is None else delay, seed=seed)
+    except ValueError as exc:
+        flag = "--measurement-delay" if str(exc).startswith("delay") else "--measurement-noise"
+        raise CLIError(f"{flag}: {exc}" if not str(exc).startswith("--") else str(exc)) from None
+
+
+def _seen_summary(ctrl: _Counted, traj: Any) -> dict[str, Any]:
+    """RMS error [rad/s] of the link rates the controller was given (measurement or estimate) against the plant's."""
+    if not ctrl.seen:
+        return {}
+    h = float(traj.t[1] - traj.t[0])
+    nq = traj.x.shape[1] // 2
+    err = np.array([x[nq : nq + 2] - traj.x[round(t / h)][nq : nq + 2] for t, x in ctrl.seen])
+    return {"controller_rate_rms_error": float(np.sqrt(np.mean(err**2)))}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -194,6 +243,7 @@ def run(args: argparse.Namespace) -> int:
             relative_tolerance("--tolerance", args.tolerance)
         except ValueError as exc:
             raise CLIError(str(exc)) from None
+    measurement = _measurement(args)
     task = _load_task(args.task) if args.task is not None else None
     if task is not None:
         given = [f for f, v in (("--reference", args.reference), ("--param", args.param), ("--u-max", args.u_max),
@@ -256,9 +306,10 @@ def run(args: argparse.Namespace) -> int:
     _progress(f"co-simulating {fmu.name} ({info.kind}, FMI {info.fmi_version}) under {args.controller} for {t_final:g} s")
     # A progress bar of the controller samples where a run takes seconds (NMPC solves per sample).
     bar = ProgressBar(f"co-simulating ({args.controller})", not args.no_progress and args.controller == "nmpc")
+    counted = _Counted(ctrl, bar)
     try:
-        traj = cosim(fmu, _Counted(ctrl, bar), comm_step, t_final, x0=x0, params=params, solver=args.solver,
-                     tolerance=args.tolerance)  # fmt: skip
+        traj = cosim(fmu, counted, comm_step, t_final, x0=x0, params=params, solver=args.solver,
+                     tolerance=args.tolerance, estimator=args.estimator, measurement=measurement)  # fmt: skip
     except ValueError as exc:
         raise CLIError(str(exc)) from None
     finally:
@@ -281,7 +332,12 @@ def run(args: argparse.Namespace) -> int:
         "max_abs_torque": float(np.abs(traj.u).max()),
         "caught_at": getattr(ctrl, "caught_at", None),
         "stats": {k: float(v) for k, v in traj.stats.items()},
+        "estimator": args.estimator,
+        "measurement": None
+        if measurement is None
+        else {"velocity_noise": measurement.velocity_noise, "delay_samples": measurement.delay, "seed": measurement.seed},
     }
+    summary.update(_seen_summary(counted, traj))
     summary.update(_controller_summary(ctrl))
     if task is not None:
         summary.update(_task_summary(task, traj))

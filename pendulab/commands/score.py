@@ -47,6 +47,12 @@ def register(subparsers: Any) -> None:
         "--task", default=None, metavar="TASK", help="swing-up task name (pendulab swingup --list); --realai: pendubot | acrobot"
     )
     p.add_argument("--runs", default=None, metavar="N", help="runs per level of the stochastic categories (default 20)")
+    p.add_argument(
+        "--estimator",
+        default=None,
+        metavar="NAME",
+        help="scorecard: feed the controller a state estimate of the measurement: ekf | mmae (docs/estimation.md)",
+    )
     p.add_argument("--categories", default=None, metavar="A,B", help="comma-separated categories (default: all that apply)")
     p.add_argument("--seed", default=None, metavar="S", help="base seed (default 0)")
     p.add_argument("--workers", default=None, metavar="N", help="worker processes (default: all cores)")
@@ -90,6 +96,7 @@ PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
 
 #: Options of the scorecard that the other modes do not take (an error there, not ignored).
 _SCORECARD_ONLY = (
+    ("estimator", "--estimator"),
     ("categories", "--categories"),
     ("seed", "--seed"),
     ("resume", "--resume"),
@@ -167,6 +174,10 @@ def run_score(args: argparse.Namespace) -> int:
 
     if args.controller not in TASK_CONTROLLERS:
         raise CLIError(f"--controller {args.controller!r}: expected one of {list(TASK_CONTROLLERS)}")
+    from ..control.robust import ESTIMATORS
+
+    if args.estimator is not None and args.estimator not in ESTIMATORS:
+        raise CLIError(f"--estimator {args.estimator!r}: expected one of {list(ESTIMATORS)}")
     try:
         task = load_task(args.task)
     except FileNotFoundError:
@@ -179,8 +190,11 @@ def run_score(args: argparse.Namespace) -> int:
             raise CLIError(f"--categories: unknown {bad}; expected some of {list(CATEGORIES)}")
     seed = _int("--seed", args.seed, 0, 2**63 - 1, "a seed of numpy's SeedSequence", 0)
     budget = parse_number("--max-wall-time", args.max_wall_time, positive=True)
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"{args.controller}-{task.name}"
-    settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats}
+    fed = f"+{args.estimator}" if args.estimator else ""
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"{args.controller}{fed}-{task.name}"
+    # estimator None matches records files written before the option (data.get("estimator") is None).
+    settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats,
+                "estimator": args.estimator}  # fmt: skip
     completed = _resume(out / _RECORDS, settings) if args.resume else ()
 
     def save(records: tuple, complete: bool = False) -> None:
@@ -201,7 +215,7 @@ def run_score(args: argparse.Namespace) -> int:
         with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
             card = score(
                 args.controller, task, runs=runs, categories=cats, seed=seed, workers=workers, progress=progress,
-                completed=completed, on_records=save, max_wall_time=budget,
+                completed=completed, on_records=save, max_wall_time=budget, estimator=args.estimator,
             )  # fmt: skip
     finally:
         planning.close()
@@ -262,7 +276,9 @@ def _protocol_task(args: argparse.Namespace) -> str:
 
 def _run_protocol(args: argparse.Namespace) -> int:
     """``--protocol robustness-v2`` and ``--protocol v3``."""
-    common = (("runs", "--runs"), ("categories", "--categories"), ("max_wall_time", "--max-wall-time"))
+    common = (
+        ("runs", "--runs"), ("categories", "--categories"), ("max_wall_time", "--max-wall-time"), ("estimator", "--estimator")
+    )  # fmt: skip
     if args.protocol == "v3":
         _reject(args, "--protocol v3", (*common, ("workers", "--workers"), ("resume", "--resume")))
         return _run_v3(args)

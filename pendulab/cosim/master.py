@@ -19,7 +19,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,10 @@ from ..control.feedback import SampledController
 from ..integrate.trajectory import Trajectory
 from ..model.model import INPUT_NAMES
 from .plant import FmuInfo, FmuPlant, StepCheck, inspect_fmu
+
+if TYPE_CHECKING:
+    from ..control.estimation import StateEstimator
+    from ..evaluate.measurement import MeasurementModel
 
 __all__ = ["cosim", "cosim_many"]
 
@@ -86,6 +90,39 @@ def _controller_output(controller: SampledController, cols: list[int], t: float,
     return full
 
 
+def _check_measurement(estimator: Any, measurement: Any) -> None:
+    """Reject a bad estimator name or measurement model before any FMU is instantiated."""
+    from ..evaluate.measurement import MeasurementModel
+
+    if measurement is not None and not isinstance(measurement, MeasurementModel):
+        raise TypeError(
+            "measurement must be a pendulab.evaluate.measurement.MeasurementModel (velocity noise, delay) or None, "
+            f"got {type(measurement).__name__}"
+        )
+    if estimator is None:
+        return
+    from ..control.estimation import StateEstimator
+    from ..control.robust import ESTIMATORS
+
+    if isinstance(estimator, str) and estimator not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {list(ESTIMATORS)} or an object with reset() and update(), got {estimator!r}")
+    if not isinstance(estimator, str | StateEstimator):
+        raise TypeError(
+            f"estimator must be one of {list(ESTIMATORS)} or an object with reset() and update(), got {type(estimator).__name__}"
+        )
+
+
+def _estimated(controller: SampledController, estimator: Any, info: FmuInfo, params: Any, x0: np.ndarray) -> Any:
+    """``controller`` fed by ``estimator`` (a name: built on the FMU's model at the controller's sample time from ``x0``)."""
+    from ..control.robust import EstimatedController, build_estimator
+
+    u_max = getattr(controller, "u_max", None)
+    # Undriven inputs stay 0 whatever the limit (the wrapper scatters the command to the driven ones only).
+    torque = None if u_max is None else np.array([float(u_max) if n in controller.input_names else 0.0 for n in INPUT_NAMES])
+    est = build_estimator(estimator, info.model(params), float(controller.sample_time), x0=x0, torque_limit=torque)
+    return EstimatedController(controller, est)
+
+
 def _run(
     infos: Sequence[FmuInfo],
     controller: SampledController,
@@ -99,9 +136,12 @@ def _run(
     tolerance: float | None,
     check: StepCheck | None,
     max_halvings: int,
+    estimator: str | StateEstimator | None = None,
+    measurement: MeasurementModel | None = None,
 ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray, list[dict[str, Any]], float]:
     """The one master loop: states, outputs, shared inputs and per-plant stats of ``n`` steps of ``h``."""
     every = _check_controller(controller, infos[feedback_from], h)
+    _check_measurement(estimator, measurement)
     if isinstance(max_halvings, bool) or not isinstance(max_halvings, int) or max_halvings < 0:
         raise ValueError(f"max_halvings must be a non-negative integer, got {max_halvings!r}")
     if max_halvings:
@@ -109,7 +149,6 @@ def _run(
         if cannot:
             raise ValueError(f"max_halvings={max_halvings} needs FMUs that can get and set their state; {cannot} cannot")
     cols = [INPUT_NAMES.index(name) for name in controller.input_names]
-    controller.reset()
     X = [np.empty((n + 1, len(i.state_names))) for i in infos]
     Y = [np.empty((n + 1, len(i.output_names))) for i in infos]
     U = np.zeros((n + 1, len(INPUT_NAMES)))
@@ -124,11 +163,20 @@ def _run(
         for k in range(n + 1):
             for j, plant in enumerate(plants):
                 X[j][k], Y[j][k] = plant.read()
+            if k == 0:  # the start state is known only now (the FMU's start values unless x0 is given)
+                x_start = X[feedback_from][0]
+                if estimator is not None:
+                    controller = _estimated(controller, estimator, infos[feedback_from], params[feedback_from], x_start)
+                controller.reset()
+                if measurement is not None:
+                    measurement.reset(x_start)
             if k == n:
                 break
             t = k * h
             if k % every == 0:
-                u = _controller_output(controller, cols, t, X[feedback_from][k])
+                # The controller (or its estimator) sees the measurement: delayed by whole samples, noisy rates.
+                x_meas = X[feedback_from][k] if measurement is None else measurement(X[feedback_from][k])
+                u = _controller_output(controller, cols, t, x_meas)
             U[k] = u
             for j, plant in enumerate(plants):
                 plant.set_inputs(u)
@@ -158,6 +206,8 @@ def cosim(
     tolerance: float | None = None,
     check: StepCheck | None = None,
     max_halvings: int = 0,
+    estimator: str | StateEstimator | None = None,
+    measurement: MeasurementModel | None = None,
 ) -> Trajectory:
     """Co-simulate a pendulab FMU (Co-Simulation, FMI 2 or 3) under a sampled-data controller.
 
@@ -190,6 +240,15 @@ def cosim(
         When > 0, the master saves the FMU state before each step and, on a
         rejected step (Discard, non-finite result or ``check`` False), restores
         it and covers the step in halves, at most this many times.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        Feed the controller the estimator's state instead of the measurement
+        (:class:`~pendulab.control.robust.EstimatedController`; a name is built by
+        :func:`~pendulab.control.robust.build_estimator` on the FMU's model with ``params`` at the
+        controller's sample time, from the start state read from the FMU).
+    measurement : MeasurementModel, optional
+        What the controller (or its estimator) sees at each of its samples:
+        :class:`~pendulab.evaluate.measurement.MeasurementModel` (delay in controller samples, Gaussian
+        noise on ``omega1, omega2``, seeded; reset at the start state). Default: the FMU's state as it is.
 
     Returns
     -------
@@ -203,7 +262,9 @@ def cosim(
     ------
     ValueError
         Not a pendulab Co-Simulation FMU, mismatched controller, non-positive
-        or inconsistent steps, bad parameters or start values.
+        or inconsistent steps, bad parameters or start values, an unknown estimator name.
+    TypeError
+        ``estimator`` neither a name nor an estimator, ``measurement`` not a MeasurementModel.
     StepRejectedError
         A step could not be completed even at the smallest retry step.
     RuntimeError
@@ -224,6 +285,8 @@ def cosim(
         tolerance=tolerance,
         check=check,
         max_halvings=max_halvings,
+        estimator=estimator,
+        measurement=measurement,
     )
     return Trajectory(
         t=np.arange(n + 1) * h,
@@ -253,6 +316,8 @@ def cosim_many(
     tolerance: float | None = None,
     check: StepCheck | None = None,
     max_halvings: int = 0,
+    estimator: str | StateEstimator | None = None,
+    measurement: MeasurementModel | None = None,
 ) -> list[Trajectory]:
     """Step several pendulab FMUs side by side in one master, all driven by the same inputs.
 
@@ -274,6 +339,8 @@ def cosim_many(
         Per-plant parameters.
     solver, tolerance, check, max_halvings
         As in :func:`cosim`, for all plants (a rejected step is retried per plant).
+    estimator, measurement
+        As in :func:`cosim`, on the feedback plant.
 
     Returns
     -------
@@ -313,6 +380,8 @@ def cosim_many(
         tolerance=tolerance,
         check=check,
         max_halvings=max_halvings,
+        estimator=estimator,
+        measurement=measurement,
     )
     return [
         Trajectory(

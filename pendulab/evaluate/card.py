@@ -105,6 +105,9 @@ class Scorecard:
         Wall time of the scorecard [s].
     n_sub : int
         RK4 substeps per controller sample of every run's plant.
+    estimator : str or None
+        The state estimator every run's controller was fed by (``"ekf"``, ``"mmae"`` or the class name of an
+        estimator object); None: the controller saw the measurement.
     """
 
     controller: str
@@ -116,6 +119,7 @@ class Scorecard:
     runs_per_level: int
     wall_time: float
     n_sub: int = 1
+    estimator: str | None = None
 
     @property
     def failures(self) -> tuple[RunRecord, ...]:
@@ -151,12 +155,13 @@ class Scorecard:
         Returns
         -------
         dict
-            controller, task, overall, seed, runs_per_level, wall_time_s,
+            controller, estimator, task, overall, seed, runs_per_level, wall_time_s,
             categories (name, unit, levels, runs, success_rates, score) and
             failures (category, level, run, seed, reason).
         """
         return {
             "controller": self.controller,
+            "estimator": self.estimator,
             "task": self.task,
             "overall": self.overall,
             "seed": self.seed,
@@ -195,8 +200,9 @@ class Scorecard:
         str
             Markdown (header, one row per category, the overall score).
         """
+        fed = f" fed by `{self.estimator}`" if self.estimator else ""
         lines = [
-            f"Robustness of `{self.controller}` on `{self.task}` (success rate per level; "
+            f"Robustness of `{self.controller}`{fed} on `{self.task}` (success rate per level; "
             f"{self.runs_per_level} runs per level of the stochastic categories)",
             "",
             "| category | unit | levels: success rate | score |",

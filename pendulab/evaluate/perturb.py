@@ -44,6 +44,7 @@ import numpy as np
 from ..analysis.equilibria import equilibrium
 from ..control.feedback import SampledController
 from ..model.model import INPUT_NAMES, Model, model_functions
+from .measurement import MeasurementModel
 
 if TYPE_CHECKING:
     from ..control.swingup.tasks import Task
@@ -333,8 +334,9 @@ def run_perturbed_episode(
     threshold = task.success_fraction * lengths
     rng = np.random.default_rng(pert.seed)
     pushes = _pushes(rng, pert, K * dt)
-    lag = round(pert.delay / dt)
-    nq = plant.nq
+    # Delay and rate noise: the one measurement model (also cosim's and the gym env's), drawing from this run's rng.
+    measure = MeasurementModel(pert.meas_noise, round(pert.delay / dt))
+    measure.reset(x, rng=rng)
     p = plant.p
 
     t = np.arange(K + 1) * dt
@@ -358,9 +360,7 @@ def run_perturbed_episode(
     controller.reset()
     for k in range(K):
         tk = float(t[k])
-        xm = X[max(k - lag, 0)].copy()
-        if pert.meas_noise > 0:
-            xm[nq : nq + 2] += pert.meas_noise * rng.standard_normal(2)
+        xm = measure(X[k])
         try:
             cmd = np.asarray(controller(tk, xm), dtype=float).reshape(-1)
         except Exception as exc:  # noqa: BLE001 - any controller error ends this run, recorded, not the scorecard

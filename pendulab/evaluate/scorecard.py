@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,10 +43,12 @@ __all__ = ["score", "rerun", "MAX_RUNS", "MAX_LEVELS"]
 ControllerSpec = str | Callable[["Task"], tuple[SampledController, np.ndarray]]
 
 
-def _resolve(controller: ControllerSpec, task: Task | str) -> tuple[Task, str, SampledController, np.ndarray]:
+def _resolve(
+    controller: ControllerSpec, task: Task | str, estimator: Any = None
+) -> tuple[Task, str, SampledController, np.ndarray]:
     tk = resolve_task(task)
     if isinstance(controller, str):
-        ctrl, x0 = controller_for_task(controller, tk)
+        ctrl, x0 = controller_for_task(controller, tk, estimator=estimator)
         return tk, controller, ctrl, np.asarray(x0, dtype=float)
     if not callable(controller):
         raise TypeError(f"controller must be a name or a factory task -> (controller, x0), got {type(controller).__name__}")
@@ -54,7 +56,40 @@ def _resolve(controller: ControllerSpec, task: Task | str) -> tuple[Task, str, S
     if not (isinstance(made, tuple) and len(made) == 2):
         raise TypeError("a controller factory must return (controller, x0)")
     ctrl, x0 = made
-    return tk, getattr(controller, "__name__", type(controller).__name__), ctrl, np.asarray(x0, dtype=float)
+    x0 = np.asarray(x0, dtype=float)
+    if estimator is not None:
+        ctrl = _estimated(ctrl, tk, x0, estimator)
+    return tk, getattr(controller, "__name__", type(controller).__name__), ctrl, x0
+
+
+def _estimated(ctrl: SampledController, task: Task, x0: np.ndarray, estimator: Any) -> SampledController:
+    """A factory's controller fed by ``estimator`` (a name built on the task's model, or an object)."""
+    from ..control.robust import EstimatedController, build_estimator
+    from ..model.model import INPUT_NAMES
+
+    limit = float(task.problem.torque_limit)
+    torque = np.array([limit if n in ctrl.input_names else 0.0 for n in INPUT_NAMES])
+    est = build_estimator(estimator, task.model, float(ctrl.sample_time), x0=x0, torque_limit=torque)
+    return EstimatedController(ctrl, est, u_max=limit)
+
+
+def _check_estimator(estimator: Any) -> str | None:
+    """The estimator's name for the card (None: none), checked before any design."""
+    if estimator is None:
+        return None
+    from ..control.robust import ESTIMATORS
+
+    if isinstance(estimator, str):
+        if estimator not in ESTIMATORS:
+            raise ValueError(
+                f"estimator must be one of {list(ESTIMATORS)} or an object with reset() and update(), got {estimator!r}"
+            )
+        return estimator
+    if not (callable(getattr(estimator, "reset", None)) and callable(getattr(estimator, "update", None))):
+        raise TypeError(
+            f"estimator must be one of {list(ESTIMATORS)} or an object with reset() and update(), got {type(estimator).__name__}"
+        )
+    return type(estimator).__name__
 
 
 def _check_selection(task: Task, categories: Sequence[str] | None, levels: Mapping[str, Sequence[float]] | None) -> list[str]:
@@ -96,6 +131,7 @@ def score(
     completed: Iterable[RunRecord] = (),
     on_records: Callable[[tuple[RunRecord, ...]], None] | None = None,
     max_wall_time: float | None = None,
+    estimator: Any = None,
 ) -> Scorecard:
     """Robustness scorecard of a controller on a swing-up task.
 
@@ -130,6 +166,12 @@ def score(
         Wall-time budget [s]: once spent, the scorecard stops after the running
         batch and raises ``TimeoutError`` (the finished batches were passed to
         ``on_records``). None: no budget.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        Feed every run's controller the estimator's state instead of the measurement
+        (:class:`~pendulab.control.robust.EstimatedController`; a name is built by
+        :func:`~pendulab.control.robust.build_estimator` on the task's model at the controller's
+        sample time from the start state, and reset with the controller before each run). The
+        measurement-noise and delay categories then act on the filter's input.
 
     Returns
     -------
@@ -144,7 +186,8 @@ def score(
         records that are not runs of this scorecard.
     TypeError
         A controller that is neither a name nor a factory, a task that is neither
-        a Task nor a name.
+        a Task nor a name, an estimator that is neither a name nor an object with
+        ``reset`` and ``update``.
     TimeoutError
         The wall-time budget ran out.
     KeyboardInterrupt
@@ -159,7 +202,8 @@ def score(
     t0 = time.perf_counter()
     # Every selection is checked before the controller is designed (a tvlqr or nmpc plan takes seconds).
     names = _check_selection(resolve_task(task), categories, levels)
-    tk, cname, ctrl, x0 = _resolve(controller, task)
+    est_name = _check_estimator(estimator)
+    tk, cname, ctrl, x0 = _resolve(controller, task, estimator)
     plan: list[tuple[str, int, float, int, tuple[int, ...]]] = []
     for name in names:
         cat = CATEGORIES[name]
@@ -220,7 +264,9 @@ def score(
             rates.append(sum(r.success for r in at) / len(at))
         cats.append(CategoryScore(name, CATEGORIES[name].unit, tuple(lv), tuple(counts), tuple(rates), float(np.mean(rates))))
     overall = float(np.mean([c.score for c in cats]))
-    return Scorecard(cname, tk.name, tuple(cats), overall, tuple(records), int(seed), runs, time.perf_counter() - t0, n_sub)
+    return Scorecard(
+        cname, tk.name, tuple(cats), overall, tuple(records), int(seed), runs, time.perf_counter() - t0, n_sub, est_name
+    )
 
 
 def _batches(
@@ -256,7 +302,9 @@ def _plan_substeps(
     return n
 
 
-def rerun(controller: ControllerSpec, task: Task | str, record: RunRecord, *, n_sub: int | None = None) -> RunRecord:
+def rerun(
+    controller: ControllerSpec, task: Task | str, record: RunRecord, *, n_sub: int | None = None, estimator: Any = None
+) -> RunRecord:
     """Run one scorecard run again, directly (same category, level and seed).
 
     Parameters
@@ -269,13 +317,16 @@ def rerun(controller: ControllerSpec, task: Task | str, record: RunRecord, *, n_
         A run of a scorecard.
     n_sub : int, optional
         RK4 substeps per sample (the scorecard's: ``Scorecard.n_sub``); default from the run's plant.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        As for :func:`score` (the scorecard's ``Scorecard.estimator``).
 
     Returns
     -------
     RunRecord
         The run's outcome now (equal to ``record`` for a deterministic controller).
     """
-    tk, _, ctrl, x0 = _resolve(controller, task)
+    _check_estimator(estimator)
+    tk, _, ctrl, x0 = _resolve(controller, task, estimator)
     pert = CATEGORIES[record.category].perturbation(tk, record.level, record.seed)
     res = run_perturbed_episode(ctrl, tk, x0, pert, n_sub=n_sub)
     return RunRecord(
