@@ -7,7 +7,10 @@ limit [N.m]); the torque is held over the sample ``dt`` (zero-order hold).
 Observation (float32): ``cos th1, sin th1, cos th2, sin th2, w1 / ws, w2 / ws`` for the rigid
 model (absolute angles from the downward vertical, ``ws = velocity_scale`` [rad/s]); the
 elastic model appends ``(r1 - L1) / L1, (r2 - L2) / L2, v1 / (ws L1), v2 / (ws L2)``. The
-full-precision model state is ``env.unwrapped.state``.
+full-precision model state is ``env.unwrapped.state``. With ``measurement=`` and/or ``estimator=``
+the observation is made from the delayed, noisy measurement of the state or from a state estimate
+of it (:mod:`pendulab.gym.observation`; ``env.unwrapped.estimate``); reward and termination stay
+on the true state.
 
 Episode: reset near hanging at rest (uniform noise of ``reset_noise`` on angles [rad] and
 angular rates [rad/s]) or at ``options={"state": x0}``; truncated after ``max_episode_steps``
@@ -35,6 +38,7 @@ from gymnasium.envs.registration import EnvSpec
 from .._checks import bounded_int, positive_float, relative_tolerance
 from ..model.model import ACTUATIONS, Model, make_model
 from .backends import INTEGRATORS, FmuBackend, NativePlant
+from .observation import make_pipeline
 from .render import FrameRenderer
 from .rewards import RewardFn, make_reward
 
@@ -160,6 +164,14 @@ class DoublePendulumEnv(gymnasium.Env):
         ``"rgb_array"``: :meth:`render` returns an RGB frame.
     render_size : int
         Frame width and height [pixel].
+    measurement : MeasurementModel, optional
+        :class:`~pendulab.evaluate.measurement.MeasurementModel`: delay [samples of ``dt``] and Gaussian noise
+        [rad/s] on ``omega1, omega2`` of the state the observation is made from; the noise is drawn from the
+        environment's generator (``reset(seed=)`` seeds it). The environment keeps its own copy.
+    estimator : {"ekf", "mmae"} or StateEstimator, optional
+        The observation is made from this estimator's state, updated every step with the measurement and the
+        held torques and reset (at the start state) by :meth:`reset`; a name is built by
+        :func:`~pendulab.control.robust.build_estimator` on the model at ``dt`` with the torque limit.
 
     Attributes
     ----------
@@ -175,6 +187,8 @@ class DoublePendulumEnv(gymnasium.Env):
         Current model state (a copy).
     t : float
         Time since reset [s].
+    estimate : ndarray, shape (nx,)
+        The state the last observation was made from (the plant's state without measurement and estimator).
 
     Raises
     ------
@@ -205,6 +219,8 @@ class DoublePendulumEnv(gymnasium.Env):
         reset_noise: float = 0.05,
         render_mode: str | None = None,
         render_size: int = 400,
+        measurement: Any = None,
+        estimator: Any = None,
     ) -> None:
         self.model = _model(model, params)
         if actuation not in ACTUATIONS:
@@ -254,8 +270,10 @@ class DoublePendulumEnv(gymnasium.Env):
         self._render_size = render_size
         if render_mode is not None:
             self._renderer = FrameRenderer(self.model, size=render_size)
+        self._pipeline = make_pipeline(self.model, self.dt, self._actuated, self.action_scale, estimator, measurement)
         self._tau = np.zeros(2)
         self._x = self.model.rest_state()
+        self._seen = self._x
         self._steps = 0
         self._needs_reset = True
 
@@ -277,6 +295,11 @@ class DoublePendulumEnv(gymnasium.Env):
     def state(self) -> np.ndarray:
         """The model state, shape (nx,), in ``model.state_names`` order (a copy)."""
         return self._x.copy()
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """The state the last observation was made from, shape (nx,) (a copy)."""
+        return np.array(self._seen, dtype=float)
 
     @property
     def t(self) -> float:
@@ -330,7 +353,8 @@ class DoublePendulumEnv(gymnasium.Env):
         self._tau = np.zeros(2)
         self._steps = 0
         self._needs_reset = False
-        return self._observe(x0), {"t": 0.0, "tau": self._tau.copy()}
+        self._seen = x0 if self._pipeline is None else self._pipeline.reset(x0, self.np_random)
+        return self._observe(self._seen), {"t": 0.0, "tau": self._tau.copy()}
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Hold the torque of ``action`` for ``dt`` and advance the plant.
@@ -381,7 +405,8 @@ class DoublePendulumEnv(gymnasium.Env):
         info: dict[str, Any] = {"t": self._steps * self.dt, "tau": tau}
         if failure is not None:
             info["failure"] = failure
-        return self._observe(x), float(self.reward_fn(x, tau)), terminated, truncated, info
+        self._seen = x if self._pipeline is None else self._pipeline.step(self._steps * self.dt, x, tau)
+        return self._observe(self._seen), float(self.reward_fn(x, tau)), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
         """The current frame.

@@ -92,6 +92,10 @@ class DoublePendulumVectorEnv(VectorEnv):
         self._lanes = _Lanes(model, tuple(self._actuated), env.tol, self.num_envs)
         self._reward = _batch_reward(env.reward_fn, model)
         self._X = np.tile(model.rest_state(), (self.num_envs, 1))
+        # One measurement model and estimator per lane (copies of the single environment's), or None.
+        pipe = env._pipeline
+        self._pipes = None if pipe is None else [pipe.copy() for _ in range(self.num_envs)]
+        self._seen = self._X.copy()
         self._steps = np.zeros(self.num_envs, dtype=int)
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._needs_reset = True
@@ -116,6 +120,11 @@ class DoublePendulumVectorEnv(VectorEnv):
     def states(self) -> np.ndarray:
         """Model states of the lanes, shape (num_envs, nx) (a copy)."""
         return self._X.copy()
+
+    @property
+    def estimates(self) -> np.ndarray:
+        """The states the lanes' last observations were made from, shape (num_envs, nx) (a copy; see the single env)."""
+        return np.array(self._seen, dtype=float)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset every lane near hanging at rest, or at ``options["state"]``.
@@ -153,7 +162,8 @@ class DoublePendulumVectorEnv(VectorEnv):
         self._steps[:] = 0
         self._autoreset[:] = False
         self._needs_reset = False
-        return self._observe(X0), {}
+        self._seen = X0 if self._pipes is None else self._pipe_step(X0, None, None)
+        return self._observe(self._seen), {}
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Advance every lane by ``dt`` (lanes whose episode ended are reset instead).
@@ -208,7 +218,9 @@ class DoublePendulumVectorEnv(VectorEnv):
             truncated[restart] = False
         self._X = X
         self._autoreset = terminated | truncated
-        return self._observe(X), rewards, terminated, truncated, {"tau": tau, "_tau": np.ones(self.num_envs, dtype=bool)}
+        self._seen = X if self._pipes is None else self._pipe_step(X, tau, restart)
+        info = {"tau": tau, "_tau": np.ones(self.num_envs, dtype=bool)}
+        return self._observe(self._seen), rewards, terminated, truncated, info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """Frames of every lane.
@@ -236,6 +248,16 @@ class DoublePendulumVectorEnv(VectorEnv):
         self._reward = _batch_reward(self.single_env.reward_fn, self._model)
 
     # -- helpers ------------------------------------------------------------------------------
+    def _pipe_step(self, X: np.ndarray, tau: np.ndarray | None, restart: np.ndarray | None) -> np.ndarray:
+        """Each lane's measurement and estimate; a lane (re)started now (``tau`` None: all) restarts its pipeline."""
+        rows = []
+        for i, pipe in enumerate(self._pipes or ()):
+            if tau is None or restart is None or restart[i]:
+                rows.append(pipe.reset(X[i], self.np_random))
+            else:
+                rows.append(pipe.step(self._steps[i] * self._dt, X[i], tau[i]))
+        return np.array(rows)
+
     def _initial_state(self) -> np.ndarray:
         model, noise = self._model, self.single_env.reset_noise
         x0 = model.rest_state()
