@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,10 +13,15 @@ from ..model.model import INPUT_NAMES
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
 
+if TYPE_CHECKING:
+    from .tracking import TVLQRTracker
+
 __all__ = [
     "REPLAN_DEFAULTS",
     "ReplanningSwingUp",
     "replanning_controller",
+    "plan_swingup",
+    "nearest_upright",
 ]
 
 
@@ -117,49 +123,21 @@ class ReplanningSwingUp:
     def _plan(self, t: float, x: np.ndarray) -> None:
         import time as _time
 
-        from .swingup import SwingUpProblem, solve_transcription
-        from .tracking import tvlqr
-
         t0 = _time.perf_counter()
         start = self._predict(t, x, self.plan_delay) if self.plan_delay > 0 else np.array(x, dtype=float)
-        two_pi = 2.0 * math.pi
-        goal = (
-            math.pi + two_pi * round((start[0] - math.pi) / two_pi),
-            math.pi + two_pi * round((start[1] - math.pi) / two_pi),
-            0.0,
-            0.0,
+        self._tracker = plan_swingup(
+            self.fallback,
+            self.actuation,
+            start,
+            horizon=self.horizon,
+            n_intervals=self.n_intervals,
+            min_time=self.min_time,
+            max_iter=self.max_iter,
+            max_solve_time=self.max_solve_time,
         )
-        fb = self.fallback
-        x0 = tuple(float(v) for v in start)
-        attempts = []
-        if self.min_time:  # time-optimal first (bang-bang within 90 % of the limit), free horizon up to ``horizon``
-            attempts.append(
-                dict(horizon=0.8 * self.horizon, free_horizon=True, horizon_bounds=(0.3, self.horizon), objective="time")
-            )
-        attempts.append(dict(horizon=self.horizon))
-        ok = False
-        for kw in attempts:
-            pb = SwingUpProblem(fb.model, self.actuation, fb.u_max, x0=x0, goal=goal, **kw)
-            try:
-                res = solve_transcription(
-                    pb,
-                    "radau",
-                    N=self.n_intervals,
-                    tolerance=None,
-                    refine=False,
-                    ipopt_options={"print_level": 0, "sb": "yes", "max_iter": self.max_iter},
-                    max_wall_time=self.max_solve_time,
-                )
-                ok = bool(res.success)
-            except (ValueError, RuntimeError):
-                ok = False
-            if ok:
-                break
-        if ok:
-            self._tracker = tvlqr(res, dt=fb.sample_time)
+        if self._tracker is not None:
             self._t_plan = t + self.plan_delay
         else:
-            self._tracker = None
             self.n_failed += 1
             self._t_retry = t + self.retry
         self.plan_times.append(_time.perf_counter() - t0)
@@ -198,6 +176,86 @@ class ReplanningSwingUp:
             u = float(tr(t - self._t_plan, x)[j])
             return np.array([min(max(u, -fb.u_max), fb.u_max)])
         return np.array([fb.pump(x)])
+
+
+def nearest_upright(start: np.ndarray) -> tuple[float, float, float, float]:
+    """The upright equilibrium on the branch (``pi + 2 pi k`` per absolute angle) nearest to ``start``."""
+    two_pi = 2.0 * math.pi
+    return (
+        math.pi + two_pi * round((float(start[0]) - math.pi) / two_pi),
+        math.pi + two_pi * round((float(start[1]) - math.pi) / two_pi),
+        0.0,
+        0.0,
+    )
+
+
+def plan_swingup(
+    fallback: GlobalSwingUp,
+    actuation: str,
+    start: np.ndarray,
+    *,
+    horizon: float,
+    n_intervals: int,
+    min_time: bool,
+    max_iter: int = 150,
+    max_solve_time: float = 60.0,
+) -> TVLQRTracker | None:
+    """The re-planner's plan: a swing-up from ``start`` to the nearest upright branch, with its TVLQR gains.
+
+    Direct collocation (Radau, ``n_intervals``): time-optimal with a free horizon in [0.3, ``horizon``] first
+    when ``min_time``, effort-optimal over ``horizon`` otherwise or on failure; IPOPT capped at ``max_iter``.
+    The tracker is designed at the fallback's sample time and torque limit.
+
+    Parameters
+    ----------
+    fallback : GlobalSwingUp
+        Supplies the design model, sample time and torque limit.
+    actuation : {"pendubot", "acrobot"}
+        Driven joint.
+    start : ndarray, shape (4,)
+        Start state (absolute angles) [rad, rad/s].
+    horizon : float
+        Plan horizon (the free horizon's upper bound) [s].
+    n_intervals : int
+        Collocation intervals.
+    min_time : bool
+        Try the time-optimal plan first.
+    max_iter : int
+        IPOPT iteration cap per solve.
+    max_solve_time : float
+        Wall-time safety budget per solve [s].
+
+    Returns
+    -------
+    TVLQRTracker or None
+        None when every attempt failed.
+    """
+    from .swingup import SwingUpProblem, solve_transcription
+    from .tracking import tvlqr
+
+    x0 = tuple(float(v) for v in start)
+    goal = nearest_upright(np.asarray(x0))
+    attempts: list[dict[str, object]] = []
+    if min_time:  # time-optimal first (bang-bang within 90 % of the limit), free horizon up to ``horizon``
+        attempts.append(dict(horizon=0.8 * horizon, free_horizon=True, horizon_bounds=(0.3, horizon), objective="time"))
+    attempts.append(dict(horizon=horizon))
+    for kw in attempts:
+        pb = SwingUpProblem(fallback.model, actuation, fallback.u_max, x0=x0, goal=goal, **kw)
+        try:
+            res = solve_transcription(
+                pb,
+                "radau",
+                N=n_intervals,
+                tolerance=None,
+                refine=False,
+                ipopt_options={"print_level": 0, "sb": "yes", "max_iter": max_iter},
+                max_wall_time=max_solve_time,
+            )
+        except (ValueError, RuntimeError):
+            continue
+        if res.success:
+            return tvlqr(res, dt=fallback.sample_time)
+    return None
 
 
 #: Plan horizon [s] and collocation intervals per task. Pendubot: the shortest horizon at which 10 of 10 random

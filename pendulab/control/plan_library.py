@@ -1,0 +1,476 @@
+"""A library of precomputed swing-up plans for the RealAIGym v3 protocol: re-planner plans built offline, played in real time.
+
+v3 throws the pendulum 15 times into a random configuration: a reset PID (kp 10, saturated at 6 N.m, plus
+gravity compensation) drives for 0.2 s from wherever the pendulum is toward a configuration drawn uniformly,
+and hands over with the velocities it has built up (typically 5-10 rad/s, not at rest). When the controller
+balances upright at the reset (what it does between resets), the hand-over state is a function of the drawn
+configuration (2-D) and the upright branch it left from. The library therefore solves, offline, the
+re-planner's time-optimal swing-up (:func:`~pendulab.control.replanning.plan_swingup`, the same planner and
+options as ``replan``) from the *simulated* hand-over states of a grid of drawn configurations and upright
+branches (plus hanging at rest, the protocol's start), and stores each plan's reference and TVLQR gains.
+
+Online (:class:`LibrarySwingUp`), the controller looks up the *nearest knot of any plan* (a KD-tree over
+``(cos th1, sin th1, cos th2, sin th2, c w1, c w2)`` of every 2 ms sample of every plan; angles wrap, so a plan
+serves every branch) and tracks that plan from that knot with its TVLQR gains; it looks up again after a gap
+in its calls (a reset), when the tracking error leaves the tube, or when a plan ends outside the catch. A state
+farther than ``accept`` from every knot is pumped by the state-based fallback
+(:class:`~pendulab.control.global_swingup.GlobalSwingUp`) until it enters the library's reach; near upright the
+fallback's verified LQR catch takes over. A call is a tree query and a 1x4 gain product: tens of microseconds.
+
+The library is cached on disk (:class:`PlanCache`): one ``.npz`` per plan, named by a hash of the task, the
+design model's parameters, the planner options and the start state, written atomically as each plan finishes,
+so a build resumes where it stopped (Ctrl-C keeps finished plans) and a damaged entry is solved again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import zipfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import bounded_int, positive_float
+from .._io import atomic_path
+from ..model.model import INPUT_NAMES, Model
+from ..model.pycode import to_python
+from .global_swingup import GlobalSwingUp, global_controller
+from .lqr import wrap_state_error
+
+__all__ = [
+    "LIBRARY_VERSION",
+    "DEFAULT_BRANCHES",
+    "PlanCache",
+    "PlanLibrary",
+    "LibrarySwingUp",
+    "reset_handover",
+    "library_starts",
+    "build_library",
+    "library_controller",
+]
+
+#: Bumped when the stored format or the planner changes (part of every entry's key).
+LIBRARY_VERSION: int = 1
+#: Upright branches the resets leave from, as (k1, k2): absolute angles ``(pi + 2 pi k1, pi + 2 pi k2)``.
+DEFAULT_BRANCHES: tuple[tuple[int, int], ...] = ((0, 0), (-1, -1), (0, -1), (-1, 0))
+#: Reset PID of the protocol (kp, ki, kd), its step [s], length [s] and saturation [N.m] (evaluate/realai/v3_definition).
+_PID = (10.0, 0.1, 1.0, 0.001, 0.2, 6.0)
+
+
+def _rk4(f: Callable, x: np.ndarray, u: Sequence[float], p: list[float], h: float) -> np.ndarray:
+    k1 = f(x, u, p)
+    k2 = f(x + 0.5 * h * k1, u, p)
+    k3 = f(x + 0.5 * h * k2, u, p)
+    k4 = f(x + h * k3, u, p)
+    return x + h * (k1 + 2.0 * (k2 + k3) + k4) / 6.0
+
+
+def reset_handover(model: Model, x_pre: np.ndarray, goal: np.ndarray, sample_time: float = 0.002) -> np.ndarray:
+    """The state a v3 reset hands over: the protocol's PID (+ gravity compensation) for 0.2 s from ``x_pre``.
+
+    A fresh PID (no integral or derivative history: the protocol's history only adds a one-step kick).
+
+    Parameters
+    ----------
+    model : Model
+        Rigid model (absolute angles).
+    x_pre : ndarray, shape (4,)
+        State when the reset starts (absolute angles) [rad, rad/s].
+    goal : ndarray, shape (2,)
+        Drawn configuration in the protocol's relative angles ``(q1, q2 = th2 - th1)`` [rad].
+    sample_time : float
+        Simulation step [s].
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        State at the hand-over (absolute angles).
+    """
+    kp, ki, kd, pid_dt, length, sat = _PID
+    f = to_python(model.functions["rhs"])
+    p = [float(v) for v in model.p]
+    prm = model.params
+    a1, a2 = prm.m1 * prm.g * prm.lc1 + prm.m2 * prm.g * prm.L1, prm.m2 * prm.g * prm.lc2
+    x = np.array(x_pre, dtype=float)
+    errs: list[np.ndarray] = []
+    timer = 0.0
+    while timer <= length:
+        q = np.array([x[0], x[1] - x[0]])
+        errs.append(np.asarray(goal, dtype=float) - q)
+        u = kp * errs[-1] + ki * np.sum(errs, axis=0) * pid_dt
+        if len(errs) > 2:
+            u = u + kd * (errs[-1] - errs[-2]) / pid_dt
+        s12 = math.sin(q[0] + q[1])
+        u = np.clip(np.clip(u, -sat, sat) + [a1 * math.sin(q[0]) + a2 * s12, a2 * s12], -sat, sat)
+        x = _rk4(f, x, u, p, sample_time)
+        timer += sample_time
+    return x
+
+
+def library_starts(model: Model, n_grid: int, branches: Sequence[tuple[int, int]] = DEFAULT_BRANCHES) -> np.ndarray:
+    """Plan starts: hanging at rest, then the hand-over states of an ``n_grid`` x ``n_grid`` grid of drawn configurations.
+
+    Parameters
+    ----------
+    model : Model
+        Design model.
+    n_grid : int
+        Grid points per relative angle (cell centres of ``[-pi, pi)``).
+    branches : sequence of (int, int)
+        Upright branches ``(k1, k2)`` the resets leave from.
+
+    Returns
+    -------
+    ndarray, shape (1 + len(branches) n_grid^2, 4)
+        Start states (absolute angles) [rad, rad/s].
+
+    Raises
+    ------
+    ValueError
+        ``n_grid`` outside [1, 64] or an empty ``branches``.
+    """
+    n = bounded_int("n_grid", n_grid, low=1, high=64, why="plans per angle of the library grid")
+    if len(branches) == 0:
+        raise ValueError(f"branches must name at least one upright branch (k1, k2), got {branches!r}")
+    g = -math.pi + (np.arange(n) + 0.5) * 2.0 * math.pi / n
+    starts = [np.zeros(4)]
+    for k1, k2 in branches:
+        up = np.array([math.pi + 2.0 * math.pi * int(k1), math.pi + 2.0 * math.pi * int(k2), 0.0, 0.0])
+        for q1 in g:
+            for q2 in g:
+                starts.append(reset_handover(model, up, np.array([q1, q2])))
+    return np.array(starts)
+
+
+class PlanCache:
+    """One ``.npz`` file per plan under ``directory``, keyed by the design and the start; atomic, self-healing.
+
+    Parameters
+    ----------
+    directory : str or Path
+        Cache directory (created on the first write).
+    design : dict
+        Everything a plan depends on besides its start (task, model parameters, planner options); JSON-serialisable.
+    """
+
+    def __init__(self, directory: str | Path, design: dict) -> None:
+        self.directory = Path(directory)
+        self.design = dict(design, version=LIBRARY_VERSION)
+        self.rebuilt = 0
+
+    def path(self, start: np.ndarray) -> Path:
+        """The entry of the plan from ``start`` (shape (4,))."""
+        key = json.dumps({"design": self.design, "start": [round(float(v), 12) for v in start]}, sort_keys=True)
+        return self.directory / f"plan-{hashlib.sha256(key.encode()).hexdigest()[:20]}.npz"
+
+    def load(self, start: np.ndarray) -> dict[str, np.ndarray] | None:
+        """The stored entry (``ok``, and for a solved plan ``x_ref``, ``u_ref``, ``K``), or None if missing or damaged.
+
+        A damaged entry (unreadable, wrong fields, shapes or non-finite values) is deleted so it is solved again.
+        """
+        path = self.path(start)
+        if not path.exists():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                entry = {k: np.array(z[k]) for k in z.files}
+            ok = bool(entry["ok"])
+            if ok:
+                n = len(entry["x_ref"])
+                if entry["x_ref"].shape != (n, 4) or entry["K"].shape != (n - 1, 4) or entry["u_ref"].shape != (n - 1,):
+                    raise ValueError("shapes")
+                if n < 2 or not all(np.all(np.isfinite(entry[k])) for k in ("x_ref", "u_ref", "K")):
+                    raise ValueError("values")
+            return entry
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            path.unlink(missing_ok=True)
+            self.rebuilt += 1
+            return None
+
+    def save(self, start: np.ndarray, entry: dict[str, np.ndarray]) -> None:
+        """Write an entry atomically (a crash leaves the old file or none, never a truncated one)."""
+        with atomic_path(self.path(start)) as tmp:
+            np.savez(tmp, **entry)
+
+
+@dataclass
+class PlanLibrary:
+    """Solved plans (references and TVLQR gains at the sample time) and the KD-tree over all their knots.
+
+    Attributes
+    ----------
+    starts : ndarray, shape (S, 4)
+        Start of each plan.
+    x_ref : list of ndarray, shape (N_i, 4)
+        References (absolute angles) [rad, rad/s].
+    u_ref : list of ndarray, shape (N_i - 1,)
+        Driven torque [N.m].
+    K : list of ndarray, shape (N_i - 1, 4)
+        TVLQR gains of the driven torque.
+    velocity_scale : float
+        Weight ``c`` of the rates in the lookup metric [s].
+    n_failed : int
+        Starts whose plan could not be solved (not in the library).
+    """
+
+    starts: np.ndarray
+    x_ref: list[np.ndarray]
+    u_ref: list[np.ndarray]
+    K: list[np.ndarray]
+    velocity_scale: float = 0.3
+    n_failed: int = 0
+    _tree: object = field(default=None, init=False, repr=False)
+    _index: np.ndarray = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        from scipy.spatial import cKDTree
+
+        if len(self.x_ref) == 0:
+            raise ValueError("a plan library needs at least one solved plan, got none")
+        feats, index = [], []
+        for i, xr in enumerate(self.x_ref):
+            m = len(xr) - 1  # knots with a gain
+            feats.append(self.features(xr[:m]))
+            index.append(np.column_stack([np.full(m, i), np.arange(m)]))
+        self._tree = cKDTree(np.concatenate(feats))
+        self._index = np.concatenate(index)
+
+    def features(self, x: np.ndarray) -> np.ndarray:
+        """Lookup coordinates ``(cos th1, sin th1, cos th2, sin th2, c w1, c w2)`` of states ``x`` (..., 4)."""
+        x = np.asarray(x, dtype=float)
+        c = self.velocity_scale
+        return np.stack(
+            [np.cos(x[..., 0]), np.sin(x[..., 0]), np.cos(x[..., 1]), np.sin(x[..., 1]), c * x[..., 2], c * x[..., 3]], axis=-1
+        )
+
+    def nearest(self, x: np.ndarray) -> tuple[int, int, float]:
+        """The knot nearest to state ``x`` (shape (4,)): plan index, knot index, distance in lookup coordinates."""
+        d, j = self._tree.query(self.features(x))
+        i, k = self._index[int(j)]
+        return int(i), int(k), float(d)
+
+    def __len__(self) -> int:
+        return len(self.x_ref)
+
+
+def build_library(
+    fallback: GlobalSwingUp,
+    actuation: str,
+    starts: np.ndarray,
+    cache: PlanCache,
+    *,
+    horizon: float,
+    n_intervals: int,
+    min_time: bool = True,
+    max_iter: int = 150,
+    solve: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> PlanLibrary:
+    """Solve (or load) the plan from each start and assemble the library; each solved plan is cached as it finishes.
+
+    Parameters
+    ----------
+    fallback : GlobalSwingUp
+        Design model, sample time and torque limit.
+    actuation : {"pendubot", "acrobot"}
+        Driven joint.
+    starts : ndarray, shape (S, 4)
+        Start states.
+    cache : PlanCache
+        Where plans are stored.
+    horizon, n_intervals, min_time, max_iter
+        Planner options (:func:`~pendulab.control.replanning.plan_swingup`).
+    solve : bool
+        Solve the missing plans (False: assemble the cached ones only, e.g. while another process builds).
+    progress : callable, optional
+        ``progress(done, total)`` after each start.
+
+    Returns
+    -------
+    PlanLibrary
+
+    Raises
+    ------
+    ValueError
+        ``starts`` not of shape (S, 4) with finite values, or no plan solved.
+    KeyboardInterrupt
+        Propagated; plans finished before it stay cached.
+    """
+    from .replanning import plan_swingup
+
+    starts = np.asarray(starts, dtype=float)
+    if starts.ndim != 2 or starts.shape[1] != 4 or len(starts) == 0 or not np.all(np.isfinite(starts)):
+        raise ValueError(f"starts must be a finite array of shape (S, 4) with S >= 1, got shape {starts.shape}")
+    j = INPUT_NAMES.index(fallback.input_names[0])
+    kept, xs, us, ks, failed = [], [], [], [], 0
+    for n, s in enumerate(starts):
+        entry = cache.load(s)
+        if entry is None and not solve:
+            continue
+        if entry is None:
+            tr = plan_swingup(
+                fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter
+            )
+            if tr is None:
+                entry = {"ok": np.array(False)}
+            else:
+                m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
+                entry = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, j], "K": tr.K[:m, j, :]}
+            cache.save(s, entry)
+        if bool(entry["ok"]):
+            kept.append(s)
+            xs.append(entry["x_ref"])
+            us.append(entry["u_ref"])
+            ks.append(entry["K"])
+        else:
+            failed += 1
+        if progress is not None:
+            progress(n + 1, len(starts))
+    return PlanLibrary(np.array(kept).reshape(-1, 4), xs, us, ks, n_failed=failed)
+
+
+@dataclass
+class LibrarySwingUp:
+    """Real-time global swing-up: nearest-knot lookup in a :class:`PlanLibrary`, TVLQR tracking, fallback pumping and catch.
+
+    Attributes
+    ----------
+    fallback : GlobalSwingUp
+        Pumping outside the library's reach, and the catch LQR (with hysteresis) near upright.
+    library : PlanLibrary
+        The plans.
+    accept : float
+        Largest lookup distance at which a plan is taken (else the fallback pumps).
+    replan_error : float
+        Leave a plan when the wrapped tracking error ``|x - x_ref|^2`` exceeds this.
+    n_lookups : int
+        Plans taken (diagnostics).
+    """
+
+    fallback: GlobalSwingUp
+    library: PlanLibrary
+    accept: float = 1.0
+    replan_error: float = 1.0
+    n_lookups: int = 0
+    _plan: tuple[int, int, float] | None = field(default=None, init=False, repr=False)
+    _t_last: float | None = field(default=None, init=False, repr=False)
+
+    @property
+    def sample_time(self) -> float:
+        """[s] (the fallback's)."""
+        return self.fallback.sample_time
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The driven torque."""
+        return self.fallback.input_names
+
+    def reset(self) -> None:
+        """Forget the plan and the catch."""
+        self.fallback.reset()
+        self._plan, self._t_last = None, None
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        fb, lib, h = self.fallback, self.library, self.fallback.sample_time
+        if self._t_last is not None and t - self._t_last > 1.5 * h:
+            self._plan, fb.caught = None, False  # a gap in the calls: the protocol reset the pendulum
+        self._t_last = t
+        v = fb.cost(x)
+        if fb.caught and v > fb.release_level:
+            fb.caught = False
+        elif not fb.caught and v < fb.catch_level:
+            fb.caught = True
+        if fb.caught:
+            self._plan = None
+            return np.clip(fb.balance(t, x), -fb.u_max, fb.u_max)
+        e = None
+        if self._plan is not None:
+            i, k0, t0 = self._plan
+            k = k0 + int((t - t0) / h + 1e-6)
+            if k >= len(lib.K[i]):
+                self._plan = None  # ended outside the catch
+            else:
+                e = wrap_state_error(x - lib.x_ref[i][k], fb.model.state_names)
+                if float(e @ e) > self.replan_error:
+                    self._plan = None
+        if self._plan is None:
+            i, k, d = lib.nearest(x)
+            if d > self.accept:
+                return np.array([fb.pump(x)])
+            self._plan = (i, k, t)
+            self.n_lookups += 1
+            e = wrap_state_error(x - lib.x_ref[i][k], fb.model.state_names)
+        u = float(lib.u_ref[i][k] - lib.K[i][k] @ e)
+        return np.array([min(max(u, -fb.u_max), fb.u_max)])
+
+
+#: Library grid (drawn configurations per relative angle) per task, and the default cache directory.
+LIBRARY_GRID: dict[str, int] = {"pendubot": 8, "acrobot": 8}
+DEFAULT_LIBRARY_DIR: str = "pendulab-out/plan_library"
+
+
+def library_controller(
+    task: str,
+    *,
+    n_grid: int | None = None,
+    branches: Sequence[tuple[int, int]] = DEFAULT_BRANCHES,
+    directory: str | Path | None = None,
+    accept: float = 1.0,
+    build: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> LibrarySwingUp:
+    """The plan-library swing-up on a RealAIGym leaderboard task's plant; builds (or completes) the cached library first.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+    n_grid : int, optional
+        Drawn configurations per angle (:func:`library_starts`); default :data:`LIBRARY_GRID`.
+    branches : sequence of (int, int)
+        Upright branches the resets leave from.
+    directory : str or Path, optional
+        Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``.
+    accept : float
+        Lookup distance within which a plan is taken.
+    build : bool
+        Solve missing plans (False: use the cached ones only).
+    progress : callable, optional
+        ``progress(done, total)`` over the starts while building.
+
+    Returns
+    -------
+    LibrarySwingUp
+
+    Raises
+    ------
+    ValueError
+        Unknown task, bad ``n_grid``, non-positive ``accept``, or no plan solved.
+    """
+    from .realai.spec import check_task
+    from .replanning import REPLAN_DEFAULTS
+
+    check_task(task)
+    accept = positive_float("accept", accept)
+    fb = global_controller(task)
+    horizon, n_int, min_time = REPLAN_DEFAULTS[task]
+    n = LIBRARY_GRID[task] if n_grid is None else n_grid
+    design = {
+        "task": task,
+        "params": [float(v) for v in fb.model.p],
+        "planner": {"horizon": horizon, "n_intervals": n_int, "min_time": min_time, "max_iter": 150},
+        "sample_time": fb.sample_time,
+        "u_max": fb.u_max,
+    }
+    root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
+    cache = PlanCache(root / task, design)
+    starts = library_starts(fb.model, n, branches)
+    lib = build_library(
+        fb, task, starts, cache, horizon=horizon, n_intervals=n_int, min_time=min_time, solve=build, progress=progress
+    )
+    return LibrarySwingUp(fb, lib, accept=accept)

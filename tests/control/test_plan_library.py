@@ -1,0 +1,120 @@
+"""The v3 plan library: nearest-knot lookup, tracking a cached plan into the scored band, cache self-healing, bad input."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pendulab.control.global_swingup import global_controller
+from pendulab.control.plan_library import (
+    PlanCache,
+    PlanLibrary,
+    build_library,
+    library_controller,
+    library_starts,
+    reset_handover,
+)
+from pendulab.control.realai.spec import HEIGHT_FRACTION
+from pendulab.model.pycode import to_python
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory):
+    """Two plans (hanging at rest, one reset hand-over from upright): the cheapest real library."""
+    d = tmp_path_factory.mktemp("plan_library")
+    ctrl = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d)
+    return ctrl, d
+
+
+def _synthetic(starts: np.ndarray) -> PlanLibrary:
+    """Straight-line references from each start (the lookup only needs the knots)."""
+    xs = [s + np.linspace(0.0, 1.0, 50)[:, None] * np.array([0.3, -0.2, 1.0, 0.5]) for s in starts]
+    return PlanLibrary(starts, xs, [np.zeros(49) for _ in xs], [np.zeros((49, 4)) for _ in xs])
+
+
+def test_nearest_picks_the_plan_whose_start_matches() -> None:
+    starts = np.array([[0.0, 0.0, 0.0, 0.0], [2.0, -1.0, 3.0, -4.0], [-2.5, 2.5, -6.0, 7.0]])
+    lib = _synthetic(starts)
+    for i, s in enumerate(starts):
+        assert lib.nearest(s)[:2] == (i, 0)
+        assert lib.nearest(s)[2] == pytest.approx(0.0, abs=1e-12)  # exact match: only round-off in cos/sin
+    # Angles wrap: the same start on another branch is the same knot.
+    assert lib.nearest(starts[1] + [2 * math.pi, -2 * math.pi, 0, 0])[:2] == (1, 0)
+
+
+def test_tracking_a_library_plan_from_its_start_reaches_the_band(tiny) -> None:
+    ctrl, _ = tiny
+    lib = ctrl.library
+    assert len(lib) == 2 and lib.n_failed == 0
+    fb = ctrl.fallback
+    f, p = to_python(fb.model.functions["rhs"]), [float(v) for v in fb.model.p]
+    prm = fb.model.params
+    band = HEIGHT_FRACTION * (prm.L1 + prm.L2)
+    for i, start in enumerate(lib.starts):
+        ctrl.reset()
+        x, h, heights = np.array(start), fb.sample_time, []
+        assert lib.nearest(x)[:2] == (i, 0)
+        for k in range(round((len(lib.x_ref[i]) * h + 1.0) / h)):
+            u = [float(ctrl(k * h, x)[0]), 0.0]
+            k1 = f(x, u, p)
+            k2 = f(x + 0.5 * h * k1, u, p)
+            k3 = f(x + 0.5 * h * k2, u, p)
+            k4 = f(x + h * k3, u, p)
+            x = x + h * (k1 + 2.0 * (k2 + k3) + k4) / 6.0
+            heights.append(-prm.L1 * math.cos(x[0]) - prm.L2 * math.cos(x[1]))
+        assert max(heights) > band
+        # Caught and held: the last second stays in the band, near rest (the catch LQR's equilibrium).
+        assert min(heights[-round(1.0 / h) :]) > band
+        assert np.max(np.abs(x[2:])) < 0.1  # rad/s: a balanced pendulum, not a spinning one passing the band
+
+
+def test_cache_rebuilds_a_damaged_entry(tiny) -> None:
+    ctrl, d = tiny
+    lib = ctrl.library
+    cache_dir = d / "pendubot"
+    files = sorted(cache_dir.glob("plan-*.npz"))
+    assert len(files) == 2  # one entry per plan, nothing else left behind (no temporary files)
+    damaged = max(files, key=lambda q: q.stat().st_mtime)
+    damaged.write_bytes(b"not a zip archive")
+    again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d)
+    assert len(again.library) == 2
+    for a, b in zip(lib.x_ref, again.library.x_ref, strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-6)  # the re-solved plan is the same plan (deterministic IPOPT, capped)
+    with np.load(damaged) as z:
+        assert bool(z["ok"])
+
+
+def test_cache_load_discards_wrong_shapes(tmp_path) -> None:
+    cache = PlanCache(tmp_path, {"task": "pendubot"})
+    s = np.zeros(4)
+    cache.save(s, {"ok": np.array(True), "x_ref": np.zeros((5, 4)), "u_ref": np.zeros(3), "K": np.zeros((4, 4))})
+    assert cache.load(s) is None and cache.rebuilt == 1
+    assert not cache.path(s).exists()
+    cache.save(s, {"ok": np.array(False)})
+    assert not bool(cache.load(s)["ok"])
+
+
+def test_reset_handover_moves_toward_the_drawn_configuration() -> None:
+    ctrl = global_controller("pendubot")
+    up = np.array([math.pi, math.pi, 0.0, 0.0])
+    x = reset_handover(ctrl.model, up, np.array([0.5, 0.0]))
+    # The PID drives q1 from pi toward 0.5 (down) at its 6 N.m limit: link 1 left upright going negative, fast.
+    assert x[0] < math.pi - 0.3 and x[2] < -2.0
+
+
+def test_bad_input_raises(tmp_path) -> None:
+    ctrl = global_controller("pendubot")
+    with pytest.raises(ValueError, match="n_grid"):
+        library_starts(ctrl.model, 0)
+    with pytest.raises(ValueError, match="branches"):
+        library_starts(ctrl.model, 2, ())
+    with pytest.raises(ValueError, match="starts"):
+        build_library(ctrl, "pendubot", np.zeros(4), PlanCache(tmp_path, {}), horizon=1.0, n_intervals=10)
+    with pytest.raises(ValueError, match="accept"):
+        library_controller("pendubot", n_grid=1, directory=tmp_path, accept=-1.0)
+    with pytest.raises(ValueError, match="task"):
+        library_controller("cartpole", directory=tmp_path)
+    with pytest.raises(ValueError, match="at least one"):
+        PlanLibrary(np.zeros((0, 4)), [], [], [])
