@@ -1,0 +1,416 @@
+"""Real-time-iteration NMPC at 500 Hz: one compiled Gauss-Newton SQP step per sample (controller name ``rti``).
+
+The same tracking problem as :mod:`.controller` (track the task's offline swing-up plan, then
+regulate upright; terminal cost the discrete LQR cost-to-go about the goal; hard torque bounds), solved
+the real-time-iteration way (Diehl, Bock and Schloeder 2005): each sample takes exactly one Gauss-Newton
+SQP step from the previous solution shifted by one sample. The whole step (linearization, condensing,
+box-QP solve, update and shift; :mod:`.rti_step`) is one CasADi Function, generated as C, compiled once
+and cached on disk (:mod:`.rti_build`), and called from Python through preallocated buffers.
+
+Design (measured in ``benchmarks/results/rti.md``, explained in ``docs/rti.md``):
+
+* sampled every 2 ms, predicting over 30 intervals of 10 ms (0.3 s): intervals longer than the
+  sample keep the look-ahead of the 50 Hz NMPC at a fifth of its cost per second of horizon; the
+  warm start interpolates inside the intervals;
+* no velocity bound (the leaderboard tasks have none): the QP has torque bounds only, so it is a box QP
+  in the condensed torques, solved by a fixed number of primal-dual active-set iterations; a run whose
+  active set had not settled is counted (``qp_unsettled``) and its clipped iterate applied;
+* a step that returns a non-finite value never raises: it is counted in ``failures``, the LQR torque
+  about the goal is applied and the next sample starts cold from the reference.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import casadi as ca
+import numpy as np
+
+from ..._checks import bounded_int, positive_float
+from ...model.model import Model
+from ..feedback import actuated_inputs, upright_state
+from ..lqr import lqr_balance, wrap_state_error
+from ..tracking import resample_reference
+from .rti_build import compiled_step
+from .rti_step import rti_step_function
+
+if TYPE_CHECKING:
+    from ..swingup.tasks import Task
+
+__all__ = ["RTIOptions", "RTIController", "rti_controller", "rti_for_task", "MAX_RTI_HORIZON"]
+
+#: Largest number of shooting intervals: the condensed QP is dense in N m torques (cost ~ N^3 per QP iteration).
+MAX_RTI_HORIZON = 200
+
+
+@dataclass(frozen=True)
+class RTIOptions:
+    """Settings of the real-time-iteration NMPC.
+
+    Attributes
+    ----------
+    horizon : int
+        Shooting intervals N (prediction ``N * interval`` seconds).
+    interval : float
+        Length of a shooting interval [s], at least ``sample_time``.
+    sample_time : float
+        Controller sample time [s] (one SQP step per sample).
+    substeps : int or None
+        RK4 steps per interval; default one per 10 ms (``ceil(interval / 0.01)``).
+    qp_iterations : int
+        Primal-dual active-set iterations of the box QP after its unconstrained solve.
+    q_angle, q_rate : float
+        Stage weights on angle errors [1/rad^2] and rate errors [s^2/rad^2].
+    r : float or None
+        Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
+    compiled : bool
+        Run the step as cached C (default) or as the uncompiled CasADi graph (same numbers, slower).
+    """
+
+    horizon: int = 30
+    interval: float = 0.01
+    sample_time: float = 0.002
+    substeps: int | None = None
+    qp_iterations: int = 6
+    q_angle: float = 10.0
+    q_rate: float = 1.0
+    r: float | None = None
+    compiled: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "horizon", bounded_int("horizon", self.horizon, low=1, high=MAX_RTI_HORIZON, why="the condensed QP is dense")
+        )
+        object.__setattr__(
+            self, "qp_iterations", bounded_int("qp_iterations", self.qp_iterations, low=1, high=100, why="a fixed per-call cost")
+        )
+        if self.substeps is not None:
+            object.__setattr__(self, "substeps", bounded_int("substeps", self.substeps, high=100, why="RK4 steps are unrolled"))
+        for name, unit in (("interval", "[s]"), ("sample_time", "[s]"), ("q_angle", ""), ("q_rate", "")):
+            object.__setattr__(self, name, positive_float(name, getattr(self, name), unit))
+        if self.r is not None:
+            object.__setattr__(self, "r", positive_float("r", self.r))
+        if self.sample_time > self.interval * (1 + 1e-9):
+            raise ValueError(
+                f"sample_time must be at most interval ({self.interval!r} s: the warm start shifts inside the first "
+                f"interval), got {self.sample_time!r}"
+            )
+        if not isinstance(self.compiled, bool):
+            raise TypeError(f"compiled must be True or False, got {self.compiled!r}")
+
+    @property
+    def steps_per_interval(self) -> int:
+        """RK4 steps per interval actually used."""
+        return self.substeps if self.substeps is not None else max(1, math.ceil(self.interval / 0.01 - 1e-9))
+
+
+@dataclass
+class RTIController:
+    """One compiled real-time iteration per sample (build with :func:`rti_controller` or :func:`rti_for_task`).
+
+    Attributes
+    ----------
+    model : Model
+        Plant and prediction model (rigid).
+    options : RTIOptions
+        Settings.
+    input_names : tuple of str
+        Driven torques, in output order.
+    u_max : float
+        Torque bound [N.m].
+    x_ref : ndarray, shape (K, nx)
+        Reference states on the sample grid.
+    u_ref : ndarray, shape (K, m)
+        Reference torques on the sample grid [N.m].
+    goal : ndarray, shape (nx,)
+        Held after the reference (upright at rest by default).
+    graph : casadi.Function
+        The uncompiled step (:func:`~.rti_step.rti_step_function`).
+    step : casadi.Function
+        What runs: the compiled step, or ``graph`` with ``compiled=False``.
+    K_lqr : ndarray, shape (m, nx)
+        Discrete LQR gain about ``goal`` at the interval (fallback torque).
+    solve_times : list of float
+        Wall time of each call [s] (checks, reference window, warm start and step).
+    failures, qp_unsettled : int
+        Calls with a non-finite step (fallback applied); calls whose active set had not settled.
+    """
+
+    model: Model
+    options: RTIOptions
+    input_names: tuple[str, ...]
+    u_max: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    goal: np.ndarray
+    graph: ca.Function
+    step: ca.Function
+    K_lqr: np.ndarray
+    solve_times: list[float] = field(default_factory=list)
+    failures: int = 0
+    qp_unsettled: int = 0
+
+    def __post_init__(self) -> None:
+        N, nx, m = self.options.horizon, self.model.nx, len(self.input_names)
+        # Row k of a (N+1, nx) C-ordered array is column k of CasADi's column-major (nx, N+1) matrix.
+        self._in = [np.zeros(nx), np.zeros((N + 1, nx)), np.zeros((N, m)), np.zeros((N + 1, nx)), np.zeros((N, m))]
+        self._out = [np.zeros(m), np.zeros((N + 1, nx)), np.zeros((N, m)), np.zeros((N + 1, nx)), np.zeros((N, m)), np.zeros(3)]
+        self._buf, self._eval = self.step.buffer()
+        for i, a in enumerate(self._in):
+            self._buf.set_arg(i, memoryview(a))
+        for i, a in enumerate(self._out):
+            self._buf.set_res(i, memoryview(a))
+        ratio = self.options.interval / self.options.sample_time
+        self._offsets = np.round(np.arange(N + 1) * ratio).astype(int)
+        self._k_prev = -1
+        self._warm = False
+
+    @property
+    def sample_time(self) -> float:
+        """Sample period [s]."""
+        return self.options.sample_time
+
+    def reset(self) -> None:
+        """Forget the warm start and the statistics before a new run."""
+        self._k_prev, self._warm = -1, False
+        self.solve_times = []
+        self.failures = self.qp_unsettled = 0
+
+    def window(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Reference at the shooting nodes of the window starting at sample ``k`` (the goal after the reference).
+
+        Parameters
+        ----------
+        k : int
+            Sample index (time ``k * sample_time``).
+
+        Returns
+        -------
+        xr : ndarray, shape (N+1, nx)
+        ur : ndarray, shape (N, m)
+        """
+        K = len(self.x_ref)
+        idx = k + self._offsets
+        xr = np.where((idx < K)[:, None], self.x_ref[np.minimum(idx, K - 1)], self.goal)
+        ur = np.where((idx[:-1] < K)[:, None], self.u_ref[np.minimum(idx[:-1], K - 1)], 0.0)
+        return xr, ur
+
+    def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
+        """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).
+
+        Raises ValueError for a negative or non-finite ``t``, or an ``x`` that is not a finite state of shape
+        (nx,) (a bad measurement; a failed step never raises, it is counted in :meth:`stats`).
+        """
+        start = time.perf_counter()
+        x = self.model.check_state(x, "x")
+        if x.ndim != 1:
+            raise ValueError(f"x must be one state of shape ({self.model.nx},), got shape {x.shape}")
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise ValueError(f"t must be a time >= 0 [s], got {t!r}") from None
+        if not (math.isfinite(t) and t >= 0.0):
+            raise ValueError(f"t must be a finite time >= 0 [s] (the controller's clock starts at 0), got {t!r}")
+        k = int(math.floor(t / self.options.sample_time + 1e-6))
+        x0, X, U, XR, UR = self._in
+        XR[:], UR[:] = self.window(k)
+        x0[:] = XR[0] + wrap_state_error(x - XR[0], self.model.state_names)
+        self._guess(k)
+        self._eval()
+        u0, Xn, Un, _, _, info = self._out
+        if not (np.all(np.isfinite(u0)) and np.all(np.isfinite(Xn)) and np.all(np.isfinite(Un))):
+            self.failures += 1
+            self._warm = False
+            u = -self.K_lqr @ wrap_state_error(x0 - self.goal, self.model.state_names)
+        else:
+            self._warm, self._k_prev = True, k
+            self.qp_unsettled += int(info[0] < 0.5)
+            u = u0.copy()
+        self.solve_times.append(time.perf_counter() - start)
+        return np.clip(u, -self.u_max, self.u_max)
+
+    def _guess(self, k: int) -> None:
+        """Write the start guess of the step: the last solution shifted to sample ``k``, or the reference (cold)."""
+        x0, X, U, XR, UR = self._in
+        _, Xn, Un, Xs, Us, _ = self._out
+        s = k - self._k_prev
+        if not self._warm or s < 0:
+            X[:], U[:] = XR, UR
+        elif s == 1:  # the usual case: the step already returned the trajectory one sample later
+            X[:], U[:] = Xs, Us
+        elif s == 0:
+            X[:], U[:] = Xn, Un
+        else:
+            N, frac = self.options.horizon, s * self.options.sample_time / self.options.interval
+            nodes, at = np.arange(N + 1.0), np.minimum(np.arange(N + 1.0) + frac, N)
+            X[:] = np.column_stack([np.interp(at, nodes, Xn[:, i]) for i in range(X.shape[1])])
+            Ug = np.vstack([Un, Un[-1:]])
+            U[:] = np.column_stack([np.interp(at[:-1], nodes, Ug[:, i]) for i in range(U.shape[1])])
+        X[0] = x0
+
+    def stats(self) -> dict[str, float | int | str]:
+        """Per-call statistics of the run so far.
+
+        Returns
+        -------
+        dict
+            ``solver`` ("rti"), ``n_calls``, ``solve_time_median``, ``solve_time_max`` [s] (nan before the
+            first call), ``iterations_median`` and ``iterations_max`` (1: one SQP step per call), ``failures``,
+            ``qp_unsettled`` (counts of calls) and ``compiled``.
+        """
+        ts = np.asarray(self.solve_times)
+        n = len(ts)
+        return {
+            "solver": "rti",
+            "n_calls": n,
+            "solve_time_median": float(np.median(ts)) if n else float("nan"),
+            "solve_time_max": float(ts.max()) if n else float("nan"),
+            "iterations_median": 1.0 if n else float("nan"),
+            "iterations_max": 1 if n else 0,
+            "failures": int(self.failures),
+            "qp_unsettled": int(self.qp_unsettled),
+            "compiled": bool(self.options.compiled),
+        }
+
+
+def _check_options(options: RTIOptions | None, changes: dict[str, Any]) -> RTIOptions:
+    unknown = sorted(set(changes) - set(RTIOptions.__dataclass_fields__))
+    if unknown:
+        raise TypeError(f"unknown RTI option(s) {unknown}; expected some of {sorted(RTIOptions.__dataclass_fields__)}")
+    base = options if options is not None else RTIOptions()
+    return RTIOptions(**{**base.__dict__, **changes})
+
+
+def rti_controller(
+    model: Model,
+    *,
+    actuation: str | Sequence[str] = "full",
+    u_max: float = 20.0,
+    reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    goal: np.ndarray | None = None,
+    options: RTIOptions | None = None,
+    cache_directory: Path | None = None,
+    **option_changes: Any,
+) -> RTIController:
+    """Build a real-time-iteration NMPC tracking ``reference`` (if any), then holding ``goal``.
+
+    Parameters
+    ----------
+    model : Model
+        Rigid plant and prediction model.
+    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
+        Driven torques.
+    u_max : float
+        Torque bound [N.m].
+    reference : (t, x, u), optional
+        Times [s] shape (K,), states shape (K, nx), torques (tau1, tau2) [N.m] shape (K, 2) or (K-1, 2).
+        None: regulation about ``goal``.
+    goal : ndarray, shape (nx,), optional
+        State held after the reference; default upright at rest.
+    options : RTIOptions, optional
+        Settings (default :class:`RTIOptions`).
+    cache_directory : Path, optional
+        Cache folder of the compiled step; default :func:`pendulab.native.cache_dir`.
+    **option_changes
+        :class:`RTIOptions` fields overriding ``options``.
+
+    Returns
+    -------
+    RTIController
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a Model, or unknown option names.
+    ValueError
+        An elastic model, bad options, torque limit, actuation, goal or reference shapes.
+    CompilerNotFoundError (RuntimeError)
+        ``compiled=True``, the step is not cached and no C compiler is found.
+    """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
+    if model.kind != "rigid":
+        raise ValueError(f"model must be rigid for the RTI controller (use 'nmpc' for elastic plants), got kind {model.kind!r}")
+    opts = _check_options(options, option_changes)
+    u_max = positive_float("u_max", u_max, "[N.m]")
+    names = actuated_inputs(actuation)
+    cols = [("tau1", "tau2").index(n) for n in names]
+    goal = upright_state(model) if goal is None else model.check_state(goal, "goal")
+    if goal.ndim != 1:
+        raise ValueError(f"goal must be a single state of shape ({model.nx},), got {goal.shape}")
+    if reference is None:
+        x_ref, u_ref = goal[None, :], np.zeros((1, len(names)))
+    else:
+        t, xs, us = reference
+        us = np.asarray(us, dtype=float)
+        if us.ndim != 2 or us.shape[1] != 2:
+            raise ValueError(f"reference torques must have shape (K, 2) (tau1, tau2), got {us.shape}")
+        xs = model.check_state(xs, "reference states")
+        if xs.ndim != 2:
+            raise ValueError(f"reference states must have shape (K, {model.nx}), got {xs.shape}")
+        _, x_ref, u_full = resample_reference(t, xs, us, opts.sample_time, model)
+        u_ref = u_full[:, cols]
+    n = model.nx // 2
+    Q = np.diag([opts.q_angle] * n + [opts.q_rate] * n)
+    R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)
+    top = lqr_balance(model, names, Q, R, opts.interval, at=goal)
+    build = {
+        "N": opts.horizon, "interval": opts.interval, "substeps": opts.steps_per_interval,
+        "shift": opts.sample_time / opts.interval, "Q": Q, "R": R, "P": top.P, "u_max": u_max,
+        "qp_iterations": opts.qp_iterations,
+    }  # fmt: skip
+    graph = rti_step_function(model, names, **build)
+    if opts.compiled:
+        meta = {**{k: np.asarray(v).tolist() for k, v in build.items()}, "model_p": np.asarray(model.p).tolist(), "inputs": names}
+        step = compiled_step(graph, meta, directory=cache_directory)
+    else:
+        step = graph
+    return RTIController(model, opts, names, u_max, x_ref, u_ref, goal, graph, step, top.K)
+
+
+def rti_for_task(task: Task | str, **options: Any) -> tuple[RTIController, np.ndarray]:
+    """RTI NMPC that tracks the task's optimized swing-up at 500 Hz and then balances; and the task's start state.
+
+    Parameters
+    ----------
+    task : Task or str
+        Rigid swing-up task, or its name (``pendubot``).
+    **options
+        :class:`RTIOptions` fields (``horizon``, ``interval``, ``sample_time``...) and ``cache_directory``.
+
+    Returns
+    -------
+    controller : RTIController
+        Saturated at the task's torque limit.
+    x0 : ndarray, shape (nx,)
+        The task's start state.
+
+    Raises
+    ------
+    ValueError
+        The swing-up plan failed, an elastic task, or bad options (checked before planning).
+    TypeError
+        ``task`` is neither a Task nor a name; unknown option names.
+    FileNotFoundError
+        Unknown task name.
+    """
+    from ..swingup.tasks import resolve_task
+    from .factories import plan_swingup
+
+    task = resolve_task(task)
+    cache_directory = options.pop("cache_directory", None)
+    opts = _check_options(None, options)  # before the (costly) plan
+    if task.model.kind != "rigid":
+        raise ValueError(f"task must be rigid for the RTI controller (use 'nmpc' for elastic tasks), got {task.name!r}")
+    pb = task.problem
+    res = plan_swingup(pb, method=task.method, N=task.N, degree=task.degree)
+    ctrl = rti_controller(
+        task.model, actuation=pb.actuation, u_max=pb.torque_limit, reference=(res.t, res.x, res.u), options=opts,
+        cache_directory=cache_directory,
+    )  # fmt: skip
+    return ctrl, np.asarray(pb.start, dtype=float)

@@ -1,0 +1,199 @@
+"""One real-time iteration (RTI) of the tracking NMPC as a single CasADi Function, ready for C code generation.
+
+The step is the Gauss-Newton SQP iteration of the multiple-shooting problem
+
+``min sum_k |x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2 + |x_N - xr_N|_P^2``
+``s.t. x_{k+1} = F(x_k, u_k), x_0 = x_meas, |u_k| <= u_max``
+
+(``F``: RK4 over one interval; the same cost as :mod:`.ocp`), linearized at the current guess
+``(X, U)`` and solved in three parts, all in one graph:
+
+1. **linearization**: ``F``, ``A_k = dF/dx``, ``B_k = dF/du`` of every interval (one SX Function mapped
+   over the horizon), gaps ``d_k = F(x_k, u_k) - x_{k+1}``;
+2. **condensing**: the state corrections are eliminated, ``dX = Gbar dU + xi``, which leaves a dense,
+   strictly convex QP in the ``N m`` torque corrections with box bounds (``H = Gbar' W Gbar + Rbar``);
+3. **box-QP solve**: a fixed number of primal-dual active-set iterations (Hintermueller, Ito and Kunisch
+   2002, a semismooth Newton method): each fixes the torques whose bound is predicted active, solves the
+   others from one LDL' factorization (CasADi's ``ldl`` linear solver, code-generable) and updates the
+   multipliers. With no bound active the first solve is the exact QP solution; a fixed count keeps the
+   per-call time bounded (the output says whether the active set had settled).
+
+The outputs are the updated trajectory (``X + dX``, ``U + dU``), the first torque and the same trajectory
+shifted by one controller sample (linear interpolation inside the intervals), the warm start of the next call.
+Everything is an MX graph over small SX kernels with dense linear algebra in loops, so the generated C is
+compact (it compiles in seconds) and its run time does not depend on the state.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ...model.functions import model_functions
+from ...model.model import INPUT_NAMES, Model
+
+__all__ = ["rk4_interval", "rti_step_function", "STEP_INPUTS", "STEP_OUTPUTS"]
+
+#: Inputs of the step Function, in order.
+STEP_INPUTS: tuple[str, ...] = ("x0", "X", "U", "XR", "UR")
+#: Outputs of the step Function, in order.
+STEP_OUTPUTS: tuple[str, ...] = ("u0", "X_new", "U_new", "X_next", "U_next", "info")
+
+
+def rk4_interval(model: Model, cols: list[int], dt: float, substeps: int) -> ca.Function:
+    """RK4 over one interval ``dt`` [s] with ``substeps`` steps, the driven torques held: ``(x, u) -> x_next``.
+
+    Parameters
+    ----------
+    model : Model
+        Prediction model (its parameters are folded in as constants).
+    cols : list of int
+        Columns of the driven torques in ``INPUT_NAMES``.
+    dt : float
+        Interval [s].
+    substeps : int
+        RK4 steps per interval.
+
+    Returns
+    -------
+    casadi.Function
+        SX Function ``(x (nx,), u (m,)) -> x_next (nx,)``.
+    """
+    f = model_functions(model.kind)["rhs"]
+    x = ca.SX.sym("x", model.nx)
+    u = ca.SX.sym("u", len(cols))
+    ufull = ca.SX.zeros(len(INPUT_NAMES))
+    for i, c in enumerate(cols):
+        ufull[c] = u[i]
+    p = ca.DM(model.p)
+    h = dt / substeps
+    xk = x
+    for _ in range(substeps):
+        k1 = f(xk, ufull, p)
+        k2 = f(xk + 0.5 * h * k1, ufull, p)
+        k3 = f(xk + 0.5 * h * k2, ufull, p)
+        k4 = f(xk + h * k3, ufull, p)
+        xk = xk + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return ca.Function("rti_rk4", [x, u], [xk], ["x", "u"], ["x_next"])
+
+
+def _stage_linearization(step: ca.Function, nx: int, m: int) -> ca.Function:
+    """SX kernel ``(x, u) -> (F, A, B)`` of one interval."""
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", m)
+    F = step(x, u)
+    return ca.Function("rti_lin", [x, u], [F, ca.jacobian(F, x), ca.jacobian(F, u)], ["x", "u"], ["F", "A", "B"])
+
+
+def _box_qp_pdas(H: ca.MX, g: ca.MX, lb: ca.MX, ub: ca.MX, iterations: int) -> tuple[ca.MX, ca.MX, ca.MX]:
+    """``min 0.5 z'Hz + g'z, lb <= z <= ub`` by ``iterations`` primal-dual active-set steps after the unconstrained solve.
+
+    Returns the iterate (inside the bounds on the active set), whether the active set was the same in the last
+    two iterations (1.0 / 0.0), and the number of active bounds.
+    """
+    n = H.size1()
+    ones = ca.DM.ones(n)
+    z = ca.solve(H, -g, "ldl")
+    lam = ca.MX.zeros(n)
+    act_prev = ca.MX.zeros(n)
+    settled = ca.MX(1.0)
+    # The scale c of the complementarity function: any c > 0 works; the mean diagonal of H balances z and lam.
+    c = ca.sum1(ca.diag(H)) / n
+    n_active = ca.MX(0.0)
+    for _ in range(iterations):
+        upper = lam + c * (z - ub) > 0
+        lower = lam + c * (z - lb) < 0
+        act = ca.fmax(upper, lower)
+        zb = upper * ub + lower * lb
+        free = ones - act
+        M = H * ca.mtimes(free, free.T) + ca.diag(act)
+        rhs = free * (-g - ca.mtimes(H, act * zb)) + act * zb
+        z = ca.solve(M, rhs, "ldl")
+        lam = act * (-(ca.mtimes(H, z) + g))
+        settled = ca.sum1(ca.fabs(act - act_prev)) == 0
+        act_prev = act
+        n_active = ca.sum1(act)
+    return z, settled, n_active
+
+
+def rti_step_function(
+    model: Model,
+    input_names: tuple[str, ...],
+    *,
+    N: int,
+    interval: float,
+    substeps: int,
+    shift: float,
+    Q: np.ndarray,
+    R: np.ndarray,
+    P: np.ndarray,
+    u_max: float,
+    qp_iterations: int,
+    name: str = "rti_step",
+) -> ca.Function:
+    """The whole real-time iteration as one MX Function (see the module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        Prediction model (parameters folded in).
+    input_names : tuple of str
+        Driven torques (m of them).
+    N : int
+        Shooting intervals.
+    interval : float
+        Interval length [s].
+    substeps : int
+        RK4 steps per interval.
+    shift : float
+        Controller sample time as a fraction of ``interval`` (in (0, 1]): how far the warm start
+        ``X_next, U_next`` is shifted.
+    Q, R, P : ndarray
+        Stage state weight (nx, nx), torque weight (m, m), terminal weight (nx, nx).
+    u_max : float
+        Torque bound [N.m].
+    qp_iterations : int
+        Primal-dual active-set iterations of the QP after the unconstrained solve.
+    name : str
+        Function name (the C symbol).
+
+    Returns
+    -------
+    casadi.Function
+        ``(x0 (nx,), X (nx, N+1), U (m, N), XR (nx, N+1), UR (m, N)) ->
+        (u0 (m,), X_new, U_new, X_next, U_next, info (3,))``, ``info = [active set settled (1/0),
+        active bounds, max |gap| of the linearization point]``.
+    """
+    nx, m = model.nx, len(input_names)
+    cols = [INPUT_NAMES.index(n) for n in input_names]
+    lin = _stage_linearization(rk4_interval(model, cols, interval, substeps), nx, m).map(N)
+    x0 = ca.MX.sym("x0", nx)
+    X, U = ca.MX.sym("X", nx, N + 1), ca.MX.sym("U", m, N)
+    XR, UR = ca.MX.sym("XR", nx, N + 1), ca.MX.sym("UR", m, N)
+    F, A, B = lin(X[:, :N], U)
+    d = F - X[:, 1:]
+    # Condensing: xi_k (free response) and G_k (sensitivity of x_k to all torque corrections), forward.
+    xi = [x0 - X[:, 0]]
+    G = [ca.MX(nx, N * m)]
+    for k in range(N):
+        Ak, Bk = A[:, k * nx : (k + 1) * nx], B[:, k * m : (k + 1) * m]
+        xi.append(ca.mtimes(Ak, xi[k]) + d[:, k])
+        head = ca.mtimes(Ak, G[k][:, : k * m]) if k else ca.MX(nx, 0)
+        G.append(ca.horzcat(head, Bk, ca.MX(nx, (N - k - 1) * m)))
+    Gbar, Xi = ca.vertcat(*G), ca.vertcat(*xi)
+    W = ca.DM(ca.diagcat(*([ca.DM(Q)] * N + [ca.DM(P)])))
+    Rbar = ca.DM(ca.diagcat(*([ca.DM(R)] * N)))
+    E = ca.vec(X - XR) + Xi
+    WG = ca.mtimes(W, Gbar)
+    H = ca.mtimes(Gbar.T, WG) + Rbar
+    g = ca.mtimes(WG.T, E) + ca.mtimes(Rbar, ca.vec(U - UR))
+    Uv = ca.vec(U)
+    dU, settled, n_active = _box_qp_pdas(H, g, -u_max - Uv, u_max - Uv, qp_iterations)
+    X_new = X + ca.reshape(ca.mtimes(Gbar, dU) + Xi, nx, N + 1)
+    U_new = ca.reshape(ca.fmin(ca.fmax(Uv + dU, -u_max), u_max), m, N)
+    # Warm start of the next call: the trajectory a fraction `shift` of an interval later (last interval held).
+    X_next = (1 - shift) * X_new + shift * ca.horzcat(X_new[:, 1:], X_new[:, N:])
+    U_next = (1 - shift) * U_new + shift * ca.horzcat(U_new[:, 1:], U_new[:, N - 1 :])
+    info = ca.vertcat(settled, n_active, ca.mmax(ca.fabs(d)))
+    return ca.Function(
+        name, [x0, X, U, XR, UR], [U_new[:, 0], X_new, U_new, X_next, U_next, info], list(STEP_INPUTS), list(STEP_OUTPUTS)
+    )
