@@ -1,12 +1,20 @@
-"""The leaderboard (``pendulab score --leaderboard``): robustness scorecards and RealAIGym scores of every controller.
+"""The leaderboard (``pendulab score --leaderboard``): RealAIGym's three protocols beside the published rows, and the
+project's own robustness scorecards.
 
-Written to ``./pendulab-out/leaderboard/leaderboard.md`` by default; the shipped ``docs/leaderboard.md`` is
-regenerated explicitly with ``--out docs/leaderboard.md`` from the repository root.
+Written to ``./pendulab-out/leaderboard/leaderboard.md`` by default (figures in ``figures/`` beside it); the shipped
+``docs/leaderboard.md`` is regenerated explicitly with ``--out docs/leaderboard.md`` from the repository root. Every
+finished case is journaled under ``./pendulab-out/leaderboard/`` (:mod:`pendulab.evaluate.realai.leaderboard`;
+scorecards in ``scorecard/TASK-CONTROLLER/records.json``); ``--resume`` continues, Ctrl-C keeps finished work.
 """
 
 from __future__ import annotations
 
+import json
+import math
+import sys
 import time
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -15,9 +23,9 @@ from .._version import __version__
 
 __all__ = ["write_leaderboard", "LEADERBOARD_TASKS", "LEADERBOARD_CONTROLLERS", "DEFAULT_PATH"]
 
-#: Tasks of the robustness table: pendubot and acrobot, rigid and elastic (soft springs, which visibly take part).
+#: Tasks of the scorecard table: pendubot and acrobot, rigid and elastic (soft springs, which visibly take part).
 LEADERBOARD_TASKS: tuple[str, ...] = ("pendubot", "acrobot", "pendubot_elastic_soft", "acrobot_elastic_soft")
-#: Controllers compared (names of ``controller_for_task``).
+#: Controllers of the scorecard table (names of ``controller_for_task``).
 LEADERBOARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
 #: Cards not run, with the reason: NMPC on the elastic plants predicts with the 8-state elastic model at
 #: ~50 ms per solve (docs/nmpc.md), so one scorecard would take hours on 2 cores; score it on its own with
@@ -36,36 +44,180 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".replace("|", "/")[:160]
 
 
+class _Bars:
+    """One ProgressBar per case label (the previous one closed when the label changes)."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled, self.label, self.bar = enabled, None, None
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        from ._common import ProgressBar
+
+        if label != self.label:
+            self.close()
+            unit = "runs" if label.startswith("robustness") else "2 ms steps"
+            self.label, self.bar = label, ProgressBar(f"{label} ({unit})", self.enabled)
+        if self.bar is not None:
+            self.bar(done, total)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+        self.label, self.bar = None, None
+
+
 def write_leaderboard(
-    path: str | Path | None = None, *, runs: int = 20, workers: int | None = None, progress: bool = True
+    path: str | Path | None = None,
+    *,
+    runs: int = 20,
+    workers: int | None = None,
+    progress: bool = True,
+    controllers: Sequence[str] | Mapping[str, Sequence[str]] | None = None,
+    quick: bool = False,
+    resume: bool = False,
+    max_wall_time: float | None = None,
+    root: str | Path | None = None,
+    tasks: Sequence[str] | None = None,
+    scorecards: bool = True,
 ) -> Path:
-    """Regenerate the leaderboard markdown.
+    """Regenerate the leaderboard markdown and its figures.
 
     Parameters
     ----------
     path : str or Path, optional
-        Output file; default :data:`DEFAULT_PATH` (``./pendulab-out/leaderboard/leaderboard.md``).
+        Output file; default :data:`DEFAULT_PATH` (``./pendulab-out/leaderboard/leaderboard.md``). Figures go to
+        ``figures/leaderboard_*.png`` beside it.
     runs : int
-        Runs per level of the stochastic categories of every scorecard.
+        Runs per level of the stochastic categories of every own scorecard.
     workers : int, optional
-        Worker processes per scorecard.
+        Worker processes of the robustness-v2 runs and the scorecards (default 1 for robustness v2).
     progress : bool
-        Show a tqdm bar per scorecard on stderr.
+        Show a tqdm bar per case on stderr.
+    controllers : sequence of str or mapping, optional
+        RealAIGym controller names for all three protocols (or protocol -> names); default
+        :data:`pendulab.evaluate.realai.leaderboard.DEFAULT_CONTROLLERS`. The own scorecards keep
+        :data:`LEADERBOARD_CONTROLLERS`.
+    quick : bool
+        Smoke run (:data:`pendulab.evaluate.realai.leaderboard.QUICK`), labelled not comparable; the own scorecards
+        are not run.
+    resume : bool
+        Reuse the journals of finished cases.
+    max_wall_time : float, optional
+        Budget [s], checked before each case; cases not started by then are marked "not run".
+    root : str or Path, optional
+        Journal directory (default ``./pendulab-out/leaderboard``).
+    tasks : sequence of str, optional
+        RealAIGym tasks (default pendubot and acrobot).
+    scorecards : bool
+        Include the own scorecard section (it is "not run" with ``quick``).
 
     Returns
     -------
     Path
-        The file written. A controller or task that cannot be built or scored
-        (not available yet, an optimization that does not solve) gets a cell
-        saying so instead of a score.
+        The markdown file written.
+
+    Raises
+    ------
+    ValueError
+        Unknown controller or task names, or a journal of other settings with ``resume``.
+    KeyboardInterrupt
+        Ctrl-C; the finished cases stay journaled (continue with ``resume``).
     """
+    from ..evaluate.realai.leaderboard import DEFAULT_ROOT, TASKS, check_controllers, run_protocols
+    from ..evaluate.realai.leaderboard_tables import protocol_tables
+
+    check_controllers(controllers)  # bad names fail before anything runs
+    out = DEFAULT_PATH if path is None else Path(path)
+    jroot = DEFAULT_ROOT if root is None else Path(root)
+    w0 = time.perf_counter()
+    bars = _Bars(progress)
+    try:
+        board = run_protocols(
+            controllers, tasks=TASKS if tasks is None else tasks, quick=quick, resume=resume, root=jroot,
+            workers=1 if workers is None else workers, progress=bars, max_wall_time=max_wall_time,
+        )  # fmt: skip
+        remaining = None if max_wall_time is None else max(0.0, max_wall_time - (time.perf_counter() - w0))
+        cards = _scorecards(runs, workers, progress, resume, jroot / "scorecard", remaining) if scorecards and not quick else None
+    finally:
+        bars.close()
+    figs = _figures(board, out.parent / "figures")
+    cmd = "pendulab score --leaderboard" + (" --quick" if quick else "") + (f" --runs {runs}" if runs != 20 else "")
+    cmd += f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else ""
+    cmd += f" --out {path}" if path else ""
+    lines = [
+        "# Leaderboard",
+        "",
+        f"Generated by `{cmd}` (pendulab {__version__}, {time.strftime('%Y-%m-%d')}). Do not edit by hand. "
+        "Journals of every finished case: `./pendulab-out/leaderboard/` (`--resume` reuses them).",
+        "",
+    ]
+    if quick:
+        lines += ["**QUICK RUN (`--quick`): reduced grids and one short v3 episode. These numbers are a smoke test, NOT "
+                  "comparable with the published rows.**", ""]  # fmt: skip
+    lines += protocol_tables(board)
+    for p in figs:
+        lines += [f"![{p.stem}](figures/{p.name})", ""]
+    if figs:
+        lines += [
+            "*Robustness v2: success rate against each category's level, one line per controller (model parameters: "
+            "the mean over the ten parameters at each grid point; noise: mean over the repetitions; perturbations: runs "
+            "binned by their largest pulse on the driven joint). Upstream publishes only category rates, so the "
+            "published entries are gray ticks right of each panel (the best named). v3: score per seed and the mean, "
+            "the dashed line the best published score.*",
+            "",
+        ]
+    lines += _scorecard_section(cards, runs, quick)
+    not_run = [c for c in board.cases if c.status != "done"]
+    if not_run:
+        again = "pendulab score --leaderboard --resume" + (" --quick" if quick else "") + (f" --out {path}" if path else "")
+        lines += ["## Cases not finished", "", f"Continue with `{again}` (finished cases are reused).", ""]
+        lines += [f"* {c.protocol} / {c.task} / `{c.controller}`: {c.status} ({c.reason})" for c in not_run] + [""]
+    lines += [f"Wall time of this generation: {time.perf_counter() - w0:.0f} s (journaled cases reused: "
+              + ", ".join(f"{p} {r}" for p, (_, r) in board.counts().items()) + ").", ""]  # fmt: skip
+    out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out, "\n".join(lines) + "\n")
+    return out
+
+
+def _figures(board: Any, fig_dir: Path) -> list[Path]:
+    from ..evaluate.realai.leaderboard import TASKS
+    from ..viz.leaderboard import plot_robustness_levels, plot_v3_seeds
+
+    figs: list[Path] = []
+    for task in TASKS:
+        if any(c.protocol == "robustness-v2" and c.task == task and c.status == "done" for c in board.cases):
+            figs.append(plot_robustness_levels(board, task, fig_dir / f"leaderboard_robustness_{task}.png"))
+    if any(c.protocol == "v3" and c.status == "done" for c in board.cases):
+        figs.append(plot_v3_seeds(board, fig_dir / "leaderboard_v3.png"))
+    return figs
+
+
+def _read_card(path: Path, settings: Mapping[str, Any]) -> tuple:
+    from ..evaluate.card import record_from_dict
+
+    if not path.is_file():
+        return ()
+    try:
+        data = json.loads(path.read_text())
+        records = tuple(record_from_dict(r) for r in data["records"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"journal {path} is not a scorecard records file ({exc}); delete it or drop --resume") from None
+    differ = {k: (data.get(k), v) for k, v in settings.items() if data.get(k) != v}
+    if differ:
+        raise ValueError(f"journal {path} was written with other settings ({differ}); delete it or drop --resume")
+    return records
+
+
+def _scorecards(
+    runs: int, workers: int | None, progress: bool, resume: bool, root: Path, budget: float | None
+) -> dict[tuple[str, str], Any]:
+    """The own scorecards, each journaled in ``root/TASK-CONTROLLER/records.json``."""
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task
-    from ..evaluate import CATEGORIES, score
+    from ..evaluate import score
     from ._common import ProgressBar
 
-    out = DEFAULT_PATH if path is None else Path(path)
-    command = "pendulab score --leaderboard" + (f" --runs {runs}" if runs != 20 else "") + (f" --out {path}" if path else "")
+    w0 = time.perf_counter()
     cards: dict[tuple[str, str], Any] = {}
     for task_name in LEADERBOARD_TASKS:
         task = load_task(task_name)
@@ -73,8 +225,22 @@ def write_leaderboard(
             if (ctrl, task_name) in SKIPPED:
                 cards[(ctrl, task_name)] = SKIPPED[(ctrl, task_name)]
                 continue
+            if budget is not None and time.perf_counter() - w0 > budget:
+                cards[(ctrl, task_name)] = "not run (wall-time budget reached; continue with --resume)"
+                continue
+            journal = root / f"{task.name}-{ctrl}" / "records.json"
+            settings = {"controller": ctrl, "task": task.name, "runs": runs, "seed": 0, "categories": None}
+            completed = _read_card(journal, settings) if resume else ()
+
+            def save(records: tuple, complete: bool = False, journal: Path = journal, settings: dict = settings) -> None:
+                data = {**settings, "pendulab": __version__, "complete": complete,
+                        "records": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                                     for k, v in asdict(r).items()} for r in records]}  # fmt: skip
+                journal.parent.mkdir(parents=True, exist_ok=True)
+                atomic_write_text(journal, json.dumps(data) + "\n")
+
             planning = ProgressBar(f"planning {ctrl} on {task_name} (IPOPT)", progress)
-            bar = ProgressBar(f"{ctrl} on {task_name}", progress)
+            bar = ProgressBar(f"scorecard {ctrl} on {task_name} (runs)", progress)
 
             def report(done: int, total: int, planning: ProgressBar = planning, bar: ProgressBar = bar) -> None:
                 planning.close()
@@ -84,22 +250,30 @@ def write_leaderboard(
                 with observe(
                     lambda p=planning: p.iterate(1, "iter"), lambda d, p=planning: p.note(f"building the NLP ({d}) ...")
                 ):
-                    cards[(ctrl, task_name)] = score(ctrl, task, runs=runs, workers=workers, progress=report)
+                    card = score(ctrl, task, runs=runs, workers=workers, progress=report, completed=completed,
+                                 on_records=save)  # fmt: skip
+                save(card.records, complete=True)
+                cards[(ctrl, task_name)] = card
             except (ValueError, RuntimeError) as exc:  # e.g. a swing-up the optimizer cannot solve
                 cards[(ctrl, task_name)] = f"not available ({_one_line(exc)})"
             finally:
                 planning.close()
                 bar.close()
+    return cards
 
-    lines = [
-        "# Leaderboard",
-        "",
-        f"Generated by `{command}` (pendulab {__version__}, {time.strftime('%Y-%m-%d')}). Do not edit by hand.",
-        "",
-        "## Robustness (scorecard)",
-        "",
-        "Overall score = mean over the categories of the mean success rate over the levels (docs/scorecard.md); "
-        f"{runs} runs per level of the stochastic categories. In brackets: does the nominal run (no perturbation) succeed.",
+
+def _scorecard_section(cards: dict[tuple[str, str], Any] | None, runs: int, quick: bool) -> list[str]:
+    from ..evaluate import CATEGORIES
+
+    lines = ["## pendulab's own robustness scorecard", ""]
+    if cards is None:
+        why = "--quick" if quick else "scorecards=False"
+        return lines + [f"not run ({why}); the full leaderboard scores it (docs/scorecard.md).", ""]
+    lines += [
+        "pendulab's own protocol (not RealAIGym's: its own categories, levels and success rule; docs/scorecard.md). "
+        "Overall score = mean over the categories of the mean success rate over the levels; "
+        f"{runs} runs per level of the stochastic categories. In brackets: does the nominal run (no perturbation) "
+        "succeed, and the card's wall time.",
         "",
         "| controller | " + " | ".join(LEADERBOARD_TASKS) + " |",
         "|---|" + "---|" * len(LEADERBOARD_TASKS),
@@ -111,8 +285,7 @@ def write_leaderboard(
             if isinstance(card, str):
                 cells.append(card)
                 continue
-            nominal = _nominal(card)
-            cells.append(f"**{card.overall:.2f}** ({nominal}, {card.wall_time:.0f} s)")
+            cells.append(f"**{card.overall:.2f}** ({_nominal(card)}, {card.wall_time:.0f} s)")
         lines.append(f"| {ctrl} | " + " | ".join(cells) + " |")
     lines += ["", "### Category scores", ""]
     for task_name in LEADERBOARD_TASKS:
@@ -125,10 +298,7 @@ def write_leaderboard(
             lines.append(f"| {ctrl} | " + " | ".join(f"{card.category(n).score:.2f}" for n in names) + " |")
         lines.append("")
     lines += ["Categories: " + "; ".join(f"`{c.name}`: {c.description} [{c.unit}]" for c in CATEGORIES.values()), ""]
-    lines += _realai_section()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, "\n".join(lines) + "\n")
-    return out
+    return lines
 
 
 def _nominal(card: Any) -> str:
@@ -139,20 +309,12 @@ def _nominal(card: Any) -> str:
     return "nominal ?"
 
 
-def _realai_section() -> list[str]:
-    from ..evaluate.realai import PUBLISHED, realai_score
+def print_summary(path: Path) -> None:
+    """One line on stderr naming the file written (the CLI's report).
 
-    lines = ["## RealAIGym simulation leaderboard (v2 score)", ""]
-    lines += ["Definitions, and the score-designed swing-up: docs/realai.md.", ""]
-    lines += ["| task | entry | score | success | swing-up time [s] |", "|---|---|---|---|---|"]
-    for task in ("pendubot", "acrobot"):
-        for name, value in sorted(PUBLISHED[task].items(), key=lambda kv: -kv[1]):
-            lines.append(f"| {task} | {name} (published) | {value:.3f} | | |")
-        for ctrl in ("best", *LEADERBOARD_CONTROLLERS):
-            try:
-                d = realai_score(task, ctrl).to_dict()
-                t_up = float(d.get("swingup_time", float("nan")))
-                lines.append(f"| {task} | pendulab {ctrl} | {d['score']:.3f} | {d['success']} | {t_up:.2f} |")
-            except (ValueError, RuntimeError) as exc:
-                lines.append(f"| {task} | pendulab {ctrl} | not available ({_one_line(exc)}) | | |")
-    return lines + [""]
+    Parameters
+    ----------
+    path : Path
+        The markdown file.
+    """
+    print(f"wrote {path} (figures in {path.parent / 'figures'})", file=sys.stderr)

@@ -82,7 +82,15 @@ def register(subparsers: Any) -> None:
         "--quick",
         action="store_true",
         help="--protocol robustness-v2 on a reduced grid (levels 0, 10, 20 of each category, 2 velocity-noise "
-        "repetitions, 5 perturbation runs; 77 runs): a smoke test, not a score to publish",
+        "repetitions, 5 perturbation runs; 77 runs); --leaderboard: robustness v2 on 13 runs, v3 one 10 s episode, "
+        "no own scorecards: a smoke test, not a score to publish",
+    )
+    p.add_argument(
+        "--controllers",
+        default=None,
+        metavar="A,B",
+        help="--leaderboard: RealAIGym controllers for all three protocols (default: v2 best,tvlqr,robust,global,replan; "
+        "robustness-v2 best,tvlqr,robust; v3 best,global,replan)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     mode = p.add_mutually_exclusive_group()
@@ -143,8 +151,10 @@ def run_score(args: argparse.Namespace) -> int:
         raise CLIError(f"--realai is --protocol v2; it does not combine with --protocol {args.protocol}")
     if args.protocol is not None and args.leaderboard:
         raise CLIError("--protocol does not apply to --leaderboard (it scores every controller on every task)")
-    if args.quick and args.protocol != "robustness-v2":
-        raise CLIError("--quick applies to --protocol robustness-v2 only")
+    if args.quick and args.protocol != "robustness-v2" and not args.leaderboard:
+        raise CLIError("--quick applies to --protocol robustness-v2 and --leaderboard only")
+    if args.controllers is not None and not args.leaderboard:
+        raise CLIError("--controllers applies to --leaderboard only (use --controller NAME otherwise)")
     if args.protocol in ("robustness-v2", "v3"):
         if args.controller is None or args.task is None:
             raise CLIError(f"--protocol {args.protocol} needs --controller and --task")
@@ -152,14 +162,7 @@ def run_score(args: argparse.Namespace) -> int:
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     runs = _int("--runs", args.runs, 1, MAX_RUNS, "runs per level of each stochastic category", 20)
     if args.leaderboard:
-        _reject(args, "--leaderboard (it scores every controller on every task)", _SCORECARD_ONLY)
-        if args.controller is not None or args.task is not None:
-            raise CLIError("--controller and --task do not apply to --leaderboard (it scores every controller on every task)")
-        from .leaderboard import write_leaderboard
-
-        path = write_leaderboard(args.out, runs=runs, workers=workers, progress=not args.no_progress)
-        print(f"wrote {path}", file=sys.stderr)
-        return 0
+        return _run_leaderboard(args, runs, workers)
     if args.controller is None or args.task is None:
         raise CLIError("--controller and --task are required (or --leaderboard)")
     if args.realai or args.protocol == "v2":
@@ -234,6 +237,44 @@ def run_score(args: argparse.Namespace) -> int:
         print(card.table())
         resumed = f", {len(completed)} resumed" if completed else ""
         print(f"\n{len(card.records)} runs{resumed}, {len(card.failures)} failed, {card.wall_time:.1f} s")
+    return 0
+
+
+def _run_leaderboard(args: argparse.Namespace, runs: int | None, workers: int | None) -> int:
+    """``--leaderboard``: the three RealAIGym protocols and the own scorecards (pendulab.commands.leaderboard)."""
+    _reject(
+        args, "--leaderboard (it scores every controller on every task)", (("categories", "--categories"), ("seed", "--seed"))
+    )
+    if args.controller is not None or args.task is not None:
+        raise CLIError("--controller and --task do not apply to --leaderboard (use --controllers A,B)")
+    if args.json:
+        raise CLIError("--json does not apply to --leaderboard (it writes a markdown page)")
+    from ..evaluate.realai.leaderboard import check_controllers
+    from .leaderboard import print_summary, write_leaderboard
+
+    names = None
+    if args.controllers is not None:
+        names = [c.strip() for c in args.controllers.split(",") if c.strip()]
+        try:
+            check_controllers(names)
+        except ValueError as exc:
+            raise CLIError(f"--controllers {args.controllers!r}: {exc}") from None
+    budget = parse_number("--max-wall-time", args.max_wall_time, positive=True)
+    try:
+        path = write_leaderboard(
+            args.out, runs=runs or 20, workers=workers, progress=not args.no_progress, controllers=names,
+            quick=args.quick, resume=args.resume, max_wall_time=budget,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        again = "pendulab score --leaderboard --resume" + (" --quick" if args.quick else "")
+        print(f"interrupted: finished cases are journaled under ./pendulab-out/leaderboard/; continue with `{again}`",
+              file=sys.stderr)  # fmt: skip
+        raise
+    except ValueError as exc:
+        if "journal" in str(exc):
+            raise CLIError(f"--resume: {exc}") from None
+        raise
+    print_summary(path)
     return 0
 
 

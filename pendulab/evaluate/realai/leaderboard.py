@@ -1,0 +1,484 @@
+"""All three RealAIGym protocols for a set of controllers, journaled: what ``pendulab score --leaderboard`` runs.
+
+Every finished case is recorded atomically under ``root`` (default ``./pendulab-out/leaderboard/``;
+``--quick`` cases under ``root/quick/``, never mixed with full ones):
+
+* ``v2/TASK-CONTROLLER.json``: the v2 performance run (criteria, score, wall time, controller time per call);
+* ``robustness-v2/TASK-CONTROLLER/runs.json``: the robustness-v2 journal of
+  :func:`~.robustness.robustness_v2` (rewritten after every batch of runs; ``pendulab score --protocol robustness-v2
+  --out DIR`` writes the same file, so such a run is picked up too);
+* ``v3/TASK-CONTROLLER-seedS.json``: one v3 episode (:meth:`~.v3_result.V3Result.to_dict`).
+
+With ``resume=True`` a recorded case is read back instead of run (robustness v2: only its missing runs are run);
+a record written with other settings is an error. Ctrl-C ends the current case; everything recorded before stays.
+
+``quick=True`` (:data:`QUICK`) is a smoke run, not comparable with the published rows: robustness v2 on grid points
+0 and 20 of every category, two model parameters, one repetition per noise level and one perturbation run (13 runs);
+v3 one seed over the first 10 s (score = uptime / 10 s); v2 is one deterministic run either way.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..._checks import bounded_int, positive_float
+from ..._io import atomic_write_text
+from ...control.realai.spec import DT
+from .controllers import CONTROLLERS, resolve_controller
+
+__all__ = [
+    "PROTOCOLS",
+    "TASKS",
+    "DEFAULT_CONTROLLERS",
+    "DEFAULT_ROOT",
+    "FULL",
+    "QUICK",
+    "Case",
+    "LeaderboardRun",
+    "ProtocolSettings",
+    "check_controllers",
+    "run_protocols",
+]
+
+#: The three protocols, in table order.
+PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
+#: Leaderboard tasks.
+TASKS: tuple[str, ...] = ("pendubot", "acrobot")
+#: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
+#: (one cheap run each); robustness v2 the trackers with and without the estimator; v3 the controllers that can start
+#: from any state (``global``, ``replan``) beside the v2 best.
+DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
+    "v2": ("best", "tvlqr", "robust", "global", "replan"),
+    "robustness-v2": ("best", "tvlqr", "robust"),
+    "v3": ("best", "global", "replan"),
+}
+#: Journal directory (relative to the current directory).
+DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"
+
+
+@dataclass(frozen=True)
+class ProtocolSettings:
+    """How much of each protocol is run.
+
+    Attributes
+    ----------
+    name : str
+        ``"full"`` or ``"quick"``.
+    robustness : mapping
+        Keyword arguments of :func:`~.robustness.robustness_v2` (empty: the full 722-run protocol).
+    v3_seeds : tuple of int
+        Schedule seeds of the v3 episodes.
+    v3_steps : int
+        RK4 steps per v3 episode (30000: the protocol's 60 s).
+    """
+
+    name: str
+    robustness: Mapping[str, Any]
+    v3_seeds: tuple[int, ...]
+    v3_steps: int
+
+    @property
+    def comparable(self) -> bool:
+        """Whether the scores are the protocols' own (comparable with the published rows)."""
+        return self.name == "full"
+
+
+#: The protocols as published: robustness v2 in full (722 runs, seed 0), v3 on seeds 0, 1, 2 (60 s each).
+FULL = ProtocolSettings("full", {}, (0, 1, 2), 30000)
+#: Smoke run (tests, ``--quick``): NOT comparable with the published rows.
+QUICK = ProtocolSettings(
+    "quick",
+    {
+        "levels": (0, 20),
+        "repetitions": 1,
+        "perturbation_repetitions": 1,
+        "u_noise_repetitions": 1,
+        "model_params": ("m2", "b2"),
+    },
+    (0,),
+    5000,
+)
+
+
+@dataclass
+class Case:
+    """One (protocol, task, controller) cell of the leaderboard.
+
+    Attributes
+    ----------
+    protocol, task, controller : str
+        The cell.
+    status : str
+        ``"done"``, ``"failed"`` (the controller could not be built or run: ``reason``) or ``"not run"`` (``reason``).
+    reason : str
+        Why a case failed or was not run.
+    summary : dict
+        v2: the run's :meth:`~.simulate.RealAIResult.to_dict` plus ``wall_time`` [s] and ``controller_time``;
+        robustness v2: :meth:`~.robustness_scores.RobustnessResult.to_dict` plus ``wall_total`` (sum of the runs'
+        wall times [s]), ``perturbation_amplitude`` (largest pulse on the driven joint per perturbation run [N m])
+        and ``model_level_indices``; v3: ``seeds`` (one :meth:`~.v3_result.V3Result.to_dict` per seed, with
+        ``duration`` [s] and ``uptime_fraction``) and their ``mean``.
+    executed, reused : int
+        Runs done by this call / read back from the journal (robustness v2: protocol runs; v2, v3: episodes).
+    """
+
+    protocol: str
+    task: str
+    controller: str
+    status: str = "not run"
+    reason: str = ""
+    summary: dict[str, Any] = field(default_factory=dict, repr=False)
+    executed: int = 0
+    reused: int = 0
+
+
+@dataclass
+class LeaderboardRun:
+    """The cases of one leaderboard call.
+
+    Attributes
+    ----------
+    settings : ProtocolSettings
+        Full or quick.
+    cases : list of Case
+        In protocol, task, controller order.
+    root : Path
+        Journal directory of this call.
+    wall_time : float
+        Wall time of this call [s].
+    """
+
+    settings: ProtocolSettings
+    cases: list[Case]
+    root: Path
+    wall_time: float = 0.0
+
+    def case(self, protocol: str, task: str, controller: str) -> Case:
+        """The case of a cell.
+
+        Parameters
+        ----------
+        protocol, task, controller : str
+            The cell.
+
+        Returns
+        -------
+        Case
+
+        Raises
+        ------
+        KeyError
+            No such cell in this run.
+        """
+        for c in self.cases:
+            if (c.protocol, c.task, c.controller) == (protocol, task, controller):
+                return c
+        raise KeyError(f"no case ({protocol!r}, {task!r}, {controller!r}) in this leaderboard run")
+
+    def controllers(self, protocol: str) -> list[str]:
+        """Controllers of a protocol, in order.
+
+        Parameters
+        ----------
+        protocol : str
+            One of :data:`PROTOCOLS`.
+
+        Returns
+        -------
+        list of str
+            Controller names with a case of ``protocol``.
+        """
+        out: list[str] = []
+        for c in self.cases:
+            if c.protocol == protocol and c.controller not in out:
+                out.append(c.controller)
+        return out
+
+    def counts(self) -> dict[str, tuple[int, int]]:
+        """Runs done and runs read back, per protocol.
+
+        Returns
+        -------
+        dict of str to (int, int)
+            Protocol -> (executed, reused): robustness-v2 protocol runs, v2 and v3 episodes.
+        """
+        out = {p: (0, 0) for p in PROTOCOLS}
+        for c in self.cases:
+            e, r = out[c.protocol]
+            out[c.protocol] = (e + c.executed, r + c.reused)
+        return out
+
+
+def check_controllers(controllers: Mapping[str, Sequence[str]] | Sequence[str] | None) -> dict[str, tuple[str, ...]]:
+    """Controllers per protocol from a list for all three, a mapping, or None (:data:`DEFAULT_CONTROLLERS`).
+
+    Parameters
+    ----------
+    controllers : sequence of str, mapping of str to sequence of str, or None
+        Names of :data:`~.controllers.CONTROLLERS`.
+
+    Returns
+    -------
+    dict of str to tuple of str
+        Protocol -> controller names (duplicates dropped, order kept).
+
+    Raises
+    ------
+    ValueError
+        An unknown controller or protocol name, or an empty list.
+    TypeError
+        Not a sequence of strings or a mapping.
+    """
+    if controllers is None:
+        return {p: tuple(DEFAULT_CONTROLLERS[p]) for p in PROTOCOLS}
+    if isinstance(controllers, str):
+        raise TypeError(f"controllers must be a sequence of names, not the string {controllers!r} (use [{controllers!r}])")
+    per = dict(controllers) if isinstance(controllers, Mapping) else {p: controllers for p in PROTOCOLS}
+    bad_p = [p for p in per if p not in PROTOCOLS]
+    if bad_p:
+        raise ValueError(f"controllers: unknown protocols {bad_p}; expected some of {list(PROTOCOLS)}")
+    out: dict[str, tuple[str, ...]] = {}
+    for p, names in per.items():
+        if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+            raise TypeError(f"controllers[{p!r}] must be a sequence of controller names, got {names!r}")
+        bad = [n for n in names if n not in CONTROLLERS]
+        if bad:
+            raise ValueError(f"controllers: unknown {bad}; expected names of {list(CONTROLLERS)}")
+        if not names:
+            raise ValueError(f"controllers[{p!r}] is empty; expected at least one of {list(CONTROLLERS)}")
+        out[p] = tuple(dict.fromkeys(names))
+    return out
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".replace("|", "/")[:160]
+
+
+def _read(path: Path, settings: Mapping[str, Any]) -> dict[str, Any] | None:
+    """A recorded case, or None when there is none; ValueError for a record of other settings."""
+    if not path.is_file():
+        return None
+    try:
+        data = json.loads(path.read_text())
+        stored, summary = data["settings"], data["summary"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"journal {path} is not a leaderboard record ({exc}); delete it or run without resume") from None
+    if stored != dict(settings):
+        raise ValueError(f"journal {path} was written with other settings ({stored} there, {dict(settings)} now); "
+                         "use another journal directory or resume=False")  # fmt: skip
+    return summary
+
+
+def _write(path: Path, settings: Mapping[str, Any], summary: Mapping[str, Any]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps({"settings": dict(settings), "summary": dict(summary)}) + "\n")
+
+
+class _Timed:
+    """A sampled controller whose calls are timed (wall clock) in :attr:`times`."""
+
+    def __init__(self, ctrl: Any) -> None:
+        self._ctrl = ctrl
+        self.times: list[float] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._ctrl, name)
+
+    def reset(self) -> None:
+        self._ctrl.reset()
+
+    def __call__(self, t: float, x: Any) -> Any:
+        t0 = time.perf_counter()
+        u = self._ctrl(t, x)
+        self.times.append(time.perf_counter() - t0)
+        return u
+
+
+def _run_v2(task: str, name: str, progress: Callable[[int, int], None] | None) -> dict[str, Any]:
+    from .simulate import run_leaderboard
+
+    w0 = time.perf_counter()
+    _, ctrl = resolve_controller(task, name)
+    timed = _Timed(ctrl)
+    res = run_leaderboard(task, timed, name, progress=progress)
+    d = res.to_dict()
+    d["wall_time"] = time.perf_counter() - w0
+    d["controller_time"] = {
+        "median_per_call": float(statistics.median(timed.times)) if timed.times else 0.0,
+        "max_per_call": float(max(timed.times)) if timed.times else 0.0,
+        "calls": len(timed.times),
+        "sample_time": float(ctrl.sample_time),
+    }
+    return d
+
+
+def _run_robustness(
+    task: str, name: str, journal: Path, settings: ProtocolSettings, resume: bool, workers: int,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[dict[str, Any], int, int]:  # fmt: skip
+    from .robustness import robustness_v2
+
+    before = 0
+    if resume and journal.is_file():
+        try:
+            before = len(json.loads(journal.read_text()).get("records", []))
+        except (OSError, ValueError, AttributeError):
+            before = 0  # robustness_v2 reports the broken journal itself
+    res = robustness_v2(
+        task, name, seed=0, workers=workers, progress=progress, journal=journal, resume=resume, **settings.robustness
+    )
+    d = res.to_dict()
+    d["wall_total"] = float(sum(r.get("wall", 0.0) for r in res.records))
+    act = 0 if task == "pendubot" else 1
+    pert = [r for r in res.records if r["category"] == "perturbation"]
+    d["perturbation_amplitude"] = [float(max(abs(a) for a in r["amplitude"][act])) for r in pert]
+    d["model_level_indices"] = sorted({int(r["level_index"]) for r in res.records if r["category"] == "model"})
+    n = len(res.records)
+    return d, n - before, before
+
+
+def _run_v3(task: str, name: str, seed: int, steps: int, progress: Callable[[int, int], None] | None) -> dict[str, Any]:
+    from .v3 import run_v3
+
+    w0 = time.perf_counter()
+    _, ctrl = resolve_controller(task, name)
+    res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress)
+    d = res.to_dict()
+    d["duration"] = steps * DT
+    d["uptime_fraction"] = res.uptime / (steps * DT)
+    d["wall_time_s"] = time.perf_counter() - w0  # with the controller's design (plans, ROA)
+    return d
+
+
+def run_protocols(
+    controllers: Mapping[str, Sequence[str]] | Sequence[str] | None = None,
+    *,
+    tasks: Sequence[str] = TASKS,
+    protocols: Sequence[str] = PROTOCOLS,
+    quick: bool = False,
+    resume: bool = False,
+    root: str | Path | None = None,
+    workers: int = 1,
+    progress: Callable[[str, int, int], None] | None = None,
+    max_wall_time: float | None = None,
+) -> LeaderboardRun:
+    """Run (or read back) every (protocol, task, controller) case of the leaderboard.
+
+    Parameters
+    ----------
+    controllers : sequence of str or mapping, optional
+        Names of :data:`~.controllers.CONTROLLERS` for all three protocols, or protocol -> names; default
+        :data:`DEFAULT_CONTROLLERS`.
+    tasks : sequence of str
+        Subset of ``("pendubot", "acrobot")``.
+    protocols : sequence of str
+        Subset of :data:`PROTOCOLS`.
+    quick : bool
+        The smoke settings :data:`QUICK` (not comparable) instead of :data:`FULL`.
+    resume : bool
+        Read recorded cases back (robustness v2: run only the missing runs); without it every case is run anew
+        and its record overwritten.
+    root : str or Path, optional
+        Journal directory (default :data:`DEFAULT_ROOT`; quick cases in ``root/quick``).
+    workers : int
+        Worker processes of the robustness-v2 runs.
+    progress : callable, optional
+        ``progress(label, done, total)``: ``label`` names the case (and its unit: runs or 2 ms steps).
+    max_wall_time : float, optional
+        Budget [s] of this call, checked before each case: cases not started by then are "not run".
+
+    Returns
+    -------
+    LeaderboardRun
+        The cases; a controller that cannot be built or run gets status ``"failed"`` with the reason.
+
+    Raises
+    ------
+    ValueError
+        Unknown task, protocol or controller name; a journal of other settings (with ``resume``).
+    TypeError
+        Badly typed ``controllers``, ``tasks`` or ``protocols``.
+    KeyboardInterrupt
+        Ctrl-C (the cases and robustness-v2 batches finished before it are recorded).
+    """
+    per = check_controllers(controllers)
+    for what, given, allowed in (("tasks", tasks, TASKS), ("protocols", protocols, PROTOCOLS)):
+        if isinstance(given, str) or not all(isinstance(v, str) for v in given):
+            raise TypeError(f"{what} must be a sequence of names, got {given!r}")
+        bad = [v for v in given if v not in allowed]
+        if bad or not given:
+            raise ValueError(f"{what}: got {list(given)!r}; expected a non-empty subset of {list(allowed)}")
+    workers = bounded_int("workers", workers, low=1, high=256, why="worker processes of the robustness-v2 runs")
+    budget = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time)
+    settings = QUICK if quick else FULL
+    base = DEFAULT_ROOT if root is None else Path(root)
+    jroot = base / "quick" if quick else base
+    w0 = time.perf_counter()
+    cases: list[Case] = []
+    for protocol in (p for p in PROTOCOLS if p in protocols):
+        for task in (t for t in TASKS if t in tasks):
+            for name in per.get(protocol, ()):
+                case = Case(protocol, task, name)
+                cases.append(case)
+                if budget is not None and time.perf_counter() - w0 > budget:
+                    case.reason = f"wall-time budget of {budget:g} s reached before this case"
+                    continue
+
+                def report(done: int, total: int, label: str = f"{protocol} {name} on {task}") -> None:
+                    if progress is not None:
+                        progress(label, done, total)
+
+                try:
+                    _run_case(case, settings, jroot, resume, workers, report)
+                except (RuntimeError, ArithmeticError) as exc:
+                    case.status, case.reason = "failed", _one_line(exc)
+                except ValueError as exc:
+                    if "journal" in str(exc):
+                        raise
+                    case.status, case.reason = "failed", _one_line(exc)
+    return LeaderboardRun(settings, cases, jroot, time.perf_counter() - w0)
+
+
+def _run_case(
+    case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int, report: Callable[[int, int], None]
+) -> None:
+    task, name = case.task, case.controller
+    if case.protocol == "v2":
+        path = jroot / "v2" / f"{task}-{name}.json"
+        keys = {"protocol": "v2", "task": task, "controller": name}
+        summary = _read(path, keys) if resume else None
+        if summary is None:
+            summary = _run_v2(task, name, report)
+            _write(path, keys, summary)
+            case.executed = 1
+        else:
+            case.reused = 1
+        case.summary, case.status = summary, "done"
+    elif case.protocol == "robustness-v2":
+        journal = jroot / "robustness-v2" / f"{task}-{name}" / "runs.json"
+        case.summary, case.executed, case.reused = _run_robustness(task, name, journal, settings, resume, workers, report)
+        case.status = "done"
+    else:
+        seeds = []
+        for seed in settings.v3_seeds:
+            path = jroot / "v3" / f"{task}-{name}-seed{seed}.json"
+            keys = {"protocol": "v3", "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps}
+            summary = _read(path, keys) if resume else None
+            if summary is None:
+                summary = _run_v3(task, name, seed, settings.v3_steps, report)
+                _write(path, keys, summary)
+                case.executed += 1
+            else:
+                case.reused += 1
+            seeds.append(summary)
+        scores = [s["uptime_fraction"] for s in seeds]
+        case.summary = {"seeds": seeds, "mean": float(sum(scores) / len(scores)) if scores else math.nan}
+        case.status = "done"
