@@ -136,14 +136,29 @@ def _timed(fn: Any, budget: float = 1.0) -> tuple[Any, float]:
     return res, statistics.median(times)
 
 
+def _paired(a: Any, b: Any, budget: float = 0.3, most: int = 25) -> tuple[float, float]:
+    """Median wall times [s] of ``a`` and ``b`` run alternately: 3 pairs, more (up to ``most``) while under ``budget`` s."""
+    ta: list[float] = []
+    tb: list[float] = []
+    spent = 0.0
+    while len(ta) < 3 or (spent < budget and len(ta) < most):
+        for fn, times in ((a, ta), (b, tb)):
+            t0 = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t0)
+            spent += times[-1]
+    return statistics.median(ta), statistics.median(tb)
+
+
 def measure(scene: Scene) -> dict[str, Any]:
     """One scene: prediction, measurement, times."""
     choose_model(scene)  # warm-up (JIT of model functions, solver plugins)
     choice, t_rule = _timed(lambda: choose_model(scene))
     measured = measure_levels(scene)
     level = choice.model_level(scene)
-    _, t_level = _timed(lambda: level.simulate(scene))  # the same Trajectory (states + outputs) auto returns
-    _, t_auto = _timed(lambda: choose_model(scene).simulate(scene))
+    # The same Trajectory (states + outputs) auto returns; auto and the level alone alternate, so that both see
+    # the same load of the shared machine.
+    t_level, t_auto = _paired(lambda: level.simulate(scene), lambda: choose_model(scene).simulate(scene))
     ref_name = list(measured)[0]
     reference = next(lv for lv in levels_for(scene.model) if lv.name == ref_name)
     _, t_ref = _timed(lambda: reference.simulate(scene))  # warm, as the others (measure_levels ran it first)

@@ -26,7 +26,10 @@ scene's tolerance (the scene's own model always qualifies). Predictions
     error that grows secularly and, over chaotic motion, like ``e^(lambda_1 t)``:
     angle error ``nu (sum_j C_j A_j w_j t / 2 + C_CHAOS expm1(lambda_1 t))`` with
     the start's modal amplitudes ``A_j`` (``C_SLOW`` for the in-phase, ``C_FAST``
-    for the anti-phase mode). Position outputs add the spring-length error
+    for the anti-phase mode), seen through the envelope ``min(1, s0 + w_slow t)``
+    of a mode started at rest (``s0``: kinetic share of the start). The stretch
+    grows from the start's own load to the largest over a quarter of the slow
+    period, lengthened by ``2 K(sin^2(A / 2)) / pi`` for the amplitude. Position outputs add the spring-length error
     itself: ``delta_i + dR_i`` for rigid links, ``dR_i + delta_i eps^2`` with
     quasi-static lengths.
 reference

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from scipy.signal import lfilter
+from scipy.special import ellipk
 
 from ..analysis.model_error import error_growth, frequency_split, lyapunov_exponent, spring_stretch
 from ..model.quasistatic import quasi_static_lengths
@@ -62,21 +63,28 @@ class _Features:
     phase_sum: float  # sum_j A_j w_j over the pendular modes [rad/s]
     energy_fraction: float
     stretch_static: np.ndarray  # delta_i at hanging rest [m]
-    stretch_start: np.ndarray  # delta_i of the start's centrifugal load beyond static [m]
+    stretch_start: np.ndarray  # |delta_i| under the start's own load (gravity along the links + centrifugal) [m]
     stretch_max: np.ndarray  # delta_i of the largest load (gravity + centrifugal of all energy) beyond static [m]
     ring: np.ndarray  # dR_i: start off the quasi-static lengths [m]
     lengths: np.ndarray  # L_i [m]
+    kinetic_share: float = 1.0  # sqrt(kinetic / total energy above rest) at the start: 0 from rest
+    quarter: float = 0.0  # time [s] the motion takes to reach its largest load: a quarter of the slow period
 
     @property
     def stretch(self) -> np.ndarray:
         return self.stretch_static + self.stretch_max
 
     def offsets(self, t: np.ndarray) -> np.ndarray:
-        """Spring-length error of rigid links [m], (len(t), 2): static + centrifugal stretch, growing as the
-        pendulum falls over a quarter of its slow period from the start's load to the largest, + the ring."""
-        ramp = np.minimum(1.0, (np.asarray(t) * self.w_slow / (math.pi / 2)) ** 2)[:, None]
-        dyn = self.stretch_start + (self.stretch_max - self.stretch_start) * ramp
-        return self.ring + self.stretch_static + dyn
+        """Spring-length error of rigid links [m], (len(t), 2): the stretch under the start's load, growing as
+        the pendulum falls over a quarter of its (amplitude-dependent) slow period to the largest load, + the ring."""
+        ramp = np.minimum(1.0, (np.asarray(t) / self.quarter) ** 2)[:, None] if self.quarter > 0 else 1.0
+        final = self.stretch_static + self.stretch_max
+        return self.ring + self.stretch_start + np.maximum(final - self.stretch_start, 0.0) * ramp
+
+    def envelope(self, t: np.ndarray) -> np.ndarray:
+        """Envelope of a phase error's angle error per unit of its secular size: a mode started at its turning
+        point (at rest) has ``A dw t |sin(w t)|``, which grows as ``w t`` over the first radian of phase."""
+        return np.minimum(1.0, self.kinetic_share + self.w_slow * np.asarray(t))
 
 
 _HANGING: dict[tuple, tuple] = {}
@@ -128,9 +136,13 @@ def _features(scene: Scene) -> _Features:
         phase_rate, phase_sum = C_FAST * amplitude * w_p, amplitude * w_p
     phase_sum = max(phase_sum, amplitude * w_slow)
     lam = lyapunov_exponent(frac, math.sqrt(p.g / L.mean()), w_s / w_p)
+    kinetic_share = math.sqrt(min(1.0, float(model.kinetic_energy(x0)) / e_above)) if e_above > 0 else 1.0
+    # A pendulum of amplitude A swings slower than its linear mode by 2 K(sin^2(A / 2)) / pi (capped near the top).
+    stretch_period = 2.0 / math.pi * float(ellipk(math.sin(min(amplitude, 3.0) / 2) ** 2))
+    quarter = math.pi / 2 / w_slow * stretch_period if w_slow > 0 else 0.0
     if model.kind != "elastic":
         z = np.zeros(2)
-        return _Features(w_p, w_s, w_slow, lam, amplitude, phase_rate, phase_sum, frac, z, z, z, z, L)
+        return _Features(w_p, w_s, w_slow, lam, amplitude, phase_rate, phase_sum, frac, z, z, z, z, L, kinetic_share, quarter)
     share = np.array([1.0, M2 / M1])  # bob 2's share of the centrifugal load on spring 2
     static = np.array([M1 * p.g, M2 * p.g])
     centrifugal = 2 * e_above * share / L
@@ -139,13 +151,29 @@ def _features(scene: Scene) -> _Features:
         static = static + np.abs(np.asarray(scene.u, dtype=float)) / L
     k = np.array([p.k1, p.k2])
     stretch_static = np.array([spring_stretch(static[i], k[i]) for i in range(2)])
+    stretch_start = stretch_static + start / k
     try:
         r_qs = quasi_static_lengths(model, th0, x0[4:6], scene.u)
         ring = np.abs(x0[2:4] - r_qs) + np.abs(x0[6:8]) / w_s
+        stretch_start = np.abs(r_qs - L)  # the start's own load (a raised link carries less of its weight)
     except RuntimeError:  # no quasi-static lengths: the springs cannot hold the motion
         ring = np.full(2, np.inf)
     return _Features(
-        w_p, w_s, w_slow, lam, amplitude, phase_rate, phase_sum, frac, stretch_static, start / k, centrifugal / k, ring, L
+        w_p,
+        w_s,
+        w_slow,
+        lam,
+        amplitude,
+        phase_rate,
+        phase_sum,
+        frac,
+        stretch_static,
+        stretch_start,
+        centrifugal / k,
+        ring,
+        L,
+        kinetic_share,
+        quarter,
     )
 
 
@@ -197,7 +225,7 @@ def _reduced_curve(scene: Scene, f: _Features, t: np.ndarray, quasi_static: bool
     offsets = f.offsets(t)  # (n, 2): spring-length errors of rigid links, growing as the pendulum speeds up
     nu = np.sum((offsets - f.ring + f.ring * eps) / f.lengths, axis=1)  # relative length error, (n,)
     nu = np.maximum.accumulate(nu)
-    e_th = nu * error_growth(t, f.phase_rate, f.lam, chaotic=C_CHAOS)
+    e_th = nu * error_growth(t, f.phase_rate, f.lam, chaotic=C_CHAOS) * f.envelope(t)
     e_th = np.minimum(e_th, 2 * math.pi)  # angles of two motions differ by at most a turn or so
     if quasi_static:  # the lengths carry the load; what remains: the ring and the next order of the slow manifold
         offsets = f.ring + (offsets - f.ring) * eps**2
