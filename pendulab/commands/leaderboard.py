@@ -151,6 +151,15 @@ def write_leaderboard(
         "Journals of every finished case: `./pendulab-out/leaderboard/` (`--resume` reuses them).",
         "",
     ]
+    lines += [
+        "Regenerate: `pendulab score --leaderboard --resume --runs 10 --out docs/leaderboard.md` (repository root; "
+        "`--workers N` for the robustness-v2 runs and scorecards, `--controllers A,B` to choose the RealAIGym "
+        "controllers, `--max-wall-time S` to stop starting new cases after S seconds). A full run takes hours on 2 "
+        "cores: robustness v2 is 722 runs of 10 s per controller and task (300-700 s; `robust` ~1500 s), a v3 episode "
+        "20-700 s. `--quick` is a smoke run (robustness v2 on 13 runs, one 10 s v3 episode, no own scorecards) whose "
+        "numbers are not comparable; its journals live in `./pendulab-out/leaderboard/quick/`.",
+        "",
+    ]
     if quick:
         lines += ["**QUICK RUN (`--quick`): reduced grids and one short v3 episode. These numbers are a smoke test, NOT "
                   "comparable with the published rows.**", ""]  # fmt: skip

@@ -432,12 +432,8 @@ def run_protocols(
                     case.reason = f"wall-time budget of {budget:g} s reached before this case"
                     continue
 
-                def report(done: int, total: int, label: str = f"{protocol} {name} on {task}") -> None:
-                    if progress is not None:
-                        progress(label, done, total)
-
                 try:
-                    _run_case(case, settings, jroot, resume, workers, report)
+                    _run_case(case, settings, jroot, resume, workers, progress)
                 except (RuntimeError, ArithmeticError) as exc:
                     case.status, case.reason = "failed", _one_line(exc)
                 except ValueError as exc:
@@ -447,10 +443,23 @@ def run_protocols(
     return LeaderboardRun(settings, cases, jroot, time.perf_counter() - w0)
 
 
+def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> Callable[[int, int], None] | None:
+    if progress is None:
+        return None
+
+    def report(done: int, total: int) -> None:
+        progress(label, done, total)
+
+    return report
+
+
 def _run_case(
-    case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int, report: Callable[[int, int], None]
-) -> None:
+    case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int,
+    progress: Callable[[str, int, int], None] | None,
+) -> None:  # fmt: skip
     task, name = case.task, case.controller
+    label = f"{case.protocol} {name} on {task}"
+    report = _reporter(progress, label)
     if case.protocol == "v2":
         path = jroot / "v2" / f"{task}-{name}.json"
         keys = {"protocol": "v2", "task": task, "controller": name}
@@ -473,7 +482,7 @@ def _run_case(
             keys = {"protocol": "v3", "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps}
             summary = _read(path, keys) if resume else None
             if summary is None:
-                summary = _run_v3(task, name, seed, settings.v3_steps, report)
+                summary = _run_v3(task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"))
                 _write(path, keys, summary)
                 case.executed += 1
             else:
