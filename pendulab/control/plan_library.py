@@ -17,6 +17,11 @@ farther than ``accept`` from every knot is pumped by the state-based fallback
 (:class:`~pendulab.control.global_swingup.GlobalSwingUp`) until it enters the library's reach; near upright the
 fallback's verified LQR catch takes over. A call is a tree query and a 1x4 gain product: tens of microseconds.
 
+Each plan is then re-planned to *enter the scored band* as early as possible
+(:func:`~pendulab.control.band_plan.band_entry_refine`: the v3 score counts time above 0.9 (l1 + l2), not
+time at rest upright), kept only where its TVLQR closed loop on the design model enters the band sooner
+and stays there.
+
 The library is cached on disk (:class:`PlanCache`): one ``.npz`` per plan, named by a hash of the task, the
 design model's parameters, the planner options and the start state, written atomically as each plan finishes,
 so a build resumes where it stopped (Ctrl-C keeps finished plans) and a damaged entry is solved again.
@@ -26,7 +31,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -34,12 +38,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import bounded_int, positive_float
+from .._checks import positive_float
 from .._io import atomic_path
-from ..model.model import INPUT_NAMES, Model
-from ..model.pycode import to_python
+from ..model.model import INPUT_NAMES
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
+from .plan_starts import DEFAULT_BRANCHES, library_starts, reset_handover
 
 __all__ = [
     "LIBRARY_VERSION",
@@ -55,95 +59,6 @@ __all__ = [
 
 #: Bumped when the stored format or the planner changes (part of every entry's key).
 LIBRARY_VERSION: int = 1
-#: Upright branches the resets leave from, as (k1, k2): absolute angles ``(pi + 2 pi k1, pi + 2 pi k2)``.
-DEFAULT_BRANCHES: tuple[tuple[int, int], ...] = ((0, 0), (-1, -1), (0, -1), (-1, 0))
-#: Reset PID of the protocol (kp, ki, kd), its step [s], length [s] and saturation [N.m] (evaluate/realai/v3_definition).
-_PID = (10.0, 0.1, 1.0, 0.001, 0.2, 6.0)
-
-
-def _rk4(f: Callable, x: np.ndarray, u: Sequence[float], p: list[float], h: float) -> np.ndarray:
-    k1 = f(x, u, p)
-    k2 = f(x + 0.5 * h * k1, u, p)
-    k3 = f(x + 0.5 * h * k2, u, p)
-    k4 = f(x + h * k3, u, p)
-    return x + h * (k1 + 2.0 * (k2 + k3) + k4) / 6.0
-
-
-def reset_handover(model: Model, x_pre: np.ndarray, goal: np.ndarray, sample_time: float = 0.002) -> np.ndarray:
-    """The state a v3 reset hands over: the protocol's PID (+ gravity compensation) for 0.2 s from ``x_pre``.
-
-    A fresh PID (no integral or derivative history: the protocol's history only adds a one-step kick).
-
-    Parameters
-    ----------
-    model : Model
-        Rigid model (absolute angles).
-    x_pre : ndarray, shape (4,)
-        State when the reset starts (absolute angles) [rad, rad/s].
-    goal : ndarray, shape (2,)
-        Drawn configuration in the protocol's relative angles ``(q1, q2 = th2 - th1)`` [rad].
-    sample_time : float
-        Simulation step [s].
-
-    Returns
-    -------
-    ndarray, shape (4,)
-        State at the hand-over (absolute angles).
-    """
-    kp, ki, kd, pid_dt, length, sat = _PID
-    f = to_python(model.functions["rhs"])
-    p = [float(v) for v in model.p]
-    prm = model.params
-    a1, a2 = prm.m1 * prm.g * prm.lc1 + prm.m2 * prm.g * prm.L1, prm.m2 * prm.g * prm.lc2
-    x = np.array(x_pre, dtype=float)
-    errs: list[np.ndarray] = []
-    timer = 0.0
-    while timer <= length:
-        q = np.array([x[0], x[1] - x[0]])
-        errs.append(np.asarray(goal, dtype=float) - q)
-        u = kp * errs[-1] + ki * np.sum(errs, axis=0) * pid_dt
-        if len(errs) > 2:
-            u = u + kd * (errs[-1] - errs[-2]) / pid_dt
-        s12 = math.sin(q[0] + q[1])
-        u = np.clip(np.clip(u, -sat, sat) + [a1 * math.sin(q[0]) + a2 * s12, a2 * s12], -sat, sat)
-        x = _rk4(f, x, u, p, sample_time)
-        timer += sample_time
-    return x
-
-
-def library_starts(model: Model, n_grid: int, branches: Sequence[tuple[int, int]] = DEFAULT_BRANCHES) -> np.ndarray:
-    """Plan starts: hanging at rest, then the hand-over states of an ``n_grid`` x ``n_grid`` grid of drawn configurations.
-
-    Parameters
-    ----------
-    model : Model
-        Design model.
-    n_grid : int
-        Grid points per relative angle (cell centres of ``[-pi, pi)``).
-    branches : sequence of (int, int)
-        Upright branches ``(k1, k2)`` the resets leave from.
-
-    Returns
-    -------
-    ndarray, shape (1 + len(branches) n_grid^2, 4)
-        Start states (absolute angles) [rad, rad/s].
-
-    Raises
-    ------
-    ValueError
-        ``n_grid`` outside [1, 64] or an empty ``branches``.
-    """
-    n = bounded_int("n_grid", n_grid, low=1, high=64, why="plans per angle of the library grid")
-    if len(branches) == 0:
-        raise ValueError(f"branches must name at least one upright branch (k1, k2), got {branches!r}")
-    g = -math.pi + (np.arange(n) + 0.5) * 2.0 * math.pi / n
-    starts = [np.zeros(4)]
-    for k1, k2 in branches:
-        up = np.array([math.pi + 2.0 * math.pi * int(k1), math.pi + 2.0 * math.pi * int(k2), 0.0, 0.0])
-        for q1 in g:
-            for q2 in g:
-                starts.append(reset_handover(model, up, np.array([q1, q2])))
-    return np.array(starts)
 
 
 class PlanCache:
@@ -215,6 +130,8 @@ class PlanLibrary:
         Weight ``c`` of the rates in the lookup metric [s].
     n_failed : int
         Starts whose plan could not be solved (not in the library).
+    n_refined : int
+        Plans re-planned for band entry.
     """
 
     starts: np.ndarray
@@ -223,6 +140,7 @@ class PlanLibrary:
     K: list[np.ndarray]
     velocity_scale: float = 0.3
     n_failed: int = 0
+    n_refined: int = 0
     _tree: object = field(default=None, init=False, repr=False)
     _index: np.ndarray = field(default=None, init=False, repr=False)
 
@@ -268,6 +186,8 @@ def build_library(
     min_time: bool = True,
     max_iter: int = 150,
     solve: bool = True,
+    band: float | None = None,
+    band_cache: PlanCache | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> PlanLibrary:
     """Solve (or load) the plan from each start and assemble the library; each solved plan is cached as it finishes.
@@ -286,6 +206,11 @@ def build_library(
         Planner options (:func:`~pendulab.control.replanning.plan_swingup`).
     solve : bool
         Solve the missing plans (False: assemble the cached ones only, e.g. while another process builds).
+    band : float, optional
+        Scored height [m]: re-plan each plan for band entry (:func:`~pendulab.control.band_plan.band_entry_refine`),
+        kept where its closed loop enters the band sooner; needs ``band_cache``.
+    band_cache : PlanCache, optional
+        Where the band-entry entries are stored (the time-optimal plans they start from stay in ``cache``).
     progress : callable, optional
         ``progress(done, total)`` after each start.
 
@@ -300,37 +225,46 @@ def build_library(
     KeyboardInterrupt
         Propagated; plans finished before it stay cached.
     """
+    from .band_plan import band_entry_refine
     from .replanning import plan_swingup
 
+    if (band is None) != (band_cache is None):
+        raise ValueError(f"band and band_cache go together, got band={band!r} and band_cache={band_cache!r}")
     starts = np.asarray(starts, dtype=float)
     if starts.ndim != 2 or starts.shape[1] != 4 or len(starts) == 0 or not np.all(np.isfinite(starts)):
         raise ValueError(f"starts must be a finite array of shape (S, 4) with S >= 1, got shape {starts.shape}")
     j = INPUT_NAMES.index(fallback.input_names[0])
-    kept, xs, us, ks, failed = [], [], [], [], 0
+    kept, xs, us, ks, failed, n_refined = [], [], [], [], 0, 0
     for n, s in enumerate(starts):
-        entry = cache.load(s)
-        if entry is None and not solve:
-            continue
+        entry = None if band_cache is None else band_cache.load(s)
         if entry is None:
-            tr = plan_swingup(
-                fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter
-            )
-            if tr is None:
+            entry = cache.load(s)
+            if entry is None and solve:
+                tr = plan_swingup(
+                    fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter
+                )
                 entry = {"ok": np.array(False)}
-            else:
-                m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
-                entry = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, j], "K": tr.K[:m, j, :]}
-            cache.save(s, entry)
-        if bool(entry["ok"]):
+                if tr is not None:
+                    m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
+                    entry = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, j], "K": tr.K[:m, j, :]}
+                cache.save(s, entry)
+            if entry is not None and band_cache is not None and solve:
+                refined = None
+                if bool(entry["ok"]):
+                    refined = band_entry_refine(fallback.model, actuation, entry, band=band, u_max=fallback.u_max)
+                entry = dict(entry, refined=np.array(False)) if refined is None else dict(refined, refined=np.array(True))
+                band_cache.save(s, entry)
+        if entry is not None and bool(entry["ok"]):
             kept.append(s)
             xs.append(entry["x_ref"])
             us.append(entry["u_ref"])
             ks.append(entry["K"])
-        else:
+            n_refined += int(bool(entry.get("refined", False)))
+        elif entry is not None:
             failed += 1
         if progress is not None:
             progress(n + 1, len(starts))
-    return PlanLibrary(np.array(kept).reshape(-1, 4), xs, us, ks, n_failed=failed)
+    return PlanLibrary(np.array(kept).reshape(-1, 4), xs, us, ks, n_failed=failed, n_refined=n_refined)
 
 
 @dataclass
@@ -410,7 +344,9 @@ class LibrarySwingUp:
 
 
 #: Library grid (drawn configurations per relative angle) per task, and the default cache directory.
-LIBRARY_GRID: dict[str, int] = {"pendubot": 8, "acrobot": 8}
+LIBRARY_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
+#: Re-plan the library's plans for band entry, per task.
+LIBRARY_BAND: dict[str, bool] = {"pendubot": True, "acrobot": True}
 DEFAULT_LIBRARY_DIR: str = "pendulab-out/plan_library"
 
 
@@ -421,6 +357,7 @@ def library_controller(
     branches: Sequence[tuple[int, int]] = DEFAULT_BRANCHES,
     directory: str | Path | None = None,
     accept: float = 1.0,
+    band: bool | None = None,
     build: bool = True,
     progress: Callable[[int, int], None] | None = None,
 ) -> LibrarySwingUp:
@@ -438,6 +375,8 @@ def library_controller(
         Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``.
     accept : float
         Lookup distance within which a plan is taken.
+    band : bool, optional
+        Re-plan for band entry (faster into the scored band); default :data:`LIBRARY_BAND`.
     build : bool
         Solve missing plans (False: use the cached ones only).
     progress : callable, optional
@@ -452,7 +391,7 @@ def library_controller(
     ValueError
         Unknown task, bad ``n_grid``, non-positive ``accept``, or no plan solved.
     """
-    from .realai.spec import check_task
+    from .realai.spec import HEIGHT_FRACTION, check_task
     from .replanning import REPLAN_DEFAULTS
 
     check_task(task)
@@ -470,7 +409,21 @@ def library_controller(
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, branches)
+    use_band = LIBRARY_BAND[task] if band is None else bool(band)
+    prm = fb.model.params
+    height = HEIGHT_FRACTION * (prm.L1 + prm.L2) if use_band else None
+    band_cache = PlanCache(root / task, dict(design, band=height)) if use_band else None
     lib = build_library(
-        fb, task, starts, cache, horizon=horizon, n_intervals=n_int, min_time=min_time, solve=build, progress=progress
+        fb,
+        task,
+        starts,
+        cache,
+        horizon=horizon,
+        n_intervals=n_int,
+        min_time=min_time,
+        solve=build,
+        band=height,
+        band_cache=band_cache,
+        progress=progress,
     )
     return LibrarySwingUp(fb, lib, accept=accept)

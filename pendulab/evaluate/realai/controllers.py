@@ -55,6 +55,12 @@ def _replan_delayed(task: str) -> SampledController:
     return replanning_controller(task, plan_delay=REPLAN_DELAY)
 
 
+def _library(task: str) -> SampledController:
+    from ...control.plan_library import library_controller  # builds (or completes) ./pendulab-out/plan_library first
+
+    return library_controller(task)
+
+
 #: Controller names -> factory ``task -> SampledController`` (add an entry to plug a new name in).
 CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
     "best": best_controller,
@@ -67,6 +73,7 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
     "global": _global,
     "replan": _replan,
     "replan_delayed": _replan_delayed,
+    "library": _library,
 }
 
 
