@@ -93,7 +93,13 @@ class ObservationPipeline:
         return self.estimate
 
     def copy(self) -> ObservationPipeline:
-        """An independent pipeline with the same settings (one per lane of a vector environment)."""
+        """An independent pipeline with the same settings (one per lane of a vector environment).
+
+        Returns
+        -------
+        ObservationPipeline
+            Deep copies of the measurement model and the estimator.
+        """
         return ObservationPipeline(copy.deepcopy(self.measurement), copy.deepcopy(self.estimator))
 
 
