@@ -116,6 +116,12 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
     assert (out.parent / "figures" / "leaderboard_robustness_pendubot.png").stat().st_size > 10_000
     assert (out.parent / "figures" / "leaderboard_v3.png").is_file()
 
+    # Past a wall-time budget complete journals are still read back and nothing runs; without resume nothing runs.
+    late = run_protocols(["lqr"], tasks=["pendubot"], quick=True, resume=True, root=root, max_wall_time=1e-9)
+    assert [c.status for c in late.cases] == ["done"] * 3 and calls == {"v2": 1, "robustness-v2": 13, "v3": 1}
+    fresh = run_protocols(["lqr"], tasks=["pendubot"], quick=True, root=root, max_wall_time=1e-9)
+    assert all(c.status == "not run" and "budget" in c.reason for c in fresh.cases)
+
     # A journal of other settings is refused on resume, not silently reused.
     rec = root / "quick" / "v2" / "pendubot-lqr.json"
     data = json.loads(rec.read_text())

@@ -393,7 +393,8 @@ def run_protocols(
     progress : callable, optional
         ``progress(label, done, total)``: ``label`` names the case (and its unit: runs or 2 ms steps).
     max_wall_time : float, optional
-        Budget [s] of this call, checked before each case: cases not started by then are "not run".
+        Budget [s] of this call, checked before each case: cases not started by then are "not run" (with
+        ``resume``, cases whose journals are complete are still read back; a partial journal is reported as such).
 
     Returns
     -------
@@ -428,12 +429,13 @@ def run_protocols(
             for name in per.get(protocol, ()):
                 case = Case(protocol, task, name)
                 cases.append(case)
-                if budget is not None and time.perf_counter() - w0 > budget:
-                    case.reason = f"wall-time budget of {budget:g} s reached before this case"
-                    continue
-
+                over = budget is not None and time.perf_counter() - w0 > budget
                 try:
-                    _run_case(case, settings, jroot, resume, workers, progress)
+                    if over and not resume:
+                        case.reason = f"wall-time budget of {budget:g} s reached before this case"
+                    else:
+                        # Past the budget, finished journals are still read back; nothing new is run.
+                        _run_case(case, settings, jroot, resume, workers, progress, run_new=not over)
                 except (RuntimeError, ArithmeticError) as exc:
                     case.status, case.reason = "failed", _one_line(exc)
                 except ValueError as exc:
@@ -441,6 +443,26 @@ def run_protocols(
                         raise
                     case.status, case.reason = "failed", _one_line(exc)
     return LeaderboardRun(settings, cases, jroot, time.perf_counter() - w0)
+
+
+def _finished(case: Case, settings: ProtocolSettings, jroot: Path) -> bool:
+    """Whether a case's journal holds all of it (reading it back runs nothing)."""
+    task, name = case.task, case.controller
+    if case.protocol == "v2":
+        return (jroot / "v2" / f"{task}-{name}.json").is_file()
+    if case.protocol == "v3":
+        return all((jroot / "v3" / f"{task}-{name}-seed{s}.json").is_file() for s in settings.v3_seeds)
+    from .robustness_grid import plan_runs
+
+    journal = jroot / "robustness-v2" / f"{task}-{name}" / "runs.json"
+    try:
+        n = len(json.loads(journal.read_text())["records"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+    total = len(plan_runs(task, **settings.robustness))
+    if n < total:
+        case.reason = f"{n} of {total} runs journaled; "
+    return n >= total
 
 
 def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> Callable[[int, int], None] | None:
@@ -455,11 +477,14 @@ def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> C
 
 def _run_case(
     case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int,
-    progress: Callable[[str, int, int], None] | None,
+    progress: Callable[[str, int, int], None] | None, run_new: bool = True,
 ) -> None:  # fmt: skip
     task, name = case.task, case.controller
     label = f"{case.protocol} {name} on {task}"
     report = _reporter(progress, label)
+    if not run_new and not _finished(case, settings, jroot):
+        case.reason += "wall-time budget reached before this case finished; its journal is kept (resume continues)"
+        return
     if case.protocol == "v2":
         path = jroot / "v2" / f"{task}-{name}.json"
         keys = {"protocol": "v2", "task": task, "controller": name}
