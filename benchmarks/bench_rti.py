@@ -74,7 +74,7 @@ def closed_loop(task: str, repeats: int) -> tuple[dict, list]:
         wall += ctrl.solve_times
         cpu += timed.cpu
         st = ctrl.stats()
-        runs.append((res.success, res.score, res.swingup_time, st["failures"], st["qp_unsettled"]))
+        runs.append((res.success, res.score, res.swingup_time, st["failures"], st["qp_unsolved"]))
         records = records or timed.records
     w, c = np.array(wall) * 1e3, np.array(cpu) * 1e3
     row = {
@@ -174,14 +174,14 @@ def main() -> None:
         "",
         f"Controller `rti`: sample time {o.sample_time * 1e3:g} ms, {o.horizon} intervals of {o.interval * 1e3:g} ms "
         f"({o.horizon * o.interval:g} s), RK4 {o.steps_per_interval} step(s) per interval, one Gauss-Newton SQP step per "
-        f"call (condensed box QP, {o.qp_iterations} primal-dual active-set iterations), compiled C (cached).",
+        f"call (condensed box QP, {o.qp_iterations} primal-dual active-set solves), compiled C (cached).",
         "",
         "## Closed loop through the leaderboard v2 simulator (RK4 at 2 ms, 10 s, controller called every step)",
         "",
         "Per call = the whole controller call from Python (checks, reference window, warm start, step). Wall time "
         "includes preemption by other processes; thread CPU time is what the call itself costs.",
         "",
-        "| task | success | v2 score | t_up [s] | failures | QP unsettled | calls | wall median / p99 / max [ms] "
+        "| task | success | v2 score | t_up [s] | failures | QP not solved | calls | wall median / p99 / max [ms] "
         "| CPU median / p99 / max [ms] |",
         "|---|---|---:|---:|---:|---:|---:|---|---|",
     ]

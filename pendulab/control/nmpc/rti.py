@@ -13,8 +13,9 @@ Design (measured in ``benchmarks/results/rti.md``, explained in ``docs/rti.md``)
   sample keep the look-ahead of the 50 Hz NMPC at a fifth of its cost per second of horizon; the
   warm start interpolates inside the intervals;
 * no velocity bound (the leaderboard tasks have none): the QP has torque bounds only, so it is a box QP
-  in the condensed torques, solved by a fixed number of primal-dual active-set iterations; a run whose
-  active set had not settled is counted (``qp_unsettled``) and its clipped iterate applied;
+  in the condensed torques, solved by a fixed number of primal-dual active-set iterations started from
+  the bounds the warm start sits on; a call whose last iterate is not a KKT point is counted
+  (``qp_unsolved``) and its clipped iterate applied;
 * a step that returns a non-finite value never raises: it is counted in ``failures``, the LQR torque
   about the goal is applied and the next sample starts cold from the reference.
 """
@@ -63,7 +64,7 @@ class RTIOptions:
     substeps : int or None
         RK4 steps per interval; default one per 10 ms (``ceil(interval / 0.01)``).
     qp_iterations : int
-        Primal-dual active-set iterations of the box QP after its unconstrained solve.
+        Primal-dual active-set solves of the box QP (the first holds the warm start's saturated torques).
     q_angle, q_rate : float
         Stage weights on angle errors [1/rad^2] and rate errors [s^2/rad^2].
     r : float or None
@@ -76,7 +77,7 @@ class RTIOptions:
     interval: float = 0.01
     sample_time: float = 0.002
     substeps: int | None = None
-    qp_iterations: int = 6
+    qp_iterations: int = 20
     q_angle: float = 10.0
     q_rate: float = 1.0
     r: float | None = None
@@ -137,8 +138,8 @@ class RTIController:
         Discrete LQR gain about ``goal`` at the interval (fallback torque).
     solve_times : list of float
         Wall time of each call [s] (checks, reference window, warm start and step).
-    failures, qp_unsettled : int
-        Calls with a non-finite step (fallback applied); calls whose active set had not settled.
+    failures, qp_unsolved : int
+        Calls with a non-finite step (fallback applied); calls whose QP iterate was not a KKT point (clipped, applied).
     """
 
     model: Model
@@ -153,7 +154,7 @@ class RTIController:
     K_lqr: np.ndarray
     solve_times: list[float] = field(default_factory=list)
     failures: int = 0
-    qp_unsettled: int = 0
+    qp_unsolved: int = 0
 
     def __post_init__(self) -> None:
         N, nx, m = self.options.horizon, self.model.nx, len(self.input_names)
@@ -179,7 +180,7 @@ class RTIController:
         """Forget the warm start and the statistics before a new run."""
         self._k_prev, self._warm = -1, False
         self.solve_times = []
-        self.failures = self.qp_unsettled = 0
+        self.failures = self.qp_unsolved = 0
 
     def window(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Reference at the shooting nodes of the window starting at sample ``k`` (the goal after the reference).
@@ -229,7 +230,7 @@ class RTIController:
             u = -self.K_lqr @ wrap_state_error(x0 - self.goal, self.model.state_names)
         else:
             self._warm, self._k_prev = True, k
-            self.qp_unsettled += int(info[0] < 0.5)
+            self.qp_unsolved += int(info[0] < 0.5)
             u = u0.copy()
         self.solve_times.append(time.perf_counter() - start)
         return np.clip(u, -self.u_max, self.u_max)
@@ -261,7 +262,7 @@ class RTIController:
         dict
             ``solver`` ("rti"), ``n_calls``, ``solve_time_median``, ``solve_time_max`` [s] (nan before the
             first call), ``iterations_median`` and ``iterations_max`` (1: one SQP step per call), ``failures``,
-            ``qp_unsettled`` (counts of calls) and ``compiled``.
+            ``qp_unsolved`` (counts of calls) and ``compiled``.
         """
         ts = np.asarray(self.solve_times)
         n = len(ts)
@@ -273,7 +274,7 @@ class RTIController:
             "iterations_median": 1.0 if n else float("nan"),
             "iterations_max": 1 if n else 0,
             "failures": int(self.failures),
-            "qp_unsettled": int(self.qp_unsettled),
+            "qp_unsolved": int(self.qp_unsolved),
             "compiled": bool(self.options.compiled),
         }
 

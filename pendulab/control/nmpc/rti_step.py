@@ -13,10 +13,11 @@ The step is the Gauss-Newton SQP iteration of the multiple-shooting problem
 2. **condensing**: the state corrections are eliminated, ``dX = Gbar dU + xi``, which leaves a dense,
    strictly convex QP in the ``N m`` torque corrections with box bounds (``H = Gbar' W Gbar + Rbar``);
 3. **box-QP solve**: a fixed number of primal-dual active-set iterations (Hintermueller, Ito and Kunisch
-   2002, a semismooth Newton method): each fixes the torques whose bound is predicted active, solves the
-   others from one LDL' factorization (CasADi's ``ldl`` linear solver, code-generable) and updates the
-   multipliers. With no bound active the first solve is the exact QP solution; a fixed count keeps the
-   per-call time bounded (the output says whether the active set had settled).
+   2002, a semismooth Newton method), started from the bounds the warm start sits on: each fixes the
+   torques whose bound is predicted active, solves the others from one LDL' factorization (CasADi's
+   ``ldl`` linear solver, code-generable) and updates the multipliers. With the right active set (none,
+   or the previous sample's, the usual case) the first solve is the exact QP solution; a fixed count
+   keeps the per-call time bounded (the output says whether the last iterate is a KKT point).
 
 The outputs are the updated trajectory (``X + dX``, ``U + dU``), the first torque and the same trajectory
 shifted by one controller sample (linear interpolation inside the intervals), the warm start of the next call.
@@ -84,35 +85,35 @@ def _stage_linearization(step: ca.Function, nx: int, m: int) -> ca.Function:
     return ca.Function("rti_lin", [x, u], [F, ca.jacobian(F, x), ca.jacobian(F, u)], ["x", "u"], ["F", "A", "B"])
 
 
-def _box_qp_pdas(H: ca.MX, g: ca.MX, lb: ca.MX, ub: ca.MX, iterations: int) -> tuple[ca.MX, ca.MX, ca.MX]:
-    """``min 0.5 z'Hz + g'z, lb <= z <= ub`` by ``iterations`` primal-dual active-set steps after the unconstrained solve.
+def _box_qp_pdas(
+    H: ca.MX, g: ca.MX, lb: ca.MX, ub: ca.MX, upper: ca.MX, lower: ca.MX, iterations: int
+) -> tuple[ca.MX, ca.MX, ca.MX]:
+    """``min 0.5 z'Hz + g'z, lb <= z <= ub`` by ``iterations`` primal-dual active-set steps.
 
-    Returns the iterate (inside the bounds on the active set), whether the active set was the same in the last
-    two iterations (1.0 / 0.0), and the number of active bounds.
+    ``upper``, ``lower`` (0/1) are the first guess of the bounds that are active (the warm start's
+    saturated torques). Each step solves with the guessed bounds held, then re-guesses them from the
+    multipliers and the bound violations. Returns the last iterate, whether it is a KKT point of the
+    box QP (free entries inside their bounds, multipliers of the held ones of the right sign: 1.0 / 0.0),
+    and the number of bounds held.
     """
     n = H.size1()
     ones = ca.DM.ones(n)
-    z = ca.solve(H, -g, "ldl")
-    lam = ca.MX.zeros(n)
-    act_prev = ca.MX.zeros(n)
-    settled = ca.MX(1.0)
     # The scale c of the complementarity function: any c > 0 works; the mean diagonal of H balances z and lam.
     c = ca.sum1(ca.diag(H)) / n
-    n_active = ca.MX(0.0)
-    for _ in range(iterations):
-        upper = lam + c * (z - ub) > 0
-        lower = lam + c * (z - lb) < 0
+    tol = 1e-9
+    z = lam = ca.MX.zeros(n)
+    for it in range(iterations):
+        if it:
+            upper = lam + c * (z - ub) > 0
+            lower = lam + c * (z - lb) < 0
         act = ca.fmax(upper, lower)
         zb = upper * ub + lower * lb
         free = ones - act
         M = H * ca.mtimes(free, free.T) + ca.diag(act)
-        rhs = free * (-g - ca.mtimes(H, act * zb)) + act * zb
-        z = ca.solve(M, rhs, "ldl")
+        z = ca.solve(M, free * (-g - ca.mtimes(H, act * zb)) + act * zb, "ldl")
         lam = act * (-(ca.mtimes(H, z) + g))
-        settled = ca.sum1(ca.fabs(act - act_prev)) == 0
-        act_prev = act
-        n_active = ca.sum1(act)
-    return z, settled, n_active
+    feasible = ca.mmax(ca.vertcat(free * (z - ub), free * (lb - z), -upper * lam, lower * lam)) <= tol
+    return z, feasible, ca.sum1(act)
 
 
 def rti_step_function(
@@ -152,7 +153,7 @@ def rti_step_function(
     u_max : float
         Torque bound [N.m].
     qp_iterations : int
-        Primal-dual active-set iterations of the QP after the unconstrained solve.
+        Primal-dual active-set solves of the box QP.
     name : str
         Function name (the C symbol).
 
@@ -160,8 +161,8 @@ def rti_step_function(
     -------
     casadi.Function
         ``(x0 (nx,), X (nx, N+1), U (m, N), XR (nx, N+1), UR (m, N)) ->
-        (u0 (m,), X_new, U_new, X_next, U_next, info (3,))``, ``info = [active set settled (1/0),
-        active bounds, max |gap| of the linearization point]``.
+        (u0 (m,), X_new, U_new, X_next, U_next, info (3,))``, ``info = [QP solved: the iterate is a KKT point
+        (1/0), active bounds, max |gap| of the linearization point]``.
     """
     nx, m = model.nx, len(input_names)
     cols = [INPUT_NAMES.index(n) for n in input_names]
@@ -187,7 +188,9 @@ def rti_step_function(
     H = ca.mtimes(Gbar.T, WG) + Rbar
     g = ca.mtimes(WG.T, E) + ca.mtimes(Rbar, ca.vec(U - UR))
     Uv = ca.vec(U)
-    dU, settled, n_active = _box_qp_pdas(H, g, -u_max - Uv, u_max - Uv, qp_iterations)
+    # Warm active set: the torques of the guess on a bound (the shifted previous solution).
+    edge = u_max * (1 - 1e-9)
+    dU, settled, n_active = _box_qp_pdas(H, g, -u_max - Uv, u_max - Uv, Uv >= edge, Uv <= -edge, qp_iterations)
     X_new = X + ca.reshape(ca.mtimes(Gbar, dU) + Xi, nx, N + 1)
     U_new = ca.reshape(ca.fmin(ca.fmax(Uv + dU, -u_max), u_max), m, N)
     # Warm start of the next call: the trajectory a fraction `shift` of an interval later (last interval held).
