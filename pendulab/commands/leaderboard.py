@@ -217,6 +217,13 @@ def _read_card(path: Path, settings: Mapping[str, Any]) -> tuple:
     return records
 
 
+def _complete(journal: Path, resume: bool) -> bool:
+    try:
+        return resume and bool(json.loads(journal.read_text()).get("complete"))
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 def _scorecards(
     runs: int, workers: int | None, progress: bool, resume: bool, root: Path, budget: float | None
 ) -> dict[tuple[str, str], Any]:
@@ -234,12 +241,14 @@ def _scorecards(
             if (ctrl, task_name) in SKIPPED:
                 cards[(ctrl, task_name)] = SKIPPED[(ctrl, task_name)]
                 continue
-            if budget is not None and time.perf_counter() - w0 > budget:
-                cards[(ctrl, task_name)] = "not run (wall-time budget reached; continue with --resume)"
-                continue
             journal = root / f"{task.name}-{ctrl}" / "records.json"
             settings = {"controller": ctrl, "task": task.name, "runs": runs, "seed": 0, "categories": None}
             completed = _read_card(journal, settings) if resume else ()
+            if budget is not None and time.perf_counter() - w0 > budget and not _complete(journal, resume):
+                # Past the budget only complete journals are read back (their card is rebuilt, nothing runs).
+                done = f", {len(completed)} runs journaled" if completed else ""
+                cards[(ctrl, task_name)] = f"not run (wall-time budget reached{done}; continue with --resume)"
+                continue
 
             def save(records: tuple, complete: bool = False, journal: Path = journal, settings: dict = settings) -> None:
                 data = {**settings, "pendulab": __version__, "complete": complete,
