@@ -178,7 +178,12 @@ def write_leaderboard(
     lines += _scorecard_section(cards, runs, quick)
     not_run = [c for c in board.cases if c.status != "done"]
     if not_run:
-        again = "pendulab score --leaderboard --resume" + (" --quick" if quick else "") + (f" --out {path}" if path else "")
+        again = (
+            "pendulab score --leaderboard --resume" + (" --quick" if quick else "") + (f" --runs {runs}" if runs != 20 else "")
+        )
+        again += (f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else "") + (
+            f" --out {path}" if path else ""
+        )
         lines += ["## Cases not finished", "", f"Continue with `{again}` (finished cases are reused).", ""]
         lines += [f"* {c.protocol} / {c.task} / `{c.controller}`: {c.status} ({c.reason})" for c in not_run] + [""]
     lines += [f"Wall time of this generation: {time.perf_counter() - w0:.0f} s (journaled cases reused: "

@@ -197,8 +197,10 @@ def plot_v3_seeds(run: LeaderboardRun, path: str | Path) -> Path:
                 ax.axhline(p.score, color="k", ls="--", lw=1.0)
                 ax.text(-0.45, p.score + 0.015, f"published best: {p.label} {p.score:.3f} (one unseeded run)", fontsize=8)
         ax.set_xticks(range(len(seeds) + 1), [f"seed {s}" for s in seeds] + ["mean"])
+        ax.set_xlim(-0.5, len(seeds) + 0.5)
         ax.set_ylim(0, 1.0)
         ax.set_ylabel("score = uptime / episode length [-]")
         ax.set_title(task)
-        ax.legend(fontsize=8, loc="upper right")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8, loc="upper right")
     return save_figure(fig, path)

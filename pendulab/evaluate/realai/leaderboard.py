@@ -483,7 +483,7 @@ def _run_case(
     label = f"{case.protocol} {name} on {task}"
     report = _reporter(progress, label)
     if not run_new and not _finished(case, settings, jroot):
-        case.reason += "wall-time budget reached before this case finished; its journal is kept (resume continues)"
+        case.reason += "wall-time budget reached before this case finished; resume continues it"
         return
     if case.protocol == "v2":
         path = jroot / "v2" / f"{task}-{name}.json"
