@@ -357,6 +357,9 @@ def run(args: argparse.Namespace) -> int:
     if "solve_time_median" in summary:
         med, mx = summary["solve_time_median"] * 1e3, summary["solve_time_max"] * 1e3
         say(f"controller solve time median {med:.2f} ms, max {mx:.2f} ms, failures {summary['failures']}")
+    if measurement is not None or args.estimator is not None:
+        seen = "estimate" if args.estimator else "measurement"
+        say(f"controller saw the {seen}: link-rate RMS error {summary['controller_rate_rms_error']:.4g} rad/s")
     if task is not None:
         say(f"task {task.name}: {'success' if summary['success'] else 'FAILED'} (t_up {summary['t_up']})")
     return 0

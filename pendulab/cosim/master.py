@@ -79,7 +79,15 @@ def _n_steps(t_final: float, comm_step: float) -> int:
 
 def _controller_output(controller: SampledController, cols: list[int], t: float, x: np.ndarray) -> np.ndarray:
     """Controller torques scattered into (tau1, tau2); undriven inputs stay 0."""
-    u = np.asarray(controller(t, x.copy()), dtype=float).reshape(-1)
+    # A diverging estimator overflows on its way to a non-finite estimate: reported below, not as numpy warnings.
+    with np.errstate(over="ignore", invalid="ignore"):
+        u = np.asarray(controller(t, x.copy()), dtype=float).reshape(-1)
+    x_hat = getattr(controller, "x_hat", None)
+    if x_hat is not None and not np.isfinite(x_hat).all():
+        raise ValueError(
+            f"the state estimate is not finite at t = {t:.6g} s: the estimator diverged (e.g. a measurement delay "
+            "it does not model: estimator='mmae' identifies one)"
+        )
     if u.shape != (len(cols),) or not np.isfinite(u).all():
         raise ValueError(
             f"controller returned {u.tolist()!r} at t = {t:.6g} s; expected {len(cols)} finite torques "

@@ -369,7 +369,7 @@ class DoublePendulumEnv(gymnasium.Env):
         observation : ndarray, float32
         reward : float
         terminated : bool
-            Integrator failure or a spring length <= 0.
+            Integrator failure, a spring length <= 0, or a diverged estimator (``estimator=``).
         truncated : bool
             ``max_episode_steps`` reached.
         info : dict
@@ -406,6 +406,9 @@ class DoublePendulumEnv(gymnasium.Env):
         if failure is not None:
             info["failure"] = failure
         self._seen = x if self._pipeline is None else self._pipeline.step(self._steps * self.dt, x, tau)
+        if self._pipeline is not None and self._pipeline.diverged:
+            terminated = True
+            info.setdefault("failure", "the state estimate is not finite (the estimator diverged); observed the measurement")
         return self._observe(self._seen), float(self.reward_fn(x, tau)), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:

@@ -35,7 +35,10 @@ class ObservationPipeline:
     measured : ndarray, shape (nx,)
         The last measurement.
     estimate : ndarray, shape (nx,)
-        The state the last observation was made from (the estimate, or the measurement without an estimator).
+        The state the last observation was made from (the estimate, or the measurement without an estimator or
+        once the estimate stopped being finite).
+    diverged : bool
+        The last estimate was not finite (the estimator diverged; the environment terminates the episode).
     """
 
     def __init__(self, measurement: Any, estimator: Any) -> None:
@@ -43,6 +46,7 @@ class ObservationPipeline:
         self.estimator = estimator
         self.measured = np.zeros(0)
         self.estimate = np.zeros(0)
+        self.diverged = False
 
     def reset(self, x0: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Start an episode at ``x0``: the delay line holds it, the estimator's prior is centred on it.
@@ -65,6 +69,7 @@ class ObservationPipeline:
             y = self.measurement(x0)
         self.measured = y
         self.estimate = y
+        self.diverged = False
         if self.estimator is not None:
             _restart(self.estimator, x0)
             self.estimate = np.asarray(self.estimator.update(0.0, y, None), dtype=float).copy()
@@ -89,7 +94,14 @@ class ObservationPipeline:
         """
         y = x.copy() if self.measurement is None else self.measurement(x)
         self.measured = y
-        self.estimate = y if self.estimator is None else np.asarray(self.estimator.update(t, y, tau), dtype=float).copy()
+        if self.estimator is None:
+            self.estimate = y
+            return y
+        # A diverging estimator overflows on its way to a non-finite estimate: the env ends the episode instead.
+        with np.errstate(over="ignore", invalid="ignore"):
+            x_hat = np.asarray(self.estimator.update(t, y, tau), dtype=float).copy()
+        self.diverged = not np.isfinite(x_hat).all()
+        self.estimate = y if self.diverged else x_hat
         return self.estimate
 
     def copy(self) -> ObservationPipeline:

@@ -217,8 +217,10 @@ class DoublePendulumVectorEnv(VectorEnv):
             terminated[restart] = False
             truncated[restart] = False
         self._X = X
-        self._autoreset = terminated | truncated
         self._seen = X if self._pipes is None else self._pipe_step(X, tau, restart)
+        if self._pipes is not None:  # a lane whose estimator diverged ends its episode (as the single env does)
+            terminated |= np.array([p.diverged for p in self._pipes])
+        self._autoreset = terminated | truncated
         info = {"tau": tau, "_tau": np.ones(self.num_envs, dtype=bool)}
         return self._observe(self._seen), rewards, terminated, truncated, info
 

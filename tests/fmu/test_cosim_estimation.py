@@ -127,3 +127,20 @@ def test_cli_cosim_reports_what_the_controller_saw(cosim_fmu, tmp_path):
     # As in the API test: raw ~ the noise sigma, the EKF's estimate a factor > 4 closer to the plant's rates.
     assert out["raw"]["controller_rate_rms_error"] == pytest.approx(0.2, rel=0.15)  # 2 x 200 draws: 15 % > 3 sigma
     assert out["ekf"]["controller_rate_rms_error"] < out["raw"]["controller_rate_rms_error"] / 4
+
+
+class Diverging:
+    """An estimator that passes the measurement through, then returns NaN from its 4th update on."""
+
+    def reset(self):
+        self.k = 0
+
+    def update(self, t, y, u=None):
+        self.k += 1
+        return np.asarray(y, dtype=float) * (np.nan if self.k > 3 else 1.0)
+
+
+def test_cosim_names_a_diverged_estimator(cosim_fmu):
+    model = pl.rigid()
+    with pytest.raises(ValueError, match=r"state estimate is not finite at t = 0.03 s: the estimator diverged"):
+        cosim(cosim_fmu("rigid"), balance_controller(model, 0.01), 0.01, 1.0, x0=_start(model), estimator=Diverging())

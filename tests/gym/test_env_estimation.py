@@ -131,3 +131,28 @@ def test_copies_of_an_env_with_an_estimator_step_alike():
 def test_bad_estimator_or_measurement_is_named(kwargs, exc, match, vector):
     with pytest.raises(exc, match=match):
         gym.make_vec(ENV_ID, num_envs=2, **kwargs) if vector else gym.make(ENV_ID, **kwargs)
+
+
+class Diverging:
+    """An estimator that passes the measurement through, then returns NaN from its 4th update on."""
+
+    def reset(self):
+        self.k = 0
+
+    def update(self, t, y, u=None):
+        self.k += 1
+        return np.asarray(y, dtype=float) * (np.nan if self.k > 3 else 1.0)
+
+
+def test_a_diverged_estimator_ends_the_episode_with_an_observation_in_the_space():
+    env = gym.make(ENV_ID, actuation="pendubot", estimator=Diverging())
+    env.reset(seed=0)
+    steps = [env.step(a) for a in _actions(3)]
+    assert not any(s[2] for s in steps[:2])  # updates 2, 3: finite
+    obs, _, terminated, _, info = steps[2]  # update 4: NaN
+    assert terminated and "estimator diverged" in info["failure"]
+    assert env.observation_space.contains(obs)  # the measurement is observed instead
+    venv = gym.make_vec(ENV_ID, num_envs=2, actuation="pendubot", estimator=Diverging())
+    venv.reset(seed=0)
+    flags = [venv.step(np.tile(a, (2, 1)))[2] for a in _actions(3)]
+    assert not flags[1].any() and flags[2].all()
