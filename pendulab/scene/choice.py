@@ -11,7 +11,7 @@ scene's tolerance (the scene's own model always qualifies). Predictions
     Amplitude screen first (a pendulum of amplitude A runs slow by A^2 / 16:
     ``A^2 sum_j A_j w_j T / 16``); past ``SCREEN`` x tolerance it is hopeless.
     Else the linear solution is computed (it is the level's run, kept for
-    reuse) and the neglected nonlinear terms along it,
+    reuse; a sine input is held exactly as the reference holds it) and the neglected nonlinear terms along it,
     ``r(t) = f(x_lin, u) - A (x_lin - x_eq) - b``, are propagated through the
     linear dynamics (first-order perturbation, exact zero-order hold in the
     modal basis on at most ``RESIDUAL_POINTS`` times) and mapped to the
@@ -129,9 +129,7 @@ def choose_model(
     # Screen: a pendulum of amplitude A runs slow by A^2 / 16 of its frequency; past SCREEN x tolerance
     # the linearization is hopeless and its residual is not worth computing.
     screen = max(gain, 1.0) * f.amplitude**2 * f.phase_sum * t_pred / 16
-    if getattr(scene, "u_amplitude", None) is not None:
-        preds.append(LevelPrediction("linearized", math.inf, 0.0, False, "cannot run: sine input (constant torques only)"))
-    elif screen[-1] > SCREEN * tol:
+    if screen[-1] > SCREEN * tol:
         note = f"screened: amplitude {f.amplitude:.2g} rad, A^2 sum(A_j w_j) T / 16 = {screen[-1]:.2g} > {SCREEN:g} x tolerance"
         preds.append(_prediction("linearized", t_pred, screen, tol, note))
     else:

@@ -27,7 +27,7 @@ class LevelPrediction:
     error : float
         Predicted max abs error over the horizon and the outputs, against the
         scene's own model, in the outputs' units (0 for the reference; inf when the
-        level cannot run the scene, e.g. a sine input for ``linearized``).
+        level cannot run the scene, e.g. no equilibrium to linearize about).
     horizon : float
         Time [s] up to which the predicted error stays within the tolerance
         (``t_final`` when throughout, 0 when never).

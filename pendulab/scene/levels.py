@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.signal import lfilter
 
 from ..integrate import simulate, time_grid
 from ..integrate.trajectory import Trajectory
@@ -130,11 +131,16 @@ class LinearSolution:
     x_eq : ndarray, shape (nx,)
         The equilibrium linearized about.
     A, b : ndarray
-        ``dx/dt = A (x - x_eq) + b``: Jacobian (nx, nx) [1/s] and constant term (nx,).
+        ``dx/dt = A (x - x_eq) + b + B u_sine(t)``: Jacobian (nx, nx) [1/s] and constant term (nx,)
+        (the constant torques included).
     eigenvalues : ndarray, shape (nx,)
         Eigenvalues of ``A`` [1/s] (complex).
     eigenvectors : ndarray, shape (nx, nx) or None
         Their eigenvectors (columns); None when ``A`` is defective.
+    B : ndarray, shape (nx, nu), or None
+        Input Jacobian [1/(kg m^2)], with a sine input only.
+    u_sine : ndarray, shape (N, nu), or None
+        The sine part of the torques on the output grid [N.m] (``[input.sine]``), else None.
     """
 
     x: np.ndarray
@@ -143,6 +149,14 @@ class LinearSolution:
     b: np.ndarray
     eigenvalues: np.ndarray
     eigenvectors: np.ndarray | None = None
+    B: np.ndarray | None = None
+    u_sine: np.ndarray | None = None
+
+    def forcing(self, idx: np.ndarray) -> np.ndarray:
+        """``b + B u_sine(t)`` at the grid points ``idx``, shape (len(idx), nx)."""
+        if self.u_sine is None or self.B is None:
+            return np.broadcast_to(self.b, (len(idx), len(self.b)))
+        return self.b + self.u_sine[idx] @ self.B.T
 
 
 def _phi(z: np.ndarray) -> np.ndarray:
@@ -156,25 +170,21 @@ def linear_solution(scene: Scene) -> LinearSolution:
 
     With ``A = V diag(lambda) V^-1`` the modal solution is evaluated at every
     grid time at once (no time stepping); a defective ``A`` (condition of ``V``
-    above 1e8) falls back to the matrix exponential of one step.
+    above 1e8) falls back to the matrix exponential of one step. A sine input
+    (``[input.sine]``) is held exactly as the reference run holds it
+    (:meth:`Scene.input_spec`: the sine's value at the middle of each hold), and
+    the modal solution is propagated exactly over each hold.
 
     Parameters
     ----------
     scene : Scene
-        The scene; its torques must be constant (no ``[input.sine]``).
+        The scene.
 
     Returns
     -------
     LinearSolution
-
-    Raises
-    ------
-    RuntimeError
-        The scene has a sine input (the linearized level takes constant torques only).
     """
     model = scene.model
-    if getattr(scene, "u_amplitude", None) is not None:
-        raise RuntimeError("the linearized level takes constant torques only; this scene has a sine input")
     x_eq = nearest_equilibrium(model, np.asarray(scene.x0))
     u0 = np.zeros(model.nu)
     A, B = (np.asarray(m, dtype=float) for m in model.functions["jac_rhs"](x_eq, u0, model.p))
@@ -184,25 +194,61 @@ def linear_solution(scene: Scene) -> LinearSolution:
     dx0 = np.asarray(scene.x0, dtype=float) - x_eq
     lam, V = np.linalg.eig(A)
     diagonalizable = bool(np.linalg.cond(V) < 1e8)
+    if getattr(scene, "u_amplitude", None) is not None:
+        X, u_sine = _held_sine_solution(scene, t, A, B, b, dx0, lam, V if diagonalizable else None)
+        return LinearSolution(X + x_eq, x_eq, A, b, lam, V if diagonalizable else None, B, u_sine)
     if diagonalizable:
         Vi = np.linalg.inv(V)
         z = np.outer(t, lam)
         Z = np.exp(z) * (Vi @ dx0) + (t[:, None] * _phi(z)) * (Vi @ b)
         X = np.real(Z @ V.T)
     else:  # defective: one exact step, repeated
-        from scipy.linalg import expm
-
-        dt = float(t[1] - t[0])
-        n = model.nx
-        M = np.zeros((n + 1, n + 1))
-        M[:n, :n], M[:n, n] = A, b
-        E = expm(M * dt)
-        X = np.empty((len(t), n))
-        dx = dx0
-        for k in range(len(t)):
-            X[k] = dx
-            dx = E[:n, :n] @ dx + E[:n, n]
+        X = _stepped(A, np.broadcast_to(b, (len(t) - 1, len(b))), dx0, float(t[1] - t[0]))
     return LinearSolution(X + x_eq, x_eq, A, b, lam, V if diagonalizable else None)
+
+
+def _stepped(A: np.ndarray, W: np.ndarray, dx0: np.ndarray, h: float) -> np.ndarray:
+    """``dx/dt = A dx + w_k`` held over steps of ``h``, exactly (matrix exponential): states (len(W) + 1, nx)."""
+    from scipy.linalg import expm
+
+    n = len(dx0)
+    M = np.zeros((2 * n, 2 * n))
+    M[:n, :n], M[:n, n:] = A, np.eye(n)
+    E = expm(M * h)
+    X = np.empty((len(W) + 1, n))
+    X[0] = dx = dx0
+    for k, w in enumerate(W):
+        dx = E[:n, :n] @ dx + E[:n, n:] @ w
+        X[k + 1] = dx
+    return X
+
+
+def _held_sine_solution(
+    scene: Scene, t: np.ndarray, A: np.ndarray, B: np.ndarray, b: np.ndarray, dx0: np.ndarray, lam: np.ndarray, V: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """States (N, nx) relative to the equilibrium and the sine torques (N, nu) on the output grid ``t``."""
+    spec = scene.input_spec()
+    tg = spec.hold_grid(t)
+    sub = (len(tg) - 1) // (len(t) - 1)  # holds per output interval
+    h = float(tg[1] - tg[0])
+    mid = 0.5 * (tg[:-1] + tg[1:])
+    u_const = np.zeros(scene.model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
+    U = np.asarray(spec.func(mid), dtype=float) - u_const  # the sine part, held at each hold's middle
+    W = b + U @ B.T  # forcing over each hold, (M, nx)
+    if V is None:
+        X = _stepped(A, W, dx0, h)
+    else:
+        Vi = np.linalg.inv(V)
+        z0, Wm = Vi @ dx0, W @ Vi.T  # modal start and forcing
+        mu = np.exp(lam * h)
+        gain = h * _phi(lam * h)
+        Z = np.empty((len(tg), len(lam)), dtype=complex)
+        Z[0] = z0
+        for j in range(len(lam)):  # z[k+1] = mu z[k] + gain w[k], one recursion per mode (lfilter)
+            Z[1:, j] = lfilter([1.0], [1.0, -mu[j]], gain[j] * Wm[:, j], zi=[mu[j] * z0[j]])[0]
+        X = np.real(Z @ V.T)
+    t_sine = np.sin(2 * np.pi * scene.u_frequency * t)
+    return X[::sub], np.outer(t_sine, scene.u_amplitude)
 
 
 def _run_linearized(scene: Scene) -> np.ndarray:

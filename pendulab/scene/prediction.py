@@ -10,7 +10,7 @@ it is the level's run, computed once and reused.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -249,7 +249,9 @@ def _linear_curve(scene: Scene, lin: LinearSolution, t_grid: np.ndarray) -> tupl
     idx = np.arange(0, n, stride)
     t, X = t_grid[idx], lin.x[idx]
     u = np.zeros(model.nu) if scene.u is None else np.asarray(scene.u, dtype=float)
-    R = model.rhs(X, u) - (X - lin.x_eq) @ lin.A.T - lin.b
+    if lin.u_sine is not None:
+        u = u + lin.u_sine[idx]
+    R = model.rhs(X, u) - (X - lin.x_eq) @ lin.A.T - lin.forcing(idx)
     lam, V = lin.eigenvalues, lin.eigenvectors
     if V is None or len(t) < 2:
         return t, np.full(len(t), np.inf)
@@ -266,7 +268,7 @@ def _linear_curve(scene: Scene, lin: LinearSolution, t_grid: np.ndarray) -> tupl
     # Output Jacobian at the equilibrium by central differences (outputs are smooth in the state).
     h = 1e-6
     P = lin.x_eq + np.vstack([np.eye(model.nx) * h, -np.eye(model.nx) * h])
-    Yp = scene_signals(scene, P)
+    Yp = scene_signals(replace(scene, u_amplitude=None), P)  # the state's part: a sine input adds no slope
     worst = np.zeros(len(t))
     for name in scene.outputs:
         c = np.abs(Yp[name][: model.nx] - Yp[name][model.nx :]) / (2 * h)
