@@ -28,6 +28,7 @@ __all__ = [
     "C_FAST",
     "C_CHAOS",
     "C_REFERENCE",
+    "C_ENERGY",
     "RESIDUAL_POINTS",
     "SCREEN",
     "DOUBLE_PRECISION_RTOL",
@@ -43,6 +44,8 @@ C_FAST = 1.5
 C_CHAOS = 0.1
 #: Global error of the reference per unit of its max(rtol, atol), before growth (calibrated).
 C_REFERENCE = 10.0
+#: Energy error of a reduced level per unit of k delta^2 under the largest load (calibrated on rate and energy outputs).
+C_ENERGY = 4.0
 #: At most this many times carry the linearization's residual (cost of the rule, not of the level).
 RESIDUAL_POINTS = 200
 #: The linearization's residual is computed only when the amplitude screen is below SCREEN x tolerance.
@@ -188,7 +191,7 @@ def _output_gains(scene: Scene, f: _Features) -> dict[str, tuple[float, float]]:
         elif name.startswith("theta"):
             gains[name] = (1.0, 0)
         elif name.startswith("omega"):
-            gains[name] = (max(f.w_p, 1.0), 0)
+            gains[name] = (max(f.w_p, 1.0), 7)
         elif name in ("x1", "y1"):
             gains[name] = (L1, 1)
         elif name in ("x2", "y2"):
@@ -216,7 +219,14 @@ def _spring_output_error(kind: int, offsets: np.ndarray, f: _Features, p: Any) -
         return offsets[:, 1]
     if kind == 5:
         return np.max(offsets, axis=1) * f.w_s
-    return p.k1 * f.stretch[0] * offsets[:, 0] + p.k2 * f.stretch[1] * offsets[:, 1]
+    if kind == 7:
+        # A ringing spring accelerates its bob radially by dR w_s^2, which turns the next link at w_s: a fast
+        # part dR w_s / L of the link rates that no reduced level has.
+        return float(np.sum(f.ring[np.isfinite(f.ring)])) * f.w_s / float(np.min(f.lengths)) if math.isfinite(f.w_s) else 0.0
+    # Energy: the springs hold k delta^2 under the largest load, which the reduced levels' embedding books
+    # differently (rigid links none, quasi-static lengths all of it without the rigid dynamics' work).
+    k = np.array([p.k1, p.k2])
+    return C_ENERGY * np.sum(k * f.stretch * np.maximum(offsets, f.stretch), axis=1)
 
 
 def _reduced_curve(scene: Scene, f: _Features, t: np.ndarray, quasi_static: bool) -> np.ndarray:
@@ -265,12 +275,17 @@ def _linear_curve(scene: Scene, lin: LinearSolution, t_grid: np.ndarray) -> tupl
     for j, mu in enumerate(np.exp(z)):  # z[k+1] = mu z[k] + C[k], one recursion per mode in C (lfilter)
         Z[1:, j] = lfilter([1.0], [1.0, -mu], C[:, j])
     E = np.abs(np.real(Z @ V.T))  # state error, (n, nx)
-    # Output Jacobian at the equilibrium by central differences (outputs are smooth in the state).
+    # Output Jacobian by central differences (outputs are smooth in the state) at the equilibrium and at the
+    # linear solution's farthest state: an output flat at the equilibrium (the energy) has its slope there.
     h = 1e-6
-    P = lin.x_eq + np.vstack([np.eye(model.nx) * h, -np.eye(model.nx) * h])
+    far = X[int(np.argmax(np.max(np.abs(X - lin.x_eq), axis=1)))]
+    steps = np.vstack([np.eye(model.nx) * h, -np.eye(model.nx) * h])
+    P = np.vstack([lin.x_eq + steps, far + steps])
     Yp = scene_signals(replace(scene, u_amplitude=None), P)  # the state's part: a sine input adds no slope
     worst = np.zeros(len(t))
+    n = model.nx
     for name in scene.outputs:
-        c = np.abs(Yp[name][: model.nx] - Yp[name][model.nx :]) / (2 * h)
+        y = Yp[name]
+        c = np.maximum(np.abs(y[:n] - y[n : 2 * n]), np.abs(y[2 * n : 3 * n] - y[3 * n :])) / (2 * h)
         worst = np.maximum(worst, E @ c)
     return t, C_LINEAR * worst
