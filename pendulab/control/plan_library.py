@@ -283,6 +283,8 @@ class LibrarySwingUp:
         Leave a plan when the wrapped tracking error ``|x - x_ref|^2`` exceeds this.
     n_lookups : int
         Plans taken (diagnostics).
+    handovers : list of ndarray
+        The state at each gap in the calls (the protocol's reset hand-overs; diagnostics and library growth).
     """
 
     fallback: GlobalSwingUp
@@ -290,6 +292,7 @@ class LibrarySwingUp:
     accept: float = 1.0
     replan_error: float = 1.0
     n_lookups: int = 0
+    handovers: list[np.ndarray] = field(default_factory=list)
     _plan: tuple[int, int, float] | None = field(default=None, init=False, repr=False)
     _t_last: float | None = field(default=None, init=False, repr=False)
 
@@ -313,6 +316,7 @@ class LibrarySwingUp:
         fb, lib, h = self.fallback, self.library, self.fallback.sample_time
         if self._t_last is not None and t - self._t_last > 1.5 * h:
             self._plan, fb.caught = None, False  # a gap in the calls: the protocol reset the pendulum
+            self.handovers.append(x.copy())
         self._t_last = t
         v = fb.cost(x)
         if fb.caught and v > fb.release_level:
@@ -347,6 +351,9 @@ class LibrarySwingUp:
 LIBRARY_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
 #: Re-plan the library's plans for band entry, per task.
 LIBRARY_BAND: dict[str, bool] = {"pendubot": True, "acrobot": True}
+#: Grown starts (observed hand-overs the grid did not cover), an (S, 4) array in the task's cache directory,
+#: appended to the grid's starts when present (written by ``benchmarks/bench_v3.py --grow-seeds``).
+EXTRA_STARTS_FILE: str = "extra_starts.npy"
 DEFAULT_LIBRARY_DIR: str = "pendulab-out/plan_library"
 
 
@@ -372,7 +379,8 @@ def library_controller(
     branches : sequence of (int, int)
         Upright branches the resets leave from.
     directory : str or Path, optional
-        Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``.
+        Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``. Starts listed in
+        ``<directory>/<task>/extra_starts.npy`` (:data:`EXTRA_STARTS_FILE`) are added to the grid's.
     accept : float
         Lookup distance within which a plan is taken.
     band : bool, optional
@@ -409,6 +417,14 @@ def library_controller(
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, branches)
+    extra = root / task / EXTRA_STARTS_FILE
+    if extra.exists():
+        try:
+            more = np.load(extra, allow_pickle=False)
+        except (OSError, ValueError, EOFError):
+            more = np.zeros((0, 4))  # a damaged list only loses the grown starts; the grid stands
+        if more.ndim == 2 and more.shape[1] == 4 and np.all(np.isfinite(more)):
+            starts = np.vstack([starts, more])
     use_band = LIBRARY_BAND[task] if band is None else bool(band)
     prm = fb.model.params
     height = HEIGHT_FRACTION * (prm.L1 + prm.L2) if use_band else None
