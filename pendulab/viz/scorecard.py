@@ -38,7 +38,8 @@ def plot_scorecard(card: Scorecard, path: str | Path) -> Path:
     cols = min(4, n + 1)
     rows = math.ceil((n + 1) / cols)
     fig = plt.figure(figsize=(3.4 * cols, 2.8 * rows), constrained_layout=True)
-    fig.suptitle(f"Robustness of {card.controller} on {card.task}: overall score {card.overall:.2f}")
+    fed = f" fed by {card.estimator}" if getattr(card, "estimator", None) else ""
+    fig.suptitle(f"Robustness of {card.controller}{fed} on {card.task}: overall score {card.overall:.2f}")
     for i, c in enumerate(cats):
         ax = fig.add_subplot(rows, cols, i + 1)
         x = np.arange(len(c.levels))
