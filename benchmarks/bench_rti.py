@@ -21,6 +21,9 @@ On a shared machine wall times carry preemption by other processes (a 2-core mac
 Before each closed-loop run the garbage collector is run and its objects frozen (``gc.freeze()``), as a
 real-time Python loop would do, so a full collection of the benchmark's own objects does not land in a call.
 
+A figure (last run of each task: angles, torque, wall and CPU time per call) goes to
+``docs/figures/rti_timing.png``.
+
 Usage::
 
     PYTHONPATH=. python benchmarks/bench_rti.py [--repeats 3] [--tasks pendubot,acrobot]
@@ -46,6 +49,7 @@ from pendulab.control.realai.spec import leaderboard_task
 from pendulab.evaluate.realai.simulate import run_leaderboard
 
 OUT = Path(__file__).resolve().parent / "results" / "rti.md"
+FIGURE = Path(__file__).resolve().parents[1] / "docs" / "figures" / "rti_timing.png"
 
 
 class Timed:
@@ -93,8 +97,39 @@ def closed_loop(task: str, repeats: int) -> tuple[dict, list]:
         "cpu": (np.median(c), np.percentile(c, 99), c.max()),
         "calls": len(w),
         "over": (int(np.sum(w > 1.0)), int(np.sum(w > 2.0)), int(np.sum(c > 1.0)), int(np.sum(c > 2.0))),
+        "last": (res, np.array(ctrl.solve_times) * 1e3, np.array(timed.cpu) * 1e3),
     }
     return row, (ctrl, records)
+
+
+def plot(rows: dict, path: Path) -> None:
+    """Angles and torque of the last run of each task, and the wall and CPU time of every call."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(rows), figsize=(11, 6.5), sharex=True, squeeze=False, constrained_layout=True)
+    for j, (task, r) in enumerate(rows.items()):
+        res, wall, cpu = r["last"]
+        ax = axes[0, j]
+        ax.plot(res.t, res.x[:, 0], label="theta1 [rad]")
+        ax.plot(res.t, res.x[:, 1], label="theta2 [rad]")
+        ax.step(res.t, res.u[:, 0 if task == "pendubot" else 1], where="post", lw=0.8, label="torque [N.m]")
+        ax.axhline(np.pi, color="k", lw=0.5, ls=":")
+        ax.set(title=f"{task}: rti at 500 Hz, leaderboard v2 simulator (score {res.score:.3f})")
+        ax.set(ylabel="angle [rad], torque [N.m]")
+        ax.legend(loc="lower right", fontsize=8)
+        ax = axes[1, j]
+        tc = np.arange(len(wall)) * 0.002
+        ax.semilogy(tc, wall, ".", ms=1.5, label="wall time per call")
+        ax.semilogy(tc, cpu, ".", ms=1.5, label="thread CPU time per call")
+        for lim, ls in ((1.0, "--"), (2.0, "-")):
+            ax.axhline(lim, color="r", lw=0.8, ls=ls, label=f"{lim:g} ms")
+        ax.set(xlabel="time [s]", ylabel="per call [ms]")
+        ax.legend(loc="upper right", fontsize=8, markerscale=6)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def solvers(ctrl: RTIController):
@@ -176,6 +211,7 @@ def main() -> None:
         comps[task] = compare(ctrl, records, args.repeats)
         comps[task]["n"] = len(records)
     load1 = os.getloadavg()[0]
+    plot(rows, FIGURE)
     o = ctrl.options
     lines = [
         "# Real-time-iteration NMPC at 500 Hz (rigid leaderboard tasks)",
@@ -222,6 +258,7 @@ def main() -> None:
         for name, (med, mx, cmed, ratio, du) in c.items():
             row = f"| {task} | {name} | {n} x {args.repeats} | {med:.3f} | {mx:.2f} | {cmed:.3f} | {ratio:.1f} | {du:.1e} |"
             lines.append(row)
+    lines += ["", f"Figure: `docs/figures/{FIGURE.name}` (last run of each task: angles, torque, time per call)."]
     OUT.write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines), file=sys.stderr)
 

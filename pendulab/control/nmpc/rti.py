@@ -202,10 +202,25 @@ class RTIController:
         return xr, ur
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
-        """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).
+        """One real-time iteration from the measured state: the torques to apply now.
 
-        Raises ValueError for a negative or non-finite ``t``, or an ``x`` that is not a finite state of shape
-        (nx,) (a bad measurement; a failed step never raises, it is counted in :meth:`stats`).
+        Parameters
+        ----------
+        t : float
+            Time since the start of the run [s] (selects the reference window).
+        x : array_like, shape (nx,)
+            Measured plant state [rad, rad/s].
+
+        Returns
+        -------
+        ndarray, shape (m,)
+            Torques [N.m] for ``input_names``, within the torque bound.
+
+        Raises
+        ------
+        ValueError
+            A negative or non-finite ``t``, or an ``x`` that is not a finite state of shape (nx,) (a bad
+            measurement; a failed step never raises, it is counted in :meth:`stats`).
         """
         start = time.perf_counter()
         x = self.model.check_state(x, "x")
