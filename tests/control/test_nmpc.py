@@ -97,15 +97,100 @@ def test_rti_iterations_converge_to_full_solve(pendubot):
 def test_elastic_plant_prediction_models():
     model = pl.elastic(k1=2000.0, k2=2000.0)
     x = upright_state(model)
-    rigid = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, planning="rigid")
+    rigid = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, planning="rigid", state_map="project")
     assert rigid.plan_model.kind == "rigid" and rigid.ocp.nx == 4
     np.testing.assert_array_equal(rigid.plan_state(x), x[[0, 1, 4, 5]])  # angles and link rates kept
-    # Default: the elastic model itself, tracking a rigid reference lifted to quasi-static spring lengths.
+    # The elastic model itself, tracking a rigid reference lifted to quasi-static spring lengths.
     ref = (np.array([0.0, 0.5]), np.array([[np.pi, np.pi, 0.0, 0.0]] * 2), np.zeros((2, 2)))
-    own = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, reference=ref, sample_time=0.02)
+    own = nmpc_controller(model, actuation="full", u_max=20.0, horizon=5, reference=ref, sample_time=0.02, planning="model")
     assert own.plan_model is model and own.ocp.nx == 8
     np.testing.assert_allclose(own.x_ref[0], x, atol=1e-9)  # quasi-static at rest upright = the equilibrium
     assert own.ocp.step.numel_out() == 8
+    assert own.stats()["prediction_level"] == "elastic" and own.stats()["state_map"] == "none"
+
+
+@pytest.fixture(scope="module")
+def stiff():
+    return load_task("pendubot_elastic")
+
+
+def test_auto_prediction_follows_the_planning_rule(stiff):
+    from pendulab.control.nmpc.prediction import LENGTH_PARAMS
+    from pendulab.control.swingup.rule import planning_rule
+
+    # Stiff springs (w_s / w_p = 10): the rule predicts rigid 0.40, quasi-static 0.15 -> quasi-static within 0.2.
+    ctrl = nmpc_controller(stiff.model, actuation="pendubot", u_max=6.0, horizon=5)
+    st = ctrl.stats()
+    d = planning_rule(stiff.model, 0.2)
+    assert st["prediction_level"] == "rigid+quasi-static" == d.chosen
+    assert ctrl.plan_model.kind == "rigid" and ctrl.ocp.nx == 4 and st["prediction_states"] == 4
+    assert st["prediction_predicted_error"] == pytest.approx(d.predicted["rigid+quasi-static"])  # the rule's number
+    assert st["state_map"] == "average" and "quasi-static" in st["prediction_reason"]
+    assert ctrl.ocp.stage_params == LENGTH_PARAMS
+    # After the reference every stage predicts with the upright static lengths (compressed by the weight above).
+    up = upright_state(stiff.model)
+    np.testing.assert_allclose(ctrl.window(0)[2], [[up[2], up[3], up[2], up[3]]] * 5, rtol=1e-12)
+    # A tolerance below every reduced level's predicted error leaves the elastic model.
+    strict = nmpc_controller(stiff.model, actuation="pendubot", u_max=6.0, horizon=2, prediction_tolerance=0.1)
+    assert strict.stats()["prediction_level"] == "elastic" and strict.ocp.nx == 8
+    # Soft springs (w_s / w_p = 2): no reduced level is predicted within 0.2.
+    soft = load_task("pendubot_elastic_soft").model
+    assert nmpc_controller(soft, actuation="pendubot", u_max=6.0, horizon=2).stats()["prediction_level"] == "elastic"
+
+
+def test_momentum_map_is_exact_on_the_quasi_static_manifold(stiff):
+    from pendulab.control.nmpc.prediction import SlowStateMap
+    from pendulab.model.quasistatic import quasi_static_state
+
+    model = stiff.model
+    smap = SlowStateMap(model, quasi_static=True)
+    for theta, omega in (([1.0, 2.0], [3.0, -2.0]), ([np.pi, 2.5], [-8.0, 12.0]), ([0.0, 0.0], [0.0, 0.0])):
+        x = quasi_static_state(model, theta, omega)
+        # On r = r*, v = 0 the rigid mass matrix at r* is the angle block of the elastic one: rates unchanged.
+        np.testing.assert_allclose(smap(x), np.concatenate([theta, omega]), rtol=0, atol=1e-10)
+    # A radial spring velocity is not a link rate: the projection keeps the measured rates, the map the momenta.
+    x = quasi_static_state(model, [0.3, 0.3], [0.0, 0.0])
+    x[6] = 0.5  # spring 1 moving along link 1 (aligned links: it carries no angular momentum)
+    np.testing.assert_allclose(smap(x)[2:], 0.0, atol=1e-12)
+
+
+def test_averaged_map_removes_the_spring_oscillation(stiff):
+    from pendulab.control.nmpc.prediction import SlowStateMap
+    from pendulab.model.quasistatic import quasi_static_state
+
+    model = stiff.model
+    periods = tuple(sorted(2 * np.pi / np.array([126.37, 345.7])))  # the task's spring modes at hanging [s]
+    avg = SlowStateMap(model, quasi_static=False, average=periods)
+    mom = SlowStateMap(model, quasi_static=True)
+    np.testing.assert_allclose(avg(upright_state(model)), [np.pi, np.pi, 0.0, 0.0], atol=1e-12)  # an equilibrium stays
+    # A swinging pendulum with ringing springs (3 mm stretch, 0.3 m/s): 0.1 s of it, every 1 ms.
+    x = quasi_static_state(model, [2.0, 0.5], [12.0, 8.0])
+    x[2:4] += 0.003
+    x[6] = 0.3
+    traj = pl.simulate(model, x, 0.1, dt=0.001, rtol=1e-10, atol=1e-10)
+
+    def fast_part(rates):  # what a quartic fit over 0.1 s (the slow motion) leaves
+        return max(np.abs(r - np.polyval(np.polyfit(traj.t, r, 4), traj.t)).max() for r in rates.T)
+
+    measured = fast_part(traj.x[:, 4:6])
+    momentum = fast_part(np.array([mom(xk)[2:] for xk in traj.x]))
+    averaged = fast_part(np.array([avg(xk)[2:] for xk in traj.x]))
+    # Measured: the rates ring by ~3 rad/s; the momentum map leaves ~10 %, the window ~1 % (generous bounds).
+    assert measured > 1.0 and momentum < 0.2 * measured and averaged < 0.03 * measured and averaged < 0.3 * momentum
+
+
+def test_stiff_swingup_through_elastic_plant_on_the_reduced_model(stiff):
+    from pendulab.control.nmpc import nmpc_for_task
+    from pendulab.control.swingup.check import height_success
+
+    ctrl, x0 = nmpc_for_task(stiff)
+    assert ctrl.plan_model.nx == 4  # the rule's quasi-static level
+    traj = pl.simulate(stiff.model, x0, stiff.t_final, dt=stiff.dt, u=as_feedback(ctrl, stiff.model), rtol=1e-8, atol=1e-8)
+    check = height_success(traj, stiff.rest_lengths, stiff.success_fraction)
+    # The task's success rule (end effector above 0.9 (L1 + L2) over the last second), reached within the 3 s plan.
+    assert check.success and check.t_up < 3.0
+    assert ctrl.stats()["failures"] == 0
+    assert np.abs(traj.x[-1, :2] - np.pi).max() < 0.1  # held near upright at the end
 
 
 @pytest.mark.parametrize(
@@ -117,6 +202,10 @@ def test_elastic_plant_prediction_models():
         ({"u_max": float("nan")}, ValueError, "u_max"),
         ({"actuation": "both"}, ValueError, "actuation"),
         ({"wibble": 1}, TypeError, "wibble"),
+        ({"planning": "cheap"}, ValueError, "planning"),
+        ({"prediction_tolerance": 1.5}, ValueError, "prediction_tolerance"),
+        ({"state_map": "filter"}, ValueError, "state_map"),
+        ({"torque_rate": -1.0}, ValueError, "torque_rate"),
         ({"reference": (np.arange(3.0), np.zeros((3, 3)), np.zeros((3, 2)))}, ValueError, "reference states"),
         ({"reference": (np.arange(3.0), np.zeros((3, 4)), np.zeros((3, 1)))}, ValueError, "reference torques"),
     ],

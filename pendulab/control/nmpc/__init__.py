@@ -6,7 +6,8 @@
 * :mod:`.factories` plans a task's swing-up and builds the controller (:func:`nmpc_for_task`).
 """
 
-from .controller import NMPCController, NMPCOptions, nmpc_controller
+from .build import nmpc_controller
+from .controller import NMPCController, NMPCOptions
 from .factories import nmpc_for_task, nmpc_swingup, plan_swingup
 from .ocp import SOLVERS
 

@@ -20,34 +20,32 @@ Design choices (measured in ``benchmarks/results/nmpc.md``):
   structure-exploiting interior-point alternative;
 * a failed solve never raises: the controller applies the previous plan's next
   torque (or the LQR fallback), counts the failure and keeps going;
-* an elastic plant is predicted with the elastic model itself (``planning="model"``,
-  the default), tracking the rigid counterpart's swing-up lifted to quasi-static
-  spring lengths (:func:`pendulab.model.quasistatic.quasi_static_lengths`); RK4
-  substeps are chosen for the spring modes. Planning on the rigid counterpart
-  (``planning="rigid"``: angles and rates projected, 4 states, 4x cheaper) was
-  measured to lose the stiff undamped springs of the shipped elastic tasks: the
-  projection hides the spring-driven part of the link rates, the feedback excites
-  the springs and the QP fails (see docs/nmpc.md).
+* an elastic plant is predicted with the cheapest adequate model (``planning="auto"``,
+  the default): the planning rule's levels rigid, rigid + quasi-static springs (4 states,
+  per-stage quasi-static link lengths) or elastic (8 states, RK4 substeps for the spring
+  modes), chosen from the rule's predicted error against ``prediction_tolerance``
+  (:mod:`.prediction`). A rigid prediction gets the plant state on the slow manifold
+  (angles, and rates that keep the angular momenta), not the plain projection whose
+  rates carry the spring oscillation (measured: the feedback then excites the undamped
+  springs and the QP fails; docs/nmpc.md).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..._checks import bounded_int, positive_float
-from ...model.counterpart import rigid_counterpart, rigid_state
-from ...model.model import INPUT_NAMES, Model
-from ..feedback import actuated_inputs, upright_state
-from ..lqr import lqr_balance, wrap_state_error
-from ..tracking import resample_reference
-from .ocp import SOLVERS, ShootingOCP, build_ocp
+from ..._checks import bounded_int, positive_float, relative_tolerance
+from ...model.counterpart import rigid_state
+from ...model.model import Model
+from ..lqr import wrap_state_error
+from .ocp import SOLVERS, ShootingOCP
+from .prediction import PLANNING, STATE_MAPS, PredictionChoice, SlowStateMap
 
-__all__ = ["NMPCOptions", "NMPCController", "nmpc_controller", "MAX_HORIZON"]
+__all__ = ["NMPCOptions", "NMPCController", "MAX_HORIZON"]
 
 #: Largest prediction horizon (shooting intervals): 10 s at 50 Hz; the NLP grows linearly with it.
 MAX_HORIZON = 500
@@ -70,9 +68,21 @@ class NMPCOptions:
     substeps : int or None
         RK4 steps per interval; default 2 for a rigid planning model, and for an
         elastic one enough that ``h * omega_fast / substeps <= 1`` (RK4 is stable up to 2.8).
-    planning : {"model", "rigid"}
-        Prediction model of an elastic plant: the elastic model itself (default), or its
-        rigid counterpart (a rigid plant is always predicted with itself).
+    planning : {"auto", "model", "elastic", "rigid", "quasi-static"}
+        Prediction model of an elastic plant (a rigid plant is always predicted with itself):
+        ``auto`` (default) the cheapest level of the planning rule predicted within
+        ``prediction_tolerance``; ``model`` or ``elastic`` the elastic model itself; ``rigid`` the
+        rigid counterpart; ``quasi-static`` the rigid counterpart with per-stage quasi-static
+        link lengths (:mod:`pendulab.control.nmpc.prediction`).
+    prediction_tolerance : float
+        Relative prediction error ``auto`` accepts (dimensionless, in (0, 1)); the feedback
+        corrects it every sample (default 0.2, measured: docs/nmpc.md).
+    state_map : {"average", "momentum", "project"}
+        Rigid state of an elastic measurement for a rigid prediction (:mod:`.prediction`):
+        ``average`` (default) the momentum map averaged over the spring periods (states in the
+        window predicted with the elastic model), ``momentum`` the instantaneous map (angles, and
+        rates that keep the angular momenta), ``project`` the plain projection (angles and rates as
+        measured; kept to reproduce its measured failure).
     solver : {"sqp", "ipopt", "fatrop"}
         See :mod:`pendulab.control.nmpc.controller`.
     max_iter : int or None
@@ -90,12 +100,17 @@ class NMPCOptions:
     max_solve_time : float or None
         Wall-time cap of one ``ipopt`` solve [s] (a solve cut short is a counted failure with the
         fallback torque); ``sqp`` is bounded by its iteration cap. None: no cap.
+    torque_rate : float or None
+        Weight of the torque change per sample ``|u_k - u_(k-1)|^2`` [1/(N.m)^2] (the previous
+        torques become prediction states). None: no penalty.
     """
 
     horizon: int = 20
     sample_time: float = 0.02
     substeps: int | None = None
-    planning: str = "model"
+    planning: str = "auto"
+    prediction_tolerance: float = 0.2
+    state_map: str = "average"
     solver: str = "sqp"
     max_iter: int | None = None
     q_angle: float = 10.0
@@ -105,6 +120,7 @@ class NMPCOptions:
     slack_weight: float = 1e3
     slack_tol: float = 1e-3
     max_solve_time: float | None = None
+    torque_rate: float | None = None
 
     def __post_init__(self) -> None:
         # Every numeric field is checked and stored as the number it stands for (a string "1" is not a weight).
@@ -117,8 +133,11 @@ class NMPCOptions:
             if v is None and name != "horizon":
                 continue
             object.__setattr__(self, name, bounded_int(name, v, low=1, high=high, why=why))
-        if self.planning not in ("rigid", "model"):
-            raise ValueError(f"planning must be 'rigid' or 'model', got {self.planning!r}")
+        if self.planning not in PLANNING:
+            raise ValueError(f"planning must be one of {list(PLANNING)}, got {self.planning!r}")
+        if self.state_map not in STATE_MAPS:
+            raise ValueError(f"state_map must be one of {list(STATE_MAPS)}, got {self.state_map!r}")
+        object.__setattr__(self, "prediction_tolerance", relative_tolerance("prediction_tolerance", self.prediction_tolerance))
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {list(SOLVERS)}, got {self.solver!r}")
         object.__setattr__(self, "sample_time", positive_float("sample_time", self.sample_time, "[s]"))
@@ -130,6 +149,8 @@ class NMPCOptions:
             object.__setattr__(self, "velocity_limit", positive_float("velocity_limit", self.velocity_limit, "[rad/s]"))
         if self.max_solve_time is not None:
             object.__setattr__(self, "max_solve_time", positive_float("max_solve_time", self.max_solve_time, "[s]"))
+        if self.torque_rate is not None:
+            object.__setattr__(self, "torque_rate", positive_float("torque_rate", self.torque_rate, "[1/(N.m)^2]"))
 
     @property
     def iterations_cap(self) -> int:
@@ -146,7 +167,7 @@ class NMPCController:
     model : Model
         Plant model (its state is what ``__call__`` receives).
     plan_model : Model
-        Prediction model (``model``, or the rigid counterpart of an elastic one with ``planning="rigid"``).
+        Prediction model (``model``, or the rigid counterpart of an elastic one: see ``prediction``).
     options : NMPCOptions
         Problem and solver settings.
     input_names : tuple of str
@@ -173,6 +194,14 @@ class NMPCController:
         Calls whose solution needed slack above ``options.slack_tol`` on the soft state bounds.
     last_status : str
         Solver return status of the latest call.
+    prediction : PredictionChoice or None
+        Prediction level and why (None: built without a choice, a rigid plant).
+    state_map : SlowStateMap or None
+        Elastic measurement -> rigid slow state (None: plain projection, or the plant's own model).
+    stage_ref : ndarray, shape (K, n_ps)
+        Per-sample values of ``ocp.stage_params`` along the reference (quasi-static link lengths).
+    stage_goal : ndarray, shape (n_ps,)
+        Their values after the reference (upright static lengths).
     """
 
     model: Model
@@ -190,6 +219,10 @@ class NMPCController:
     failures: int = 0
     infeasible: int = 0
     last_status: str = ""
+    prediction: PredictionChoice | None = None
+    state_map: SlowStateMap | None = None
+    stage_ref: np.ndarray = field(default_factory=lambda: np.zeros((1, 0)))
+    stage_goal: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         # Warm start (previous solution, multipliers, its sample index): internal, not dataclass fields.
@@ -198,6 +231,7 @@ class NMPCController:
         self._lam_g: np.ndarray | None = None
         self._k_prev = -1
         self._restart = False
+        self._u_last = np.zeros(2)
 
     @property
     def sample_time(self) -> float:
@@ -209,12 +243,13 @@ class NMPCController:
         self._w = self._lam_x = self._lam_g = None
         self._k_prev = -1
         self._restart = False
+        self._u_last = np.zeros(2)
         self.solve_times, self.iterations = [], []
         self.failures = self.infeasible = 0
         self.last_status = ""
 
     def plan_state(self, x: np.ndarray) -> np.ndarray:
-        """The planning model's state of a plant state (rigid projection of an elastic state).
+        """The planning model's state of a plant state (slow-manifold map or projection of an elastic state).
 
         Parameters
         ----------
@@ -227,7 +262,11 @@ class NMPCController:
             Angles [rad] and rates [rad/s] (and lengths for an elastic planning model).
         """
         x = np.asarray(x, dtype=float)
-        return x.copy() if self.plan_model is self.model else rigid_state(self.model, x)
+        if self.plan_model is self.model:
+            return x.copy()
+        if self.state_map is not None:
+            return self.state_map(x, self._u_last)
+        return rigid_state(self.model, x)
 
     def window(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Reference over the prediction window starting at sample ``k``; the goal after the reference.
@@ -241,12 +280,16 @@ class NMPCController:
         -------
         xr : ndarray, shape (N+1, nx_plan)
         ur : ndarray, shape (N, m)
+        ps : ndarray, shape (N, n_ps)
+            Stage parameters (``ocp.stage_params``) of each interval.
         """
         N, K = self.ocp.N, len(self.x_ref)
         idx = np.arange(k, k + N + 1)
         xr = np.where((idx < K)[:, None], self.x_ref[np.minimum(idx, K - 1)], self.goal)
         ur = np.where((idx[:N] < K)[:, None], self.u_ref[np.minimum(idx[:N], K - 1)], 0.0)
-        return xr, ur
+        Ks = len(self.stage_ref)
+        ps = np.where((idx[:N] < Ks)[:, None], self.stage_ref[np.minimum(idx[:N], Ks - 1)], self.stage_goal)
+        return xr, ur, ps
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).
@@ -266,15 +309,16 @@ class NMPCController:
             raise ValueError(f"t must be a finite time >= 0 [s] (the controller's clock starts at 0), got {t!r}")
         ocp, m = self.ocp, self.ocp.m
         k = int(np.floor(t / self.sample_time + 1e-6))
-        xr, ur = self.window(k)
+        xr, ur, ps = self.window(k)
         xp = self.plan_state(x)
         xp = xr[0] + wrap_state_error(xp - xr[0], self.plan_model.state_names)  # same branch as the reference
-        w0, lam_x, lam_g = self._guess(k, xr, ur, xp)
+        xs = np.concatenate([xp, self._u_last[self.input_cols]]) if ocp.nh else xp  # with the held torques
+        w0, lam_x, lam_g = self._guess(k, xr, ur, xs)
         lbx, ubx = ocp.lbx.copy(), ocp.ubx.copy()
-        lbx[ocp.x_idx[0]] = ubx[ocp.x_idx[0]] = xp
+        lbx[ocp.x_idx[0]] = ubx[ocp.x_idx[0]] = xs
         w = None
         try:
-            sol = ocp.solver(x0=w0, p=np.concatenate([xr.ravel(), ur.ravel()]), lbx=lbx, ubx=ubx,
+            sol = ocp.solver(x0=w0, p=np.concatenate([xr.ravel(), ur.ravel(), ps.ravel()]), lbx=lbx, ubx=ubx,
                              lbg=ocp.lbg, ubg=ocp.ubg, lam_x0=lam_x, lam_g0=lam_g)  # fmt: skip
             st = ocp.solver.stats()
             self.last_status = str(st.get("return_status", ""))
@@ -297,15 +341,23 @@ class NMPCController:
                 self.infeasible += 1
             u = w[ocp.u_idx[0, :m]]
         self.iterations.append(iters)
+        u = np.clip(u, -self.u_max, self.u_max)
+        self._u_last = np.zeros(2)
+        self._u_last[self.input_cols] = u
         self.solve_times.append(time.perf_counter() - start)
-        return np.clip(u, -self.u_max, self.u_max)
+        return u
+
+    @property
+    def input_cols(self) -> list[int]:
+        """Columns of ``input_names`` in (tau1, tau2)."""
+        return [("tau1", "tau2").index(n) for n in self.input_names]
 
     def _guess(self, k: int, xr: np.ndarray, ur: np.ndarray, xp: np.ndarray) -> tuple[np.ndarray, Any, Any]:
         """Warm start: the previous solution shifted to sample ``k``; cold: the reference window."""
         ocp = self.ocp
         if self._w is None or k < self._k_prev or self._restart:
             w0 = np.zeros(ocp.n_w)
-            w0[ocp.x_idx] = xr
+            w0[ocp.x_idx] = np.hstack([xr, np.vstack([ur[:1], ur])]) if ocp.nh else xr
             w0[ocp.u_idx[:, : ocp.m]] = ur
             w0[ocp.x_idx[0]] = xp
             return w0, 0.0, 0.0
@@ -338,6 +390,10 @@ class NMPCController:
             ``solve_time_median``, ``solve_time_max`` [s], ``iterations_median``,
             ``iterations_max``, ``failures`` and ``infeasible`` (counts of calls),
             ``n_calls``, ``solver`` and ``last_status``. Times are nan before the first call.
+            ``prediction_level`` (rigid, rigid+quasi-static or elastic), ``prediction_states``
+            (state dimension of the prediction), ``state_map`` (of an elastic plant's state onto a rigid
+            prediction; ``none`` when the plant's own model predicts), ``prediction_predicted_error`` (the planning rule's
+            relative error of that level), ``prediction_tolerance`` and ``prediction_reason``.
         """
         ts, it = np.asarray(self.solve_times), np.asarray(self.iterations)
         n = len(ts)
@@ -351,116 +407,10 @@ class NMPCController:
             "failures": int(self.failures),
             "infeasible": int(self.infeasible),
             "last_status": self.last_status,
+            "prediction_level": self.prediction.level if self.prediction else "rigid",
+            "prediction_states": int(self.plan_model.nx),
+            "state_map": "none" if self.plan_model is self.model else self.options.state_map,
+            "prediction_predicted_error": self.prediction.predicted_error if self.prediction else 0.0,
+            "prediction_tolerance": self.options.prediction_tolerance,
+            "prediction_reason": self.prediction.reason if self.prediction else "rigid plant: predicted with its own model",
         }
-
-
-def nmpc_controller(
-    model: Model,
-    *,
-    actuation: str | Sequence[str] = "full",
-    u_max: float = 20.0,
-    reference: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-    goal: np.ndarray | None = None,
-    options: NMPCOptions | None = None,
-    **option_changes: Any,
-) -> NMPCController:
-    """Build an NMPC controller tracking ``reference`` (if any), then holding ``goal``.
-
-    Parameters
-    ----------
-    model : Model
-        Plant model (rigid or elastic; see ``NMPCOptions.planning``).
-    actuation : {"full", "pendubot", "acrobot"} or sequence of input names
-        Driven torques.
-    u_max : float
-        Hard torque bound [N.m].
-    reference : (t, x, u), optional
-        Reference times [s] shape (K,), states shape (K, nx) of ``model`` or
-        rigid states shape (K, 4) (lifted to quasi-static spring lengths for an
-        elastic prediction model), torques (tau1, tau2) [N.m] shape (K, 2) or (K-1, 2).
-        None: regulation about ``goal`` only.
-    goal : ndarray, shape (nx_plan,), optional
-        Planning-model state held after the reference; default upright at rest.
-    options : NMPCOptions, optional
-        Settings (default :class:`NMPCOptions`).
-    **option_changes
-        :class:`NMPCOptions` fields overriding ``options`` (e.g. ``solver="ipopt"``, ``horizon=30``).
-
-    Returns
-    -------
-    NMPCController
-        Ready to run (call :meth:`NMPCController.reset` between runs).
-
-    Raises
-    ------
-    TypeError
-        ``model`` is not a Model, or an unknown option name.
-    ValueError
-        Bad options, torque limit, actuation or reference shapes.
-    """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
-    opts = options if options is not None else NMPCOptions()
-    unknown = sorted(set(option_changes) - set(NMPCOptions.__dataclass_fields__))
-    if unknown:
-        raise TypeError(f"unknown NMPC option(s) {unknown}; expected some of {sorted(NMPCOptions.__dataclass_fields__)}")
-    opts = NMPCOptions(**{**opts.__dict__, **option_changes})
-    u_max = positive_float("u_max", u_max, "[N.m]")
-    names = actuated_inputs(actuation)
-    plan = rigid_counterpart(model) if opts.planning == "rigid" else model
-    h = opts.sample_time
-    goal = upright_state(plan) if goal is None else plan.check_state(goal, "goal")
-    if goal.ndim != 1:
-        raise ValueError(f"goal must be a single state of shape ({plan.nx},), got {goal.shape}")
-    cols = [INPUT_NAMES.index(n) for n in names]
-    if reference is None:
-        x_ref, u_ref = goal[None, :], np.zeros((1, len(names)))
-    else:
-        t, x, u = reference
-        x = np.asarray(x, dtype=float)
-        u = np.asarray(u, dtype=float)
-        if u.ndim != 2 or u.shape[1] != len(INPUT_NAMES):
-            raise ValueError(f"reference torques must have shape (K, 2) (tau1, tau2), got {u.shape}")
-        if x.ndim == 2 and x.shape[1] == model.nx and plan is not model:
-            x = rigid_state(model, x)
-        elif x.ndim == 2 and x.shape[1] == 4 and plan.kind == "elastic":
-            x = _lift_quasi_static(plan, x, u)
-        if x.ndim != 2 or x.shape[1] != plan.nx:
-            raise ValueError(f"reference states must have shape (K, {model.nx}) or (K, 4), got {x.shape}")
-        _, x_ref, u_full = resample_reference(t, x, u, h, plan)
-        x_ref, u_ref = x_ref, u_full[:, cols]
-    n_ang = [i for i, n in enumerate(plan.state_names) if n.startswith("theta")]
-    n_rate = [i for i, n in enumerate(plan.state_names) if n.startswith("omega")]
-    Q = np.zeros((plan.nx, plan.nx))
-    Q[n_ang, n_ang], Q[n_rate, n_rate] = opts.q_angle, opts.q_rate
-    n_len = [i for i, n in enumerate(plan.state_names) if n[0] in "rv"]
-    Q[n_len, n_len] = [100.0 if plan.state_names[i][0] == "r" else 0.1 for i in n_len]  # springs: as default_weights
-    R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)
-    top = lqr_balance(plan, names, Q, R, h, at=goal)
-    ocp = build_ocp(
-        plan, names, N=opts.horizon, sample_time=h, substeps=_substeps(plan, h, opts.substeps), Q=Q, R=R, P=top.P, u_max=u_max,
-        velocity_limit=opts.velocity_limit, slack_weight=opts.slack_weight, solver=opts.solver, max_iter=opts.iterations_cap,
-        max_solve_time=opts.max_solve_time,
-    )  # fmt: skip
-    return NMPCController(model, plan, opts, names, u_max, x_ref, u_ref, goal, ocp, top.K)
-
-
-def _substeps(plan: Model, h: float, substeps: int | None) -> int:
-    """RK4 steps per interval: given, 2 for a rigid model, or ``h * omega_fast`` rounded up for an elastic one."""
-    if substeps is not None:
-        return int(substeps)
-    if plan.kind == "rigid":
-        return 2
-    from ...analysis.equilibria import equilibrium
-    from ...analysis.linearize import linearize
-
-    fast = float(np.max(np.abs(linearize(plan, equilibrium(plan, "down-down")).eigenvalues)))
-    return max(2, int(np.ceil(h * fast)))
-
-
-def _lift_quasi_static(plan: Model, x: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Elastic states of a rigid reference: same angles and rates, quasi-static spring lengths, v = 0."""
-    from ...model.quasistatic import quasi_static_lengths
-
-    r = np.array([quasi_static_lengths(plan, xk[:2], xk[2:], u[min(k, len(u) - 1)]) for k, xk in enumerate(x)])
-    return np.column_stack([x[:, :2], r, x[:, 2:], np.zeros_like(r)])

@@ -20,7 +20,8 @@ from ...model.counterpart import rigid_counterpart
 from ...model.model import Model
 from ..lqr import actuation_name
 from ..swingup.transcription import MAX_INTERVALS
-from .controller import NMPCController, NMPCOptions, nmpc_controller
+from .build import nmpc_controller
+from .controller import NMPCController, NMPCOptions
 
 if TYPE_CHECKING:
     from ..swingup.problem import SwingUpProblem

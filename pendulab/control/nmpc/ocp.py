@@ -49,18 +49,23 @@ class ShootingOCP:
         Number of driven torques.
     ns : int
         Slacks per stage (2 with a velocity limit, else 0).
-    x_idx : ndarray of int, shape (N+1, nx)
+    x_idx : ndarray of int, shape (N+1, nx + nh)
         Positions of the stage states in the decision vector.
     u_idx : ndarray of int, shape (N, m + ns)
         Positions of the stage controls (torques, then slacks).
     g_rows : int
-        Constraint rows per stage (nx + 2 ns).
+        Constraint rows per stage (nx + nh + 2 ns).
     lbx, ubx : ndarray, shape (n_w,)
         Variable bounds (torque limits, slacks >= 0); the start state is set per solve.
     lbg, ubg : ndarray, shape (n_g,)
         Constraint bounds.
     step : casadi.Function
-        One interval of the integrator, ``(x, u_driven) -> x_next``.
+        One interval of the integrator, ``(x, u_driven[, ps]) -> x_next``.
+    stage_params : tuple of str
+        Model parameters given per interval through the NLP parameter (``ps``).
+    nh : int
+        Held torques appended to each stage state (``m`` with a torque-rate penalty, else 0):
+        ``x_idx`` has ``nx + nh`` columns, the first stage's held torques are the torques applied last.
     """
 
     solver: ca.Function
@@ -77,6 +82,8 @@ class ShootingOCP:
     lbg: np.ndarray
     ubg: np.ndarray
     step: ca.Function
+    stage_params: tuple[str, ...] = ()
+    nh: int = 0
 
     @property
     def n_w(self) -> int:
@@ -84,15 +91,22 @@ class ShootingOCP:
         return int(self.x_idx.size + self.u_idx.size)
 
 
-def _rk4_step(model: Model, cols: list[int], h: float, substeps: int) -> ca.Function:
-    """One sample interval ``h`` of RK4 with ``substeps`` steps, torques held, as an SX Function."""
+def _rk4_step(model: Model, cols: list[int], h: float, substeps: int, stage_params: tuple[str, ...] = ()) -> ca.Function:
+    """One sample interval ``h`` of RK4 with ``substeps`` steps, torques held, as an SX Function.
+
+    Inputs ``(x, u)``, and ``ps`` (the values of the parameters ``stage_params``) if there are any; the other
+    parameters are folded in.
+    """
     f = model_functions(model.kind)["rhs"]
     x = ca.SX.sym("x", model.nx)
     u = ca.SX.sym("u", len(cols))
+    ps = ca.SX.sym("ps", len(stage_params))
     ufull = ca.SX.zeros(len(INPUT_NAMES))
     for i, c in enumerate(cols):
         ufull[c] = u[i]
-    p = ca.DM(model.p)
+    p = ca.SX(ca.DM(model.p))
+    for i, name in enumerate(stage_params):
+        p[model.param_names.index(name)] = ps[i]
     dt = h / substeps
     xk = x
     for _ in range(substeps):
@@ -101,7 +115,9 @@ def _rk4_step(model: Model, cols: list[int], h: float, substeps: int) -> ca.Func
         k3 = f(xk + 0.5 * dt * k2, ufull, p)
         k4 = f(xk + dt * k3, ufull, p)
         xk = xk + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("rk4_step", [x, u], [xk], ["x", "u"], ["x_next"])
+    if not stage_params:
+        return ca.Function("rk4_step", [x, u], [xk], ["x", "u"], ["x_next"])
+    return ca.Function("rk4_step", [x, u, ps], [xk], ["x", "u", "ps"], ["x_next"])
 
 
 def build_ocp(
@@ -120,11 +136,14 @@ def build_ocp(
     solver: str,
     max_iter: int,
     max_solve_time: float | None = None,
+    stage_params: tuple[str, ...] = (),
+    rate_weight: float | None = None,
 ) -> ShootingOCP:
     """Build the tracking NLP ``min sum |x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2 + |x_N - xr_N|_P^2``.
 
-    The reference ``(xr, ur)`` is the NLP parameter ``p = [xr_0..xr_N, ur_0..ur_{N-1}]``;
-    the start state enters through equal bounds on ``x_0``.
+    The reference ``(xr, ur)`` and the stage parameters ``ps`` are the NLP parameter
+    ``p = [xr_0..xr_N, ur_0..ur_{N-1}, ps_0..ps_{N-1}]``; the start state enters through equal
+    bounds on ``x_0``.
 
     Parameters
     ----------
@@ -160,6 +179,12 @@ def build_ocp(
         Wall-time cap of one IPOPT solve [s] (IPOPT's ``max_wall_time``; an iterate cut short
         is a failed solve, handled by the controller's fallback). The real-time SQP is bounded
         by its iteration cap. None: no cap.
+    stage_params : tuple of str
+        Model parameters that take a value per interval (e.g. the link lengths of a rigid
+        prediction with quasi-static springs); the others are folded in.
+    rate_weight : float, optional
+        Weight of the torque rate ``|u_k - u_{k-1}|^2`` [1/(N.m)^2] (``u_{-1}``: the torque applied
+        last, a start state); the previous torques become states of each stage. None: no penalty.
 
     Returns
     -------
@@ -173,31 +198,43 @@ def build_ocp(
     if solver not in SOLVERS:
         raise ValueError(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
     nx, m = model.nx, len(input_names)
+    nh = m if rate_weight is not None else 0  # the previous torques, appended to the stage state
+    nxa = nx + nh
     ns = 2 if velocity_limit is not None else 0
     nu = m + ns
     cols = [INPUT_NAMES.index(n) for n in input_names]
-    step = _rk4_step(model, cols, sample_time, substeps)
+    unknown = [n for n in stage_params if n not in model.param_names]
+    if unknown:
+        raise ValueError(f"stage_params must be parameters of the {model.kind} model {model.param_names}, got {unknown}")
+    npar = len(stage_params)
+    step = _rk4_step(model, cols, sample_time, substeps, tuple(stage_params))
     omega = [model.state_names.index(n) for n in ("omega1", "omega2")]
 
-    xs = [ca.SX.sym(f"x{k}", nx) for k in range(N + 1)]
+    xs = [ca.SX.sym(f"x{k}", nxa) for k in range(N + 1)]
     us = [ca.SX.sym(f"u{k}", nu) for k in range(N)]
     xr = ca.SX.sym("xr", nx, N + 1)
     ur = ca.SX.sym("ur", m, N)
+    sp = ca.SX.sym("ps", npar, N)
     w, g, cost = [], [], 0
     lbx, ubx, lbg, ubg = [], [], [], []
     inf = np.inf
     for k in range(N):
         w += [xs[k], us[k]]
-        lbx += [-inf] * nx + [-u_max] * m + [0.0] * ns
-        ubx += [inf] * nx + [u_max] * m + [inf] * ns
+        lbx += [-inf] * nxa + [-u_max] * m + [0.0] * ns
+        ubx += [inf] * nxa + [u_max] * m + [inf] * ns
         tau, s = us[k][:m], us[k][m:]
-        ex, eu = xs[k] - xr[:, k], tau - ur[:, k]
+        xk = xs[k][:nx]
+        ex, eu = xk - xr[:, k], tau - ur[:, k]
         cost += ca.bilin(ca.DM(Q), ex, ex) + ca.bilin(ca.DM(R), eu, eu)
+        nxt = step(xk, tau, sp[:, k]) if npar else step(xk, tau)
+        if nh:  # torque-rate penalty within the stage: the held torque is a state (OCP block structure kept)
+            cost += rate_weight * ca.sumsqr(tau - xs[k][nx:])
+            nxt = ca.vertcat(nxt, tau)
         # hpipm wants the gap as F - x_next (block A B -I), fatrop's detection as x_next - F.
-        gap = step(xs[k], tau) - xs[k + 1]
+        gap = nxt - xs[k + 1]
         g.append(-gap if solver == "fatrop" else gap)
-        lbg += [0.0] * nx
-        ubg += [0.0] * nx
+        lbg += [0.0] * nxa
+        ubg += [0.0] * nxa
         if ns:
             cost += slack_weight * (ca.sum1(s) + 10.0 * ca.sumsqr(s))
             w_k = xs[k][omega]
@@ -205,19 +242,19 @@ def build_ocp(
             lbg += [-inf, -inf, -velocity_limit, -velocity_limit]
             ubg += [velocity_limit, velocity_limit, inf, inf]
     w.append(xs[N])
-    lbx += [-inf] * nx
-    ubx += [inf] * nx
-    eN = xs[N] - xr[:, N]
+    lbx += [-inf] * nxa
+    ubx += [inf] * nxa
+    eN = xs[N][:nx] - xr[:, N]
     cost += ca.bilin(ca.DM(P), eN, eN)
-    W, G, Pp = ca.vertcat(*w), ca.vertcat(*g), ca.vertcat(ca.vec(xr), ca.vec(ur))
+    W, G, Pp = ca.vertcat(*w), ca.vertcat(*g), ca.vertcat(ca.vec(xr), ca.vec(ur), ca.vec(sp))
     nlp = {"x": W, "f": cost, "g": G, "p": Pp}
-    x_idx = np.array([[k * (nx + nu) + i for i in range(nx)] for k in range(N + 1)])
-    u_idx = np.array([[k * (nx + nu) + nx + i for i in range(nu)] for k in range(N)])
+    x_idx = np.array([[k * (nxa + nu) + i for i in range(nxa)] for k in range(N + 1)])
+    u_idx = np.array([[k * (nxa + nu) + nxa + i for i in range(nu)] for k in range(N)])
     equality = [bool(lo == hi) for lo, hi in zip(lbg, ubg, strict=True)]
     fn = ca.nlpsol("nmpc", *_solver_plugin(solver, nlp, W, Pp, G, max_iter, equality, max_solve_time))
     return ShootingOCP(
-        fn, solver, N, nx, m, ns, x_idx, u_idx, nx + 2 * ns,
-        np.array(lbx), np.array(ubx), np.array(lbg), np.array(ubg), step,
+        fn, solver, N, nx, m, ns, x_idx, u_idx, nxa + 2 * ns,
+        np.array(lbx), np.array(ubx), np.array(lbg), np.array(ubg), step, tuple(stage_params), nh,
     )  # fmt: skip
 
 
