@@ -72,6 +72,7 @@ class _Features:
     lengths: np.ndarray  # L_i [m]
     kinetic_share: float = 1.0  # sqrt(kinetic / total energy above rest) at the start: 0 from rest
     quarter: float = 0.0  # time [s] the motion takes to reach its largest load: a quarter of the slow period
+    energy_rigid: float = 0.0  # |E(x0) - E(rigid links at rest length, v = 0)| [J]: the rigid level's energy offset
 
     @property
     def stretch(self) -> np.ndarray:
@@ -161,6 +162,8 @@ def _features(scene: Scene) -> _Features:
         stretch_start = np.abs(r_qs - L)  # the start's own load (a raised link carries less of its weight)
     except RuntimeError:  # no quasi-static lengths: the springs cannot hold the motion
         ring = np.full(2, np.inf)
+    # The rigid level books the energy with springs at rest length and still: a constant offset from the start's.
+    energy_rigid = abs(float(model.energy(x0)) - float(model.energy(np.concatenate([th0, L, x0[4:6], np.zeros(2)]))))
     return _Features(
         w_p,
         w_s,
@@ -177,6 +180,7 @@ def _features(scene: Scene) -> _Features:
         L,
         kinetic_share,
         quarter,
+        energy_rigid,
     )
 
 
@@ -202,12 +206,15 @@ def _output_gains(scene: Scene, f: _Features) -> dict[str, tuple[float, float]]:
             gains[name] = (0.0, 4)
         elif name in ("v1", "v2"):
             gains[name] = (0.0, 5)
-        else:  # energy
-            gains[name] = (0.0, 6)
+        else:  # energy: the torques' work along a different path, and the springs' share (kind 6)
+            torque = (0.0 if scene.u is None else np.sum(np.abs(scene.u))) + (
+                0.0 if scene.u_amplitude is None else np.sum(np.abs(scene.u_amplitude))
+            )
+            gains[name] = (float(torque), 6)
     return gains
 
 
-def _spring_output_error(kind: int, offsets: np.ndarray, f: _Features, p: Any) -> np.ndarray | float:
+def _spring_output_error(kind: int, offsets: np.ndarray, f: _Features, p: Any, quasi_static: bool) -> np.ndarray | float:
     """Error of an output from the spring-length errors ``offsets`` [m], shape (n, 2)."""
     if kind == 0:
         return 0.0
@@ -223,8 +230,11 @@ def _spring_output_error(kind: int, offsets: np.ndarray, f: _Features, p: Any) -
         # A ringing spring accelerates its bob radially by dR w_s^2, which turns the next link at w_s: a fast
         # part dR w_s / L of the link rates that no reduced level has.
         return float(np.sum(f.ring[np.isfinite(f.ring)])) * f.w_s / float(np.min(f.lengths)) if math.isfinite(f.w_s) else 0.0
-    # Energy: the springs hold k delta^2 under the largest load, which the reduced levels' embedding books
-    # differently (rigid links none, quasi-static lengths all of it without the rigid dynamics' work).
+    # Energy. Rigid links at rest length conserve the rigid energy, which differs from the scene's by the start's
+    # offset (springs at rest length, still): exact but for the torque's work along a different path, hence 2x.
+    # Quasi-static lengths book the springs' k delta^2 under the load, which changes along the motion.
+    if not quasi_static:
+        return np.full(len(offsets), 2.0 * f.energy_rigid)
     k = np.array([p.k1, p.k2])
     return C_ENERGY * np.sum(k * f.stretch * np.maximum(offsets, f.stretch), axis=1)
 
@@ -241,7 +251,7 @@ def _reduced_curve(scene: Scene, f: _Features, t: np.ndarray, quasi_static: bool
         offsets = f.ring + (offsets - f.ring) * eps**2
     worst = np.zeros_like(t)
     for gain, kind in _output_gains(scene, f).values():
-        worst = np.maximum(worst, gain * e_th + _spring_output_error(int(kind), offsets, f, scene.model.params))
+        worst = np.maximum(worst, gain * e_th + _spring_output_error(int(kind), offsets, f, scene.model.params, quasi_static))
     return worst
 
 
