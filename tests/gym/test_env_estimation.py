@@ -156,3 +156,17 @@ def test_a_diverged_estimator_ends_the_episode_with_an_observation_in_the_space(
     venv.reset(seed=0)
     flags = [venv.step(np.tile(a, (2, 1)))[2] for a in _actions(3)]
     assert not flags[1].any() and flags[2].all()
+
+
+def test_mmae_identifies_the_delay_from_each_episodes_random_start():
+    env = gym.make(ENV_ID, actuation="pendubot", measurement=MeasurementModel(0.0, 3), estimator="mmae")
+    for seed in (4, 5):
+        env.reset(seed=seed)  # a random start near hanging: the bank's predictions must start there, not at rest
+        errs = []
+        for a in _actions(120):
+            env.step(a)
+            errs.append(np.abs(env.unwrapped.estimate - env.unwrapped.state).max())
+        assert env.unwrapped._pipeline.estimator.hypothesis[0] == pytest.approx(0.03)  # 3 samples of 10 ms
+        # Locked on the right delay, the rolled-forward estimate is the current state (measured 1.4e-5: the 10 ms RK4
+        # rollout over 3 samples against the Taylor plant); a wrong delay is off by 0.1-0.8.
+        assert max(errs[50:]) < 1e-3

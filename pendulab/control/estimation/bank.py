@@ -110,11 +110,19 @@ class MultipleModelEstimator:
         """The EKF's disturbance estimate [N.m] (zeros before the lock)."""
         return self.ekf.d_hat if self._locked else np.zeros(len(INPUT_NAMES))
 
-    def reset(self) -> None:
-        """Back to the start state, every hypothesis equally likely."""
-        self.ekf.reset()
+    def reset(self, x0: Any = None) -> None:
+        """Back to the start state (``x0`` or the constructor's), every hypothesis equally likely.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (nx,), optional
+            Start state of this run (the hypotheses' open-loop predictions start there), as
+            :meth:`ExtendedKalmanFilter.reset` takes it.
+        """
+        self.ekf.reset(x0)
+        start = self.ekf.z[: self.model.nx].copy()  # x0, or the constructor's start state
         J = len(self.responses)
-        z0 = np.concatenate([self.ekf.x0, np.zeros(self.ekf.nz - self.model.nx)])  # zero disturbance while identifying
+        z0 = np.concatenate([start, np.zeros(self.ekf.nz - self.model.nx)])  # zero disturbance while identifying
         self._X = np.tile(z0[:, None], (1, J))  # current open-loop states, one column per response
         self._traj: list[np.ndarray] = [self._X.copy()]  # their history, one (nx, J) per sample
         self._ua = np.zeros((len(INPUT_NAMES), J))
@@ -122,7 +130,7 @@ class MultipleModelEstimator:
         self.loglik = np.zeros((len(self.delays), J))
         self._locked = False
         self.k = 0
-        self.x_hat = self.ekf.x0.copy()
+        self.x_hat = start
 
     def update(self, t: float, y: Any, u: Any = None) -> np.ndarray:
         """One step of the bank (inside the window) or of the locked EKF.
