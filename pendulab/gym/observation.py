@@ -144,7 +144,7 @@ def make_pipeline(
         [N.m] of the driven torques.
     estimator : {"ekf", "mmae"}, StateEstimator or None
         Named estimators are built by :func:`~pendulab.control.robust.build_estimator` (start state: hanging at
-        rest; :meth:`ObservationPipeline.reset` re-centres an EKF on each episode's start).
+        rest; :meth:`ObservationPipeline.reset` restarts it at each episode's start).
     measurement : MeasurementModel or None
         Delay [samples] and rate noise.
 
