@@ -117,7 +117,7 @@ def plot(rows: dict, path: Path) -> None:
         ax.plot(res.t, res.x[:, 1], label="theta2 [rad]")
         ax.step(res.t, res.u[:, 0 if task == "pendubot" else 1], where="post", lw=0.8, label="torque [N.m]")
         ax.axhline(np.pi, color="k", lw=0.5, ls=":")
-        ax.set(title=f"{task}: rti at 500 Hz, leaderboard v2 simulator (score {res.score:.3f})")
+        ax.set(title=f"{task}: rti at 500 Hz, v2 simulator, score {res.score:.3f}")
         ax.set(ylabel="angle [rad], torque [N.m]")
         ax.legend(loc="lower right", fontsize=8)
         ax = axes[1, j]
