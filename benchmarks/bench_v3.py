@@ -23,13 +23,13 @@ import numpy as np
 from pendulab.evaluate.realai.v3 import PUBLISHED_V3, v3_score
 
 
-def _build(task: str) -> object:
+def _build(task: str, build: bool = True) -> object:
     from pendulab.commands._common import ProgressBar
     from pendulab.control.plan_library import library_controller
 
     bar = ProgressBar(f"plan library ({task})", True)
     try:
-        return library_controller(task, progress=bar)
+        return library_controller(task, build=build, progress=bar)
     finally:
         bar.close()
 
@@ -79,6 +79,7 @@ def main() -> None:
     ap.add_argument("--tasks", nargs="+", default=["pendubot", "acrobot"])
     ap.add_argument("--md", type=Path, default=None, help="append the table to this Markdown file")
     ap.add_argument("--build-only", action="store_true", help="build the plan libraries and stop")
+    ap.add_argument("--cached-only", action="store_true", help="library: use the cached plans only, solve none")
     ap.add_argument("--grow-seeds", type=int, nargs="+", default=None, help="training seeds: add uncovered hand-overs")
     ap.add_argument("--grow-distance", type=float, default=0.2, help="lookup distance above which a hand-over is added")
     args = ap.parse_args()
@@ -89,7 +90,7 @@ def main() -> None:
             _grow(task, args.grow_seeds, args.grow_distance)
     calls = []
     if "library" in args.controllers or args.build_only:
-        built = {task: _build(task) for task in args.tasks}
+        built = {task: _build(task, not args.cached_only) for task in args.tasks}
         if args.build_only:
             return
         calls = [
@@ -118,8 +119,12 @@ def main() -> None:
                 loads.append(os.getloadavg()[0])
             ct = np.concatenate(call_lists) * 1e3
             best = max(PUBLISHED_V3[task].items(), key=lambda kv: kv[1])
+            label = name
+            if name == "library":
+                lib = built[task].library
+                label = f"library ({len(lib)} plans, {lib.n_refined} band-entry)"
             row = (
-                f"| {task} | {name} | {' '.join(f'{s:.3f}' for s in scores)} | {np.mean(scores):.3f} "
+                f"| {task} | {label} | {' '.join(f'{s:.3f}' for s in scores)} | {np.mean(scores):.3f} "
                 f"| {np.ptp(scores):.3f} | {np.mean(swings):.1f} | {np.median(ct):.3f} / {np.max(ct):.2f} "
                 f"| {int(np.sum(ct > 2.0))} of {len(ct)} | {time.perf_counter() - t0:.1f} | {max(loads):.1f} "
                 f"| {best[0]} {best[1]} |"
