@@ -222,6 +222,15 @@ def _read_card(path: Path, settings: Mapping[str, Any]) -> tuple:
     return records
 
 
+def _journal_wall(journal: Path) -> float | None:
+    """The wall time [s] journaled with a scorecard's records (None: not journaled)."""
+    try:
+        wall = json.loads(journal.read_text()).get("wall_time")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return float(wall) if isinstance(wall, (int, float)) else None
+
+
 def _complete(journal: Path, resume: bool) -> bool:
     try:
         return resume and bool(json.loads(journal.read_text()).get("complete"))
@@ -229,10 +238,8 @@ def _complete(journal: Path, resume: bool) -> bool:
         return False
 
 
-def _scorecards(
-    runs: int, workers: int | None, progress: bool, resume: bool, root: Path, budget: float | None
-) -> dict[tuple[str, str], Any]:
-    """The own scorecards, each journaled in ``root/TASK-CONTROLLER/records.json``."""
+def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, root: Path, budget: float | None) -> dict[str, Any]:
+    """The own scorecards, each journaled in ``root/TASK-CONTROLLER/records.json`` (``cards`` and their ``walls`` [s])."""
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task
     from ..evaluate import score
@@ -240,6 +247,7 @@ def _scorecards(
 
     w0 = time.perf_counter()
     cards: dict[tuple[str, str], Any] = {}
+    walls: dict[tuple[str, str], float | None] = {}
     for task_name in LEADERBOARD_TASKS:
         task = load_task(task_name)
         for ctrl in LEADERBOARD_CONTROLLERS:
@@ -255,8 +263,16 @@ def _scorecards(
                 cards[(ctrl, task_name)] = f"not run (wall-time budget reached{done}; continue with --resume)"
                 continue
 
-            def save(records: tuple, complete: bool = False, journal: Path = journal, settings: dict = settings) -> None:
-                data = {**settings, "pendulab": __version__, "complete": complete,
+            before = _journal_wall(journal) if completed else 0.0  # None: journaled without its wall time
+            complete_before = _complete(journal, resume)
+            t_card = time.perf_counter()
+
+            def save(
+                records: tuple, complete: bool = False, journal: Path = journal, settings: dict = settings,
+                before: float | None = before, t_card: float = t_card, frozen: bool = complete_before,
+            ) -> None:  # fmt: skip
+                wall = before if (frozen or before is None) else before + time.perf_counter() - t_card
+                data = {**settings, "pendulab": __version__, "complete": complete, "wall_time": wall,
                         "records": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
                                      for k, v in asdict(r).items()} for r in records]}  # fmt: skip
                 journal.parent.mkdir(parents=True, exist_ok=True)
@@ -277,16 +293,20 @@ def _scorecards(
                                  on_records=save)  # fmt: skip
                 save(card.records, complete=True)
                 cards[(ctrl, task_name)] = card
+                walls[(ctrl, task_name)] = _journal_wall(journal)
             except (ValueError, RuntimeError) as exc:  # e.g. a swing-up the optimizer cannot solve
                 cards[(ctrl, task_name)] = f"not available ({_one_line(exc)})"
             finally:
                 planning.close()
                 bar.close()
-    return cards
+    return {"cards": cards, "walls": walls}
 
 
-def _scorecard_section(cards: dict[tuple[str, str], Any] | None, runs: int, quick: bool) -> list[str]:
+def _scorecard_section(result: dict[str, Any] | None, runs: int, quick: bool) -> list[str]:
     from ..evaluate import CATEGORIES
+
+    cards = None if result is None else result["cards"]
+    walls = {} if result is None else result["walls"]
 
     lines = ["## pendulab's own robustness scorecard", ""]
     if cards is None:
@@ -308,7 +328,10 @@ def _scorecard_section(cards: dict[tuple[str, str], Any] | None, runs: int, quic
             if isinstance(card, str):
                 cells.append(card)
                 continue
-            cells.append(f"**{card.overall:.2f}** ({_nominal(card)}, {card.wall_time:.0f} s)")
+            wall = walls.get((ctrl, task_name))
+            cells.append(
+                f"**{card.overall:.2f}** ({_nominal(card)}, " + ("wall time not journaled)" if wall is None else f"{wall:.0f} s)")
+            )
         lines.append(f"| {ctrl} | " + " | ".join(cells) + " |")
     lines += ["", "### Category scores", ""]
     for task_name in LEADERBOARD_TASKS:
