@@ -166,6 +166,12 @@ def test_swingup_pendubot_succeeds(cache):
     assert st["failures"] == 0 and st["n_calls"] == 5000
 
 
+def test_rti_is_a_protocol_controller_name():
+    from pendulab.evaluate.realai.controllers import CONTROLLERS
+
+    assert CONTROLLERS["rti"].__name__ == "_rti"  # `pendulab score --protocol ... --controller rti` builds it
+
+
 @pytest.mark.parametrize(
     ("x", "match"),
     [(np.zeros(3), "x"), (np.array([0.0, np.nan, 0.0, 0.0]), "x"), (np.zeros((2, 4)), "one state")],
