@@ -191,16 +191,17 @@ def plot_v3_seeds(run: LeaderboardRun, path: str | Path) -> Path:
             vals = [s["uptime_fraction"] for s in c.summary["seeds"]] + [c.summary["mean"]]
             bars = ax.bar(xs, vals, width=width, color=_COLORS[j % len(_COLORS)], label=name)
             for b, v in zip(bars, vals, strict=True):
-                ax.text(b.get_x() + b.get_width() / 2, v + 0.01, f"{v:.2f}", ha="center", fontsize=7)
+                ax.text(b.get_x() + b.get_width() / 2, v + 0.01, f"{v:.3f}", ha="center", fontsize=6.5)
         for p in PUBLISHED_V3_ROWS[task]:
             if p.score is not None:
-                ax.axhline(p.score, color="k", ls="--", lw=1.0)
-                ax.text(-0.45, p.score + 0.015, f"published best: {p.label} {p.score:.3f} (one unseeded run)", fontsize=8)
+                ax.axhline(
+                    p.score, color="k", ls="--", lw=1.0, label=f"published best: {p.label} {p.score:.3f} (one unseeded run)"
+                )
         ax.set_xticks(range(len(seeds) + 1), [f"seed {s}" for s in seeds] + ["mean"])
         ax.set_xlim(-0.5, len(seeds) + 0.5)
-        ax.set_ylim(0, 1.0)
+        ax.set_ylim(0, 1.08)
         ax.set_ylabel("score = uptime / episode length [-]")
         ax.set_title(task)
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8, loc="upper right")
+            ax.legend(fontsize=7, loc="upper center", ncol=2)
     return save_figure(fig, path)
