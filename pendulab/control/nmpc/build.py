@@ -118,7 +118,8 @@ def nmpc_controller(
     n_ang = [i for i, n in enumerate(plan.state_names) if n.startswith("theta")]
     n_rate = [i for i, n in enumerate(plan.state_names) if n.startswith("omega")]
     Q = np.zeros((plan.nx, plan.nx))
-    Q[n_ang, n_ang], Q[n_rate, n_rate] = opts.q_angle, opts.q_rate
+    q_rate = opts.q_rate if opts.q_rate is not None else (0.1 if plan.kind != model.kind else 1.0)
+    Q[n_ang, n_ang], Q[n_rate, n_rate] = opts.q_angle, q_rate
     n_len = [i for i, n in enumerate(plan.state_names) if n[0] in "rv"]
     Q[n_len, n_len] = [100.0 if plan.state_names[i][0] == "r" else 0.1 for i in n_len]  # springs: as default_weights
     R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)

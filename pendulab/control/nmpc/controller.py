@@ -87,8 +87,12 @@ class NMPCOptions:
         See :mod:`pendulab.control.nmpc.controller`.
     max_iter : int or None
         Iterations per sample; default 1 for ``sqp`` (real-time iteration), 50 otherwise.
-    q_angle, q_rate : float
-        Stage weights on angle errors [1/rad^2] and rate errors [s^2/rad^2].
+    q_angle : float
+        Stage weight on angle errors [1/rad^2].
+    q_rate : float or None
+        Stage weight on rate errors [s^2/rad^2]; default 1, and 0.1 when a rigid model predicts an
+        elastic plant (its rates come from the state map: a low rate gain keeps what is left of the
+        spring ringing out of the torque; measured in docs/nmpc.md).
     r : float or None
         Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
     velocity_limit : float or None
@@ -114,7 +118,7 @@ class NMPCOptions:
     solver: str = "sqp"
     max_iter: int | None = None
     q_angle: float = 10.0
-    q_rate: float = 1.0
+    q_rate: float | None = None
     r: float | None = None
     velocity_limit: float | None = None
     slack_weight: float = 1e3
@@ -141,8 +145,10 @@ class NMPCOptions:
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {list(SOLVERS)}, got {self.solver!r}")
         object.__setattr__(self, "sample_time", positive_float("sample_time", self.sample_time, "[s]"))
-        for name in ("q_angle", "q_rate", "slack_weight", "slack_tol"):
+        for name in ("q_angle", "slack_weight", "slack_tol"):
             object.__setattr__(self, name, positive_float(name, getattr(self, name)))
+        if self.q_rate is not None:
+            object.__setattr__(self, "q_rate", positive_float("q_rate", self.q_rate))
         if self.r is not None:
             object.__setattr__(self, "r", positive_float("r", self.r))
         if self.velocity_limit is not None:
