@@ -277,11 +277,20 @@ class SlowStateMap:
         Returns
         -------
         ndarray, shape (4,)
-            Angles [rad] and slow angular rates [rad/s].
+            Angles [rad] and slow angular rates [rad/s]. When the averaging window's prediction
+            diverges (a spring near collapse), the instantaneous momentum map at rest lengths.
+
+        Raises
+        ------
+        ValueError
+            No finite image (a singular mass matrix).
         """
         uu = np.zeros(2) if u is None else u
         fn = _average_function(self.quasi_static, self.average, 8) if self.average else _map_function(self.quasi_static)
         out = np.asarray(fn(x, uu, self.model.p), dtype=float).ravel()
+        if self.average and not np.all(np.isfinite(out)):
+            # The window's prediction diverged (a spring driven near collapse): the instantaneous map is algebraic.
+            out = np.asarray(_map_function(False)(x, uu, self.model.p), dtype=float).ravel()
         if not np.all(np.isfinite(out)) or math.isnan(out[2]):
             raise ValueError(f"x must be an elastic state with a slow-manifold image, got {x!r}")
         return out
