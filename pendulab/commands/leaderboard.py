@@ -141,7 +141,8 @@ def write_leaderboard(
     finally:
         bars.close()
     figs = _figures(board, out.parent / "figures")
-    cmd = "pendulab score --leaderboard" + (" --quick" if quick else "") + (f" --runs {runs}" if runs != 20 else "")
+    cmd = "pendulab score --leaderboard" + (" --quick" if quick else "") + (" --resume" if resume else "")
+    cmd += f" --runs {runs}" if runs != 20 else ""
     cmd += f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else ""
     cmd += f" --out {path}" if path else ""
     lines = [
