@@ -42,7 +42,7 @@ __all__ = [
 #: Criterion names, in the leaderboard's order.
 CRITERIA: tuple[str, ...] = ("swingup_time", "energy", "torque_cost", "torque_smoothness", "velocity_cost")
 
-#: Published RealAIGym simulation leaderboard v2 scores (issue 13's list), best first.
+#: Published RealAIGym simulation leaderboard v2 scores, best first (criteria of each row: :mod:`.leaderboard_published`).
 PUBLISHED: Mapping[str, Mapping[str, float]] = {
     "pendubot": {
         "history_sac": 0.682,
@@ -56,7 +56,11 @@ PUBLISHED: Mapping[str, Mapping[str, float]] = {
     "acrobot": {
         "history_sac": 0.655,
         "ar_eapo": 0.633,
+        "evolsac": 0.524,
         "ilqr_tvlqr": 0.504,
+        "ilqr_riccati_lqr": 0.396,
+        "ilqr_ilqrmpc_lqr": 0.345,
+        "mcpilco": 0.316,
     },
 }
 
