@@ -379,6 +379,14 @@ def _run_v3(args: argparse.Namespace) -> int:
         from ..evaluate.realai.v3 import v3_score
     except ImportError as exc:
         raise CLIError(f"--protocol v3 is not available in this installation ({exc})") from None
+    if args.controller == "library":  # the plan library is solved once and cached: build it with its own bar
+        from ..control.plan_library import DEFAULT_LIBRARY_DIR, library_controller
+
+        plans = ProgressBar(f"plan library for {task} (IPOPT; cached in ./{DEFAULT_LIBRARY_DIR})", not args.no_progress)
+        try:
+            library_controller(task, progress=plans)
+        finally:
+            plans.close()
     bar = ProgressBar(f"v3 {args.controller} on {task}", not args.no_progress)
     try:
         res = v3_score(task, args.controller, seed=seed, progress=bar, out=out)
