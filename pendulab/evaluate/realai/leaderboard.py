@@ -50,12 +50,13 @@ PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
 #: Leaderboard tasks.
 TASKS: tuple[str, ...] = ("pendubot", "acrobot")
 #: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
-#: (one cheap run each); robustness v2 the trackers with and without the estimator; v3 the controllers that can start
-#: from any state (``global``, ``replan``) beside the v2 best.
+#: (one cheap run each, and the compiled 500 Hz ``rti``); robustness v2 the trackers with and without the estimator;
+#: v3 the controllers that can start from any state (``global``, ``replan``, the real-time plan ``library``: its first
+#: use solves and caches the library, minutes per task) beside the v2 best.
 DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
-    "v2": ("best", "tvlqr", "robust", "global", "replan"),
+    "v2": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "robustness-v2": ("best", "tvlqr", "robust"),
-    "v3": ("best", "global", "replan"),
+    "v3": ("best", "global", "replan", "library"),
 }
 #: Journal directory (relative to the current directory).
 DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"
