@@ -78,14 +78,40 @@ class PlanCache:
         self.rebuilt = 0
 
     def path(self, start: np.ndarray) -> Path:
-        """The entry of the plan from ``start`` (shape (4,))."""
+        """The entry of the plan from ``start``.
+
+        Parameters
+        ----------
+        start : ndarray, shape (4,)
+            Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+
+        Returns
+        -------
+        Path
+            ``plan-<hash>.npz`` in the cache directory (the hash covers the design and the start).
+        """
         key = json.dumps({"design": self.design, "start": [round(float(v), 12) for v in start]}, sort_keys=True)
         return self.directory / f"plan-{hashlib.sha256(key.encode()).hexdigest()[:20]}.npz"
 
     def load(self, start: np.ndarray) -> dict[str, np.ndarray] | None:
-        """The stored entry (``ok``, and for a solved plan ``x_ref``, ``u_ref``, ``K``), or None if missing or damaged.
+        """The stored entry, or None if missing or damaged.
 
         A damaged entry (unreadable, wrong fields, shapes or non-finite values) is deleted so it is solved again.
+
+        Parameters
+        ----------
+        start : ndarray, shape (4,)
+            Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+
+        Returns
+        -------
+        dict or None
+            ``ok``, and for a solved plan ``x_ref`` (n, 4), ``u_ref`` (n - 1,) [N.m] and ``K`` (n - 1, 4).
+
+        Raises
+        ------
+        ValueError
+            Never to the caller: raised inside to discard an entry of wrong shapes or values.
         """
         path = self.path(start)
         if not path.exists():
@@ -107,7 +133,15 @@ class PlanCache:
             return None
 
     def save(self, start: np.ndarray, entry: dict[str, np.ndarray]) -> None:
-        """Write an entry atomically (a crash leaves the old file or none, never a truncated one)."""
+        """Write an entry atomically (a crash leaves the old file or none, never a truncated one).
+
+        Parameters
+        ----------
+        start : ndarray, shape (4,)
+            Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+        entry : dict of str to ndarray
+            ``ok`` and, for a solved plan, ``x_ref``, ``u_ref``, ``K``.
+        """
         with atomic_path(self.path(start)) as tmp:
             np.savez(tmp, **entry)
 
@@ -158,7 +192,18 @@ class PlanLibrary:
         self._index = np.concatenate(index)
 
     def features(self, x: np.ndarray) -> np.ndarray:
-        """Lookup coordinates ``(cos th1, sin th1, cos th2, sin th2, c w1, c w2)`` of states ``x`` (..., 4)."""
+        """Lookup coordinates of states: angles on the circle, rates scaled by ``velocity_scale``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (..., 4)
+            States (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+
+        Returns
+        -------
+        ndarray, shape (..., 6)
+            ``(cos th1, sin th1, cos th2, sin th2, c w1, c w2)``.
+        """
         x = np.asarray(x, dtype=float)
         c = self.velocity_scale
         return np.stack(
@@ -166,7 +211,18 @@ class PlanLibrary:
         )
 
     def nearest(self, x: np.ndarray) -> tuple[int, int, float]:
-        """The knot nearest to state ``x`` (shape (4,)): plan index, knot index, distance in lookup coordinates."""
+        """The knot nearest to a state, over every plan.
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            State (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+
+        Returns
+        -------
+        tuple of (int, int, float)
+            Plan index, knot index, distance in lookup coordinates.
+        """
         d, j = self._tree.query(self.features(x))
         i, k = self._index[int(j)]
         return int(i), int(k), float(d)

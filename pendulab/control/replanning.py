@@ -179,7 +179,18 @@ class ReplanningSwingUp:
 
 
 def nearest_upright(start: np.ndarray) -> tuple[float, float, float, float]:
-    """The upright equilibrium on the branch (``pi + 2 pi k`` per absolute angle) nearest to ``start``."""
+    """The upright equilibrium on the branch (``pi + 2 pi k`` per absolute angle) nearest to ``start``.
+
+    Parameters
+    ----------
+    start : ndarray, shape (4,) or longer
+        State whose angles (theta1, theta2 [rad]) come first.
+
+    Returns
+    -------
+    tuple of float
+        (theta1, theta2 [rad], 0, 0): the nearest upright state at rest.
+    """
     two_pi = 2.0 * math.pi
     return (
         math.pi + two_pi * round((float(start[0]) - math.pi) / two_pi),

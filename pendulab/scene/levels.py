@@ -153,7 +153,18 @@ class LinearSolution:
     u_sine: np.ndarray | None = None
 
     def forcing(self, idx: np.ndarray) -> np.ndarray:
-        """``b + B u_sine(t)`` at the grid points ``idx``, shape (len(idx), nx)."""
+        """The forcing ``b + B u_sine(t)`` of the linear model at some grid points.
+
+        Parameters
+        ----------
+        idx : ndarray of int, shape (M,)
+            Indices into the output grid.
+
+        Returns
+        -------
+        ndarray, shape (M, nx)
+            The forcing [state units / s].
+        """
         if self.u_sine is None or self.B is None:
             return np.broadcast_to(self.b, (len(idx), len(self.b)))
         return self.b + self.u_sine[idx] @ self.B.T
