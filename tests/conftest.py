@@ -13,9 +13,32 @@ import os
 import signal
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 FMU_TESTS = Path(__file__).resolve().parent / "fmu"
+
+
+class Recorder:
+    """A controller that keeps every state it is given (what the inner controller of a pipeline sees)."""
+
+    def __init__(self, ctrl):
+        self.ctrl, self.sample_time, self.input_names = ctrl, ctrl.sample_time, ctrl.input_names
+        self.seen: list = []
+
+    def reset(self):
+        self.ctrl.reset()
+        self.seen = []
+
+    def __call__(self, t, x):
+        self.seen.append(np.array(x, dtype=float))
+        return self.ctrl(t, x)
+
+
+@pytest.fixture
+def recorder() -> type[Recorder]:
+    """The :class:`Recorder` class, for the estimator pipeline tests."""
+    return Recorder
 
 
 def compiler_missing() -> str | None:

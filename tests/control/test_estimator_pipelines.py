@@ -17,23 +17,6 @@ from pendulab.control.swingup.tasks import load_task
 from pendulab.evaluate import Perturbation, run_perturbed_episode, score
 from pendulab.evaluate.measurement import MeasurementModel
 
-
-class Recorder:
-    """A controller that keeps every state it is given (what the inner controller of a pipeline sees)."""
-
-    def __init__(self, ctrl):
-        self.ctrl, self.sample_time, self.input_names = ctrl, ctrl.sample_time, ctrl.input_names
-        self.seen: list[np.ndarray] = []
-
-    def reset(self):
-        self.ctrl.reset()
-        self.seen = []
-
-    def __call__(self, t, x):
-        self.seen.append(np.array(x, dtype=float))
-        return self.ctrl(t, x)
-
-
 # -- the measurement model ----------------------------------------------------------------------------------------------
 
 
@@ -94,9 +77,9 @@ def _ekf_fed(task, inner, x0):
     return EstimatedController(inner, est, u_max=limit)
 
 
-def test_scorecard_episode_ekf_estimate_beats_the_noisy_measurement(pendubot):
+def test_scorecard_episode_ekf_estimate_beats_the_noisy_measurement(pendubot, recorder):
     task, ctrl, x0 = pendubot
-    raw, inner = Recorder(ctrl), Recorder(ctrl)
+    raw, inner = recorder(ctrl), recorder(ctrl)
     pert = Perturbation(meas_noise=0.3, seed=(0, 6, 3, 0))
     res_raw = run_perturbed_episode(raw, task, x0, pert)
     res_ekf = run_perturbed_episode(_ekf_fed(task, inner, x0), task, x0, pert)
@@ -109,10 +92,10 @@ def test_scorecard_episode_ekf_estimate_beats_the_noisy_measurement(pendubot):
     assert res_ekf.success
 
 
-def test_scorecard_episode_without_noise_or_delay_reproduces_the_plain_run(pendubot):
+def test_scorecard_episode_without_noise_or_delay_reproduces_the_plain_run(pendubot, recorder):
     task, ctrl, x0 = pendubot
     plain = run_perturbed_episode(ctrl, task, x0)
-    inner = Recorder(ctrl)
+    inner = recorder(ctrl)
     fed = run_perturbed_episode(_ekf_fed(task, inner, x0), task, x0)
     # The estimate is the exact measurement blended with a 10 ms RK4 prediction (the plant takes substeps): it stays
     # within 1e-3 of the state (measured 3e-4 at the swing-up's fastest), and the closed loop lands where the plain one does.

@@ -14,22 +14,6 @@ from pendulab.cosim import cosim
 from pendulab.evaluate.measurement import MeasurementModel
 
 
-class Recorder:
-    """A controller that keeps every state it is given."""
-
-    def __init__(self, ctrl):
-        self.ctrl, self.sample_time, self.input_names = ctrl, ctrl.sample_time, ctrl.input_names
-        self.seen: list[np.ndarray] = []
-
-    def reset(self):
-        self.ctrl.reset()
-        self.seen = []
-
-    def __call__(self, t, x):
-        self.seen.append(np.array(x, dtype=float))
-        return self.ctrl(t, x)
-
-
 def _start(model):
     x0 = upright_state(model)
     x0[0] += 0.1
@@ -42,10 +26,10 @@ def _rms_rates(rec, traj, nq):
 
 
 @pytest.mark.parametrize("kind", ["rigid", "elastic"])
-def test_cosim_ekf_estimate_beats_the_noisy_measurement(cosim_fmu, kind):
+def test_cosim_ekf_estimate_beats_the_noisy_measurement(cosim_fmu, kind, recorder):
     model = pl.make_model(kind)
     ctrl, x0, nq = balance_controller(model, 0.01), _start(model), model.nq
-    raw, inner = Recorder(ctrl), Recorder(ctrl)
+    raw, inner = recorder(ctrl), recorder(ctrl)
     t_raw = cosim(cosim_fmu(kind), raw, 0.01, 3.0, x0=x0, measurement=MeasurementModel(0.2, seed=3))
     t_ekf = cosim(cosim_fmu(kind), inner, 0.01, 3.0, x0=x0, measurement=MeasurementModel(0.2, seed=3), estimator="ekf")
     rms_raw, rms_ekf = _rms_rates(raw, t_raw, nq), _rms_rates(inner, t_ekf, nq)
@@ -68,10 +52,10 @@ def test_cosim_exact_measurement_and_ekf_reproduce_the_plain_run(cosim_fmu):
     assert np.max(np.abs(fed.x - plain.x)) < 1e-5
 
 
-def test_cosim_mmae_identifies_a_delay(cosim_fmu):
+def test_cosim_mmae_identifies_a_delay(cosim_fmu, recorder):
     model = pl.rigid()
     ctrl, x0 = balance_controller(model, 0.01), _start(model)
-    inner = Recorder(ctrl)
+    inner = recorder(ctrl)
     traj = cosim(cosim_fmu("rigid"), inner, 0.01, 3.0, x0=x0, measurement=MeasurementModel(0.0, 3), estimator="mmae")
     # The bank's delay hypotheses (0 ... 40 ms) include the 3 samples; once identified the rolled-forward estimate is
     # the current state (3e-3: the 10 ms RK4 rollout over 3 samples, measured 1e-4).

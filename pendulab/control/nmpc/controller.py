@@ -42,7 +42,7 @@ from ..._checks import bounded_int, positive_float, relative_tolerance
 from ...model.counterpart import rigid_state
 from ...model.model import Model
 from ..lqr import wrap_state_error
-from .ocp import SOLVERS, ShootingOCP
+from .ocp import SOLVERS, ShootingOCP, reference_window
 from .prediction import PLANNING, STATE_MAPS, PredictionChoice, SlowStateMap
 
 __all__ = ["NMPCOptions", "NMPCController", "MAX_HORIZON"]
@@ -289,13 +289,11 @@ class NMPCController:
         ps : ndarray, shape (N, n_ps)
             Stage parameters (``ocp.stage_params``) of each interval.
         """
-        N, K = self.ocp.N, len(self.x_ref)
+        N = self.ocp.N
         idx = np.arange(k, k + N + 1)
-        xr = np.where((idx < K)[:, None], self.x_ref[np.minimum(idx, K - 1)], self.goal)
-        ur = np.where((idx[:N] < K)[:, None], self.u_ref[np.minimum(idx[:N], K - 1)], 0.0)
-        Ks = len(self.stage_ref)
-        ps = np.where((idx[:N] < Ks)[:, None], self.stage_ref[np.minimum(idx[:N], Ks - 1)], self.stage_goal)
-        return xr, ur, ps
+        xr = reference_window(self.x_ref, idx, self.goal)
+        ur = reference_window(self.u_ref, idx[:N], 0.0)
+        return xr, ur, reference_window(self.stage_ref, idx[:N], self.stage_goal)
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         """Torques [N.m] for ``input_names`` at time ``t`` [s] and plant state ``x``, shape (m,).

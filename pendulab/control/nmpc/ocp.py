@@ -25,7 +25,28 @@ import numpy as np
 from ...model.functions import model_functions
 from ...model.model import INPUT_NAMES, Model
 
-__all__ = ["ShootingOCP", "build_ocp", "SOLVERS"]
+__all__ = ["ShootingOCP", "build_ocp", "reference_window", "SOLVERS"]
+
+
+def reference_window(ref: np.ndarray, idx: np.ndarray, after: Any) -> np.ndarray:
+    """Rows of a sampled reference at sample indices, and ``after`` past its end (the goal, a zero torque).
+
+    Parameters
+    ----------
+    ref : ndarray, shape (K, n)
+        Reference on the sample grid.
+    idx : ndarray of int, shape (M,)
+        Sample indices (non-negative).
+    after : float or ndarray, shape (n,)
+        The value of every index at or past ``K``.
+
+    Returns
+    -------
+    ndarray, shape (M, n)
+    """
+    K = len(ref)
+    return np.where((idx < K)[:, None], ref[np.minimum(idx, K - 1)], after)
+
 
 #: Solver names accepted by :func:`build_ocp`.
 SOLVERS: tuple[str, ...] = ("sqp", "ipopt", "fatrop")

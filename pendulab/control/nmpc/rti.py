@@ -37,6 +37,7 @@ from ...model.model import Model
 from ..feedback import actuated_inputs, upright_state
 from ..lqr import lqr_balance, wrap_state_error
 from ..tracking import resample_reference
+from .ocp import reference_window
 from .rti_build import compiled_step
 from .rti_step import rti_step_function
 
@@ -195,11 +196,8 @@ class RTIController:
         xr : ndarray, shape (N+1, nx)
         ur : ndarray, shape (N, m)
         """
-        K = len(self.x_ref)
         idx = k + self._offsets
-        xr = np.where((idx < K)[:, None], self.x_ref[np.minimum(idx, K - 1)], self.goal)
-        ur = np.where((idx[:-1] < K)[:, None], self.u_ref[np.minimum(idx[:-1], K - 1)], 0.0)
-        return xr, ur
+        return reference_window(self.x_ref, idx, self.goal), reference_window(self.u_ref, idx[:-1], 0.0)
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         """One real-time iteration from the measured state: the torques to apply now.
