@@ -31,7 +31,7 @@ __all__ = ["main", "run", "COMMAND_MODULES", "CLIError"]
 
 #: Modules under ``pendulab.commands`` that each register one top-level command.
 COMMAND_MODULES: tuple[str, ...] = (
-    "simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup", "ensemble", "score", "ssp",
+    "simulate", "demo", "modes", "fmu", "cosim", "bench", "scene", "swingup", "ensemble", "score", "ssp", "identify",
 )  # fmt: skip
 
 

@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("integrate",),
     ("scene", "scenes"),
     ("ensemble",),
+    ("identify",),
     ("control",),
     ("evaluate",),
     ("viz",),

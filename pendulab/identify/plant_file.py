@@ -1,0 +1,148 @@
+"""The identified plant as a file: what ``pendulab identify`` writes and every study reads (``--plant FILE``).
+
+A JSON file (:data:`FORMAT`) with the robot's parameters in RealAIGym's names
+(:data:`pendulab.model.robot.ROBOT_PARAM_NAMES`), their standard errors, the torque reading's
+offsets, the chosen structure and where it came from. :func:`load_plant` validates everything on
+reading (unknown format, missing or unknown names, non-finite or unphysical values all raise), so
+a study never runs on a plant it misread.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .._io import atomic_write_text
+from ..model.robot import ROBOT_PARAM_NAMES, ROBOT_PARAM_UNITS, check_robot_params
+
+__all__ = ["FORMAT", "IdentifiedPlant", "load_plant", "save_plant"]
+
+#: The file format's name and version.
+FORMAT = "pendulab.identified-plant/1"
+
+
+@dataclass(frozen=True)
+class IdentifiedPlant:
+    """An identified robot.
+
+    Attributes
+    ----------
+    params : dict of str to float
+        Values of :data:`~pendulab.model.robot.ROBOT_PARAM_NAMES` (validated).
+    stderr : dict of str to float
+        Standard error per fitted parameter (``nan`` where only the prior sets it).
+    torque_offset : tuple of float
+        Constant offsets of the torque readings [N.m] (``reading = torque + offset``).
+    structure : tuple of str
+        The fitted standard parameters.
+    meta : dict
+        Provenance: robot, records, preprocessing, validation numbers.
+    """
+
+    params: dict[str, float]
+    stderr: dict[str, float] = field(default_factory=dict)
+    torque_offset: tuple[float, float] = (0.0, 0.0)
+    structure: tuple[str, ...] = ()
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "params", check_robot_params(self.params, "plant params"))
+        off = tuple(float(v) for v in self.torque_offset)
+        if len(off) != 2 or not all(math.isfinite(v) for v in off):
+            raise ValueError(f"torque_offset must be two finite numbers [N.m], got {self.torque_offset!r}")
+        object.__setattr__(self, "torque_offset", off)
+
+    def rigid_kwargs(self) -> dict[str, float]:
+        """Arguments of :func:`pendulab.rigid` for this robot's links and viscous friction.
+
+        ``pendulab.rigid`` models ideal links with viscous joint damping; the Coulomb friction and
+        the rotor inertia need the robot model (:mod:`pendulab.model.robot`), which the protocols,
+        the scorecard and the FMU of the identified robot use.
+
+        Returns
+        -------
+        dict of str to float
+            ``m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2`` (inertias about the centres of mass).
+        """
+        p = self.params
+        return {
+            "m1": p["m1"], "m2": p["m2"], "L1": p["l1"], "L2": p["l2"], "g": p["g"], "b1": p["b1"], "b2": p["b2"],
+            "lc1": p["r1"], "lc2": p["r2"], "I1": max(0.0, p["I1"] - p["m1"] * p["r1"] ** 2),
+            "I2": max(0.0, p["I2"] - p["m2"] * p["r2"] ** 2),
+        }  # fmt: skip
+
+
+def save_plant(plant: IdentifiedPlant, path: str | os.PathLike[str]) -> Path:
+    """Write a plant file atomically.
+
+    Parameters
+    ----------
+    plant : IdentifiedPlant
+        The plant.
+    path : path-like
+        The JSON file.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    doc = {
+        "format": FORMAT,
+        "params": plant.params,
+        "units": dict(ROBOT_PARAM_UNITS),
+        "stderr": {k: (None if math.isnan(v) else v) for k, v in plant.stderr.items()},
+        "torque_offset": list(plant.torque_offset),
+        "structure": list(plant.structure),
+        "meta": plant.meta,
+    }
+    target = Path(path)
+    atomic_write_text(target, json.dumps(doc, indent=2) + "\n")
+    return target
+
+
+def load_plant(path: str | os.PathLike[str]) -> IdentifiedPlant:
+    """Read and validate a plant file.
+
+    Parameters
+    ----------
+    path : path-like
+        A file written by :func:`save_plant` (``pendulab identify --out``).
+
+    Returns
+    -------
+    IdentifiedPlant
+        The plant.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        Not JSON, another format, or a parameter that is not finite or not physical.
+    KeyError
+        A parameter missing or unknown.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"plant file not found: {p}")
+    try:
+        doc = json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"plant file {p} is not JSON: {exc}") from None
+    if not isinstance(doc, Mapping) or doc.get("format") != FORMAT:
+        got = doc.get("format") if isinstance(doc, Mapping) else type(doc).__name__
+        raise ValueError(f"plant file {p}: format must be {FORMAT!r}, got {got!r}")
+    params = doc.get("params")
+    if not isinstance(params, Mapping):
+        raise ValueError(f"plant file {p}: 'params' must be a table of {list(ROBOT_PARAM_NAMES)}")
+    stderr = {k: (float("nan") if v is None else float(v)) for k, v in (doc.get("stderr") or {}).items()}
+    return IdentifiedPlant(
+        params=dict(params), stderr=stderr, torque_offset=tuple(doc.get("torque_offset", (0.0, 0.0))),
+        structure=tuple(doc.get("structure", ())), meta=dict(doc.get("meta", {})),
+    )  # fmt: skip
