@@ -337,5 +337,6 @@ def realize(base: BaseParameters, beta: np.ndarray, prior: Mapping[str, float], 
             f"IPOPT {solver.stats()['return_status']}"
         )
     pi = dict.fromkeys(STANDARD_NAMES, 0.0)
-    pi.update(zip(free, (scale * np.asarray(sol["x"]).ravel()).tolist(), strict=True))
+    # IPOPT honours bounds to its tolerance (a friction of -1e-57): snap onto them.
+    pi.update(zip(free, np.maximum(scale * np.asarray(sol["x"]).ravel(), lbx).tolist(), strict=True))
     return pi
