@@ -42,9 +42,13 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pendulab.model.builders import STATE_NAMES
+from pendulab.model.params import ElasticParams, RigidParams
+
 CONFIGS = [(kind, version, interface) for kind in ("rigid", "elastic") for version in (2, 3) for interface in ("CS", "ME")]
-NX = {"rigid": 4, "elastic": 8}
-NP = {"rigid": 11, "elastic": 11}
+# from the model's own declarations: a parameter added to a model moves the FMU state's fields
+NX = {kind: len(names) for kind, names in STATE_NAMES.items()}
+NP = {"rigid": len(RigidParams.names()), "elastic": len(ElasticParams.names())}
 NU, NY = 2, 6  # checked against the model description by the worker
 
 NAN, INF = math.nan, math.inf

@@ -50,6 +50,7 @@ API_PACKAGES = {
     "pendulab.integrate": "simulate() and the one registry of integration methods.",
     "pendulab.scene": "Scenes: TOML files read by one Scene type.",
     "pendulab.ensemble": "Many runs at once: heyoka batch mode, forked processes, Dask.",
+    "pendulab.identify": "The real robot: identification from measured records, plant files.",
     "pendulab.control": "Controller design: LQR, TVLQR, swing-up planning, NMPC.",
     "pendulab.evaluate": "Evaluation of controllers: robustness scorecard, RealAIGym leaderboard.",
     "pendulab.fmu": "FMU export (FMI 2.0 / 3.0, CS + ME) and validation.",

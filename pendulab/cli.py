@@ -47,11 +47,35 @@ def build_parser() -> argparse.ArgumentParser:
         prog="pendulab",
         description="Rigid and elastic double pendulum: simulation, modes, FMU export, co-simulation, control.",
     )
+    from ._version import __version__
+
+    parser.add_argument("--version", action="version", version=f"pendulab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMAND_MODULES:
         importlib.import_module(f"pendulab.commands.{name}").register(sub)
+    _plain_text(parser)
     return parser
+
+
+def _plain_text(parser: argparse.ArgumentParser) -> None:
+    """Drop reST literal marks (````x````) from every description and help of the tree: ``--help`` is plain text.
+
+    Command modules reuse their docstrings as descriptions; one pass here keeps every present and
+    future command's help readable (tests/test_cli_json.py walks the tree).
+    """
+
+    def plain(text: str | None) -> str | None:
+        return None if text is None else text.replace("``", "")
+
+    parser.description, parser.epilog = plain(parser.description), plain(parser.epilog)
+    for action in parser._actions:
+        action.help = plain(action.help)
+        if isinstance(action, argparse._SubParsersAction):
+            for choice in action._choices_actions:
+                choice.help = plain(choice.help)
+            for child in action.choices.values():
+                _plain_text(child)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -33,3 +33,31 @@ def test_json_is_one_object_on_stdout(args, key, capsys):
     out = capsys.readouterr().out
     data = _strict(out)  # the whole of stdout parses: nothing printed besides the object
     assert isinstance(data, dict) and key in data
+
+
+def test_version_is_the_package_version(capsys):
+    from pendulab import __version__
+    from pendulab.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"pendulab {__version__}"
+
+
+def test_every_help_text_is_plain():
+    import argparse
+
+    from pendulab.cli import build_parser
+
+    def walk(parser):
+        yield parser.description or ""
+        for action in parser._actions:
+            yield action.help or ""
+            if isinstance(action, argparse._SubParsersAction):
+                yield from (c.help or "" for c in action._choices_actions)
+                for child in action.choices.values():
+                    yield from walk(child)
+
+    texts = list(walk(build_parser()))
+    assert len(texts) > 200  # the whole tree was walked
+    assert not [t for t in texts if "``" in t]

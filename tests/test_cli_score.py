@@ -65,13 +65,23 @@ def test_realai_calls_realai_score(monkeypatch, tmp_path, capsys):
         def to_dict(self):
             return {"task": "acrobot", "controller": "best", "success": True, "score": 0.5, "criteria": {"swingup_time": 1.0}}
 
-    def fake(task, controller="best", *, csv_path=None, progress=None):
-        calls.update(task=task, controller=controller, csv_path=csv_path)
+    def fake(task, controller="best", *, csv_path=None, progress=None, plant=None):
+        calls.update(task=task, controller=controller, csv_path=csv_path, plant=plant)
         return Result()
 
     monkeypatch.setattr(realai, "realai_score", fake, raising=False)
     status = main(["score", "--realai", "--task", "acrobot", "--controller", "best", "--out", str(tmp_path), "--json"])
     assert status == 0
-    assert calls == {"task": "acrobot", "controller": "best", "csv_path": None}  # the command writes realai.csv itself
+    # the command writes realai.csv itself; no --plant: the nominal plant
+    assert calls == {"task": "acrobot", "controller": "best", "csv_path": None, "plant": None}
     assert json.loads(capsys.readouterr().out)["score"] == 0.5
     assert json.loads((tmp_path / "realai.json").read_text())["success"] is True
+
+
+def test_score_help_names_every_controller_each_mode_accepts():
+    from pendulab.commands import score as cmd
+    from pendulab.control.controllers import TASK_CONTROLLERS
+    from pendulab.evaluate.realai.controllers import CONTROLLERS
+
+    assert cmd._SCORECARD_CONTROLLERS == tuple(TASK_CONTROLLERS)
+    assert cmd._REALAI_CONTROLLERS == tuple(CONTROLLERS)

@@ -1,7 +1,7 @@
 """The CasADi right-hand sides against an independent SymPy derivation.
 
 The reference is built with ``sympy.physics.mechanics``: particles and rigid
-bodies placed in an inertial frame, gravity, springs, dampers and the joint
+bodies (links, and a robot's geared motor rotors) placed in an inertial frame, gravity, springs, dampers and the joint
 torques applied as *forces and torques* (``LagrangesMethod`` with the kinetic
 energy alone as Lagrangian). pendulab instead builds T, V and a Rayleigh
 function and differentiates them in CasADi, so the two paths share only the
@@ -23,10 +23,11 @@ RTOL = 1e-10
 N_SAMPLES = 25
 
 
-def _torque_loads(N, A, B, tau1, tau2, b1, b2, w1, w2):
-    """Joint 1 (ground-link 1) and joint 2 (link 1-link 2): actuator and damper, action and reaction."""
-    joint1 = tau1 - b1 * w1
-    joint2 = tau2 - b2 * (w2 - w1)
+def _torque_loads(N, A, B, tau1, tau2, b1, b2, w1, w2, cf1=0, cf2=0):
+    """Joint 1 (ground-link 1) and joint 2 (link 1-link 2): actuator, damper and Coulomb friction
+    (RealAIGym's smoothed ``cf atan(100 q')``), action and reaction."""
+    joint1 = tau1 - b1 * w1 - cf1 * sp.atan(100 * w1)
+    joint2 = tau2 - b2 * (w2 - w1) - cf2 * sp.atan(100 * (w2 - w1))
     return [(A, (joint1 - joint2) * N.z), (B, joint2 * N.z)]
 
 
@@ -45,17 +46,26 @@ def _reference(kind):
     e1 = sp.sin(th1) * N.x - sp.cos(th1) * N.y
     e2 = sp.sin(th2) * N.x - sp.cos(th2) * N.y
     if kind == "rigid":
-        m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2 = p = sp.symbols("m1 m2 L1 L2 g b1 b2 lc1 lc2 I1 I2")
+        m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2, Ir, gr, cf1, cf2 = p = sp.symbols(
+            "m1 m2 L1 L2 g b1 b2 lc1 lc2 I1 I2 Ir gr cf1 cf2"
+        )
         q = [th1, th2]
         G1 = O.locatenew("G1", lc1 * e1)
         J = O.locatenew("J", L1 * e1)
         G2 = J.locatenew("G2", lc2 * e2)
-        for P in (G1, G2):
+        for P in (G1, G2, J):
             P.set_vel(N, P.pos_from(O).dt(N))
         link1 = me.RigidBody("link1", G1, A, m1, (me.inertia(A, 0, 0, I1), G1))
         link2 = me.RigidBody("link2", G2, B, m2, (me.inertia(B, 0, 0, I2), G2))
-        bodies = [link1, link2]
+        # Geared motor rotors (their mass is in the links'): rotor 1 on the ground turns at gr th1';
+        # rotor 2 on link 1 turns through a reversing gear at th1' - gr (th2' - th1') (RealAIGym's M_r).
+        R1 = N.orientnew("R1", "Axis", [gr * th1, N.z])
+        R2 = N.orientnew("R2", "Axis", [th1 - gr * (th2 - th1), N.z])
+        rotor1 = me.RigidBody("rotor1", O, R1, 0, (me.inertia(R1, 0, 0, Ir), O))
+        rotor2 = me.RigidBody("rotor2", J, R2, 0, (me.inertia(R2, 0, 0, Ir), J))
+        bodies = [link1, link2, rotor1, rotor2]
         loads = [(G1, -m1 * g * N.y), (G2, -m2 * g * N.y)]
+        friction = (cf1, cf2)
     else:
         m1, m2, L1, L2, g, b1, b2, k1, k2, c1, c2 = p = sp.symbols("m1 m2 L1 L2 g b1 b2 k1 k2 c1 c2")
         r1, r2 = me.dynamicsymbols("r1 r2")
@@ -65,6 +75,7 @@ def _reference(kind):
         for P in (P1, P2):
             P.set_vel(N, P.pos_from(O).dt(N))
         bodies = [me.Particle("bob1", P1, m1), me.Particle("bob2", P2, m2)]
+        friction = (0, 0)
         # Spring + dashpot tension along each link (positive = pulling the bob back).
         s1 = k1 * (r1 - L1) + c1 * r1.diff(t)
         s2 = k2 * (r2 - L2) + c2 * r2.diff(t)
@@ -72,7 +83,7 @@ def _reference(kind):
             (P1, -m1 * g * N.y - s1 * e1 + s2 * e2),
             (P2, -m2 * g * N.y - s2 * e2),
         ]
-    loads += _torque_loads(N, A, B, tau1, tau2, b1, b2, w1, w2)
+    loads += _torque_loads(N, A, B, tau1, tau2, b1, b2, w1, w2, *friction)
     T = sum(body.kinetic_energy(N) for body in bodies)
     lm = me.LagrangesMethod(T, q, forcelist=loads, frame=N)
     lm.form_lagranges_equations()
@@ -95,6 +106,7 @@ def _random_case(rng, kind):
             b1=rng.uniform(0.0, 0.5), b2=rng.uniform(0.0, 0.5),
             lc1=rng.uniform(0.1, 1.0) * L1, lc2=rng.uniform(0.1, 1.0) * L2,
             I1=rng.uniform(0.0, 0.3), I2=rng.uniform(0.0, 0.3),
+            Ir=rng.uniform(0.0, 0.01), gr=rng.uniform(1.0, 10.0), cf1=rng.uniform(0.0, 0.5), cf2=rng.uniform(0.0, 0.5),
         )  # fmt: skip
         x = np.concatenate([rng.uniform(-np.pi, np.pi, 2), rng.uniform(-5.0, 5.0, 2)])
     else:
@@ -145,3 +157,15 @@ def test_reference_is_sensitive_to_the_physics():
     p = model.p
     qdd_ref = np.linalg.solve(np.asarray(M_fun(x, u, p), float), np.asarray(F_fun(x, u, p), float).ravel())
     assert np.max(np.abs(wrong.rhs(x, u)[2:] - qdd_ref)) > 1e-3  # a 0.4 N.m.s damper at |dw| ~ 1 rad/s
+
+
+def test_reference_sees_the_rotors_and_the_friction():
+    """A model that dropped the rotor inertia or the Coulomb friction would be caught too."""
+    M_fun, F_fun = _reference("rigid")
+    model, x, u = _random_case(np.random.default_rng(5), "rigid")
+    model = model.with_params(Ir=0.005, gr=6.0, cf1=0.3, cf2=0.2)
+    qdd_ref = np.linalg.solve(np.asarray(M_fun(x, u, model.p), float), np.asarray(F_fun(x, u, model.p), float).ravel())
+    assert np.max(np.abs(model.rhs(x, u)[2:] - qdd_ref) / np.maximum(1.0, np.abs(qdd_ref))) < RTOL
+    for dropped in ({"Ir": 0.0}, {"cf1": 0.0}, {"cf2": 0.0}):
+        # gr^2 Ir = 0.18 kg m^2 against link inertias of ~0.1-1; 0.2-0.3 N m of friction at |w| ~ 1-5 rad/s
+        assert np.max(np.abs(model.with_params(**dropped).rhs(x, u)[2:] - qdd_ref)) > 1e-3, dropped

@@ -14,7 +14,67 @@ from ..integrate.trajectory import Trajectory
 from ..model.model import Model
 from . import CLIError
 
-__all__ = ["parse_number", "parse_settings", "trajectory_format", "write_trajectory", "summarize", "format_summary"]
+__all__ = [
+    "PLANT_HELP",
+    "add_plant_option",
+    "read_plant",
+    "plant_settings",
+    "parse_number",
+    "parse_settings",
+    "trajectory_format",
+    "write_trajectory",
+    "summarize",
+    "format_summary",
+]
+
+#: What ``--plant FILE`` means, in every command that takes it.
+PLANT_HELP = (
+    "an identified robot: the plant file `pendulab identify --out DIR` writes (DIR/plant.json), or c1 (the shipped "
+    "identification of RealAIGym's design C.1); its links, friction and rotor inertia replace the nominal plant"
+)
+
+
+def add_plant_option(parser: Any, scope: str = "") -> None:
+    """Declare ``--plant FILE`` on a parser (one wording everywhere; ``scope`` adds where it applies)."""
+    parser.add_argument("--plant", default=None, metavar="FILE", help=PLANT_HELP + (f" ({scope})" if scope else ""))
+
+
+def read_plant(args: Any) -> Any:
+    """The plant of ``--plant FILE`` (``None`` without it); a bad file is a CLIError naming the option.
+
+    Returns
+    -------
+    IdentifiedPlant or None
+        The validated plant file.
+    """
+    path = getattr(args, "plant", None)
+    if path is None:
+        return None
+    from ..model.plant_file import load_plant
+
+    try:
+        return load_plant(path)
+    except (OSError, ValueError, KeyError) as exc:
+        reason = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        raise CLIError(f"--plant {path}: {reason}") from None
+
+
+def plant_settings(args: Any, kind: str) -> dict[str, float]:
+    """The rigid-model parameters of ``--plant FILE`` (empty without it), for a model of ``kind``.
+
+    Commands merge them under their own ``--set`` values: ``{**plant_settings(args, kind), **settings}``.
+
+    Raises
+    ------
+    CLIError
+        A bad plant file, or ``--plant`` with an elastic model.
+    """
+    plant = read_plant(args)
+    if plant is None:
+        return {}
+    if kind != "rigid":
+        raise CLIError(f"--plant {args.plant}: a plant file describes a rigid robot; it does not apply to the {kind} model")
+    return plant.rigid_kwargs()
 
 
 def parse_number(option: str, text: str | None, *, positive: bool = False) -> float | None:
@@ -177,19 +237,52 @@ def format_summary(summaries: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-class ProgressBar:
-    """A tqdm bar on stderr fed by a ``progress(done, total)`` callback (ensembles, scorecards); a no-op when disabled."""
+class _LogLines:
+    """tqdm's output where stderr is not a terminal (a CI log, a file): each refresh a line of its own.
 
-    def __init__(self, desc: str, enabled: bool) -> None:
-        self.desc, self.enabled, self.bar = desc, enabled, None
+    tqdm redraws its bar with carriage returns, which a log keeps as one line of thousands of updates.
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> None:
+        line = text.replace("\r", "").rstrip()
+        if line:
+            self.stream.write(line + "\n")
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+
+#: Seconds between two progress lines in a log (a terminal redraws the bar continuously).
+LOG_INTERVAL_S = 30.0
+
+
+def _tqdm(desc: str, total: int | None, unit: str) -> Any:
+    from tqdm import tqdm
+
+    if sys.stderr.isatty():
+        return tqdm(total=total, desc=desc, unit=unit, smoothing=0.1, file=sys.stderr)
+    return tqdm(total=total, desc=desc, unit=unit, smoothing=0.1, file=_LogLines(sys.stderr), mininterval=LOG_INTERVAL_S,
+                ascii=True)  # fmt: skip
+
+
+class ProgressBar:
+    """A tqdm bar on stderr fed by a ``progress(done, total)`` callback (ensembles, scorecards); a no-op when disabled.
+
+    On a terminal the bar redraws in place; in a log (stderr not a terminal) it writes a line every
+    :data:`LOG_INTERVAL_S` seconds and one at the end.
+    """
+
+    def __init__(self, desc: str, enabled: bool, unit: str = "run") -> None:
+        self.desc, self.enabled, self.unit, self.bar = desc, enabled, unit, None
 
     def __call__(self, done: int, total: int) -> None:
         if not self.enabled:
             return
         if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, desc=self.desc, unit="run", smoothing=0.1, file=sys.stderr)
+            self.bar = _tqdm(self.desc, total, self.unit)
         self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
@@ -212,9 +305,7 @@ class ProgressBar:
         if not self.enabled:
             return
         if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=None, desc=self.desc, unit=unit, smoothing=0.1, file=sys.stderr)
+            self.bar = _tqdm(self.desc, None, unit)
         self.bar.update(n)
 
     def note(self, text: str) -> None:

@@ -14,6 +14,7 @@ import numpy as np
 from .._checks import bounded_int, relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
+from ._common import add_plant_option, plant_settings
 
 _DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0, "nmpc": 10.0}
 _CONTROLLERS = ("lqr", "swingup", "tvlqr", "nmpc")  # = pendulab.control.controllers.CONTROLLERS (not imported at parser build)
@@ -64,6 +65,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--param", nargs="*", default=[], metavar="NAME=VALUE", help="FMU parameters (also used for the controller design)"
     )
     p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
+    add_plant_option(
+        p,
+        "rigid: the FMU gets the identified robot's parameters; with --task the controller keeps the task's model, "
+        "without it --param overrides and the controller is designed on the identified robot",
+    )
     p.add_argument(
         "--estimator",
         choices=("ekf", "mmae"),
@@ -255,6 +261,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.fmu is not None and args.kind is not None:
         raise CLIError("--kind chooses the model to export; it does not apply with --fmu (the FMU says its kind)")
     kind = args.kind or "rigid"
+    robot = plant_settings(args, task.model.kind if task is not None else kind)
     actuation = args.actuation or "full"
     u_max = 20.0 if args.u_max is None else args.u_max
     if not (math.isfinite(u_max) and u_max > 0):
@@ -270,16 +277,26 @@ def run(args: argparse.Namespace) -> int:
             "(each step is a row of the result and a controller call)"
         )
     t_final = n_steps * comm_step  # a whole number of steps
+    plant_model = None
+    if robot:
+        from .. import make_model
+
+        plant_model = make_model("rigid", **robot)
     if task is None:
-        fmu = _fmu_for(kind, args.fmu, args.fmi_version, out)
+        fmu = _fmu_for(kind, args.fmu, args.fmi_version, out, plant_model, "identified" if robot else "")
     else:
-        fmu = _fmu_for(task.model.kind, args.fmu, args.fmi_version, out, task.model, task.name)
+        sim = task.model if plant_model is None else plant_model
+        fmu = _fmu_for(sim.kind, args.fmu, args.fmi_version, out, sim, task.name + ("-identified" if robot else ""))
     info = inspect_fmu(fmu)
+    missing = sorted(set(robot) - set(info.parameter_names))
+    if missing:
+        raise CLIError(f"--plant: the FMU {fmu} has no parameters {missing} (exported before pendulab modelled a drivetrain)")
     if task is not None:
-        # The task's parameters also go to the FMU explicitly (a user --fmu may carry other start values).
-        params = {n: float(getattr(task.model.params, n)) for n in info.parameter_names if n in task.model.param_names}
+        # The simulated robot's parameters also go to the FMU explicitly (a user --fmu may carry other start values).
+        sim = task.model if plant_model is None else plant_model
+        params = {n: float(getattr(sim.params, n)) for n in info.parameter_names if n in sim.param_names}
     else:
-        params = _named_values(args.param, info.parameter_names, "--param")
+        params = {**robot, **_named_values(args.param, info.parameter_names, "--param")}
     model = info.model(params)
     reference = None
     if args.reference is not None:
@@ -324,6 +341,7 @@ def run(args: argparse.Namespace) -> int:
         "actuation": task.problem.actuation if task is not None else actuation,
         "torque_limit": task.problem.torque_limit if task is not None else u_max,
         "params": params,
+        "plant": args.plant,
         "comm_step": comm_step,
         "sample_time": sample_time,
         "t_final": float(traj.t[-1]),

@@ -9,6 +9,7 @@ import zipfile
 from pathlib import Path
 
 from . import CLIError
+from ._common import add_plant_option, plant_settings
 
 
 def _parse_sets(items: list[str]) -> dict[str, float]:
@@ -33,7 +34,7 @@ def _export(args: argparse.Namespace) -> int:
     from ..fmu import export
     from ..model.model import make_model
 
-    model = make_model(args.model, **_parse_sets(args.set or []))
+    model = make_model(args.model, **{**plant_settings(args, args.model), **_parse_sets(args.set or [])})
     x0 = model.state(**_parse_sets(args.initial or [])) if args.initial else None
     path = export(
         model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0, platforms=args.platforms,
@@ -127,6 +128,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     e.add_argument("--model", choices=("rigid", "elastic"), required=True)
     e.add_argument("--set", action="append", metavar="NAME=VALUE", help="parameter start value (repeatable)")
     e.add_argument("--initial", action="append", metavar="STATE=VALUE", help="state start value (repeatable)")
+    add_plant_option(e, "--model rigid; --set overrides its values")
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     e.add_argument("--out", type=Path, required=True, help="output .fmu file")
     e.add_argument("--no-timestamp", action="store_true", help="omit generationDateAndTime (reproducible bytes)")

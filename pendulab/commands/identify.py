@@ -12,7 +12,8 @@ from ._common import CLIError, ProgressBar, parse_number, parse_settings
 
 __all__ = ["register", "run"]
 
-_DATASETS = ("c1",)
+#: Shipped data sets: their records, known geometry and prior (DFKI's model 1.0 of the robot; only its masses matter).
+_DATASETS = ("c1", "a0")
 
 
 def register(subparsers: Any) -> None:
@@ -31,7 +32,8 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--dataset",
         metavar="NAME",
-        help="use a shipped data set instead: c1 (RealAIGym design C.1, its eight excitation records)",
+        help="use a shipped data set instead: c1 (RealAIGym design C.1, its eight excitation records) or a0 "
+        "(design A.0, its nine sys-id records); sets the geometry and the prior to that robot's",
     )
     p.add_argument(
         "--columns",
@@ -40,14 +42,22 @@ def register(subparsers: Any) -> None:
         "time=t,q1=a1,q2=a2,tau1=u1,tau2=u2; default RealAIGym's (tau_meas1/2 the input)",
     )
     p.add_argument(
-        "--input", default="meas", metavar="KIND", help="RealAIGym columns: meas (tau_meas*, default) or con (tau_con*)"
+        "--input",
+        metavar="KIND",
+        help="RealAIGym columns: meas (tau_meas*) or con (tau_con*); default meas, con for --dataset a0 "
+        "(A.0's choice: the command predicted its held-out sys-id records better)",
     )
     p.add_argument("--cutoff", metavar="HZ", help="zero-phase low-pass cutoff [Hz] (default 8)")
     p.add_argument("--torque-limit", metavar="T1,T2", help="input torque saturation per joint [N.m] (samples at it are dropped)")
     p.add_argument(
         "--structure", default="auto", metavar="NAME", help="auto (default) | rigid | +viscous | +coulomb | +rotor | +offset"
     )
-    p.add_argument("--geometry", metavar="NAME=VALUE", action="append", help="known l1, l2 [m], g [m/s2], gr [-]; default C.1's")
+    p.add_argument(
+        "--geometry",
+        metavar="NAME=VALUE",
+        action="append",
+        help="known l1, l2 [m], g [m/s2], gr [-]; default the --dataset's robot's, C.1's for RECORD files",
+    )
     p.add_argument("--out", default="pendulab-out/identify", metavar="DIR", help="output folder (default pendulab-out/identify)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -55,16 +65,13 @@ def register(subparsers: Any) -> None:
 
 
 def _column_map(args: argparse.Namespace) -> Any:
-    from ..identify.records import REALAIGYM_COLUMNS, ColumnMap
+    from ..identify.records import REALAIGYM_COLUMNS, REALAIGYM_COMMAND_COLUMNS, ColumnMap
 
-    if args.input not in ("meas", "con"):
+    kind = args.input if args.input is not None else ("con" if args.dataset == "a0" else "meas")
+    if kind not in ("meas", "con"):
         raise CLIError(f"--input {args.input!r}: expected meas or con")
     if args.columns is None:
-        if args.input == "meas":
-            return REALAIGYM_COLUMNS
-        return ColumnMap(
-            time="time", angles=REALAIGYM_COLUMNS.angles, torques=("tau_con1", "tau_con2"), rates=REALAIGYM_COLUMNS.rates
-        )
+        return REALAIGYM_COLUMNS if kind == "meas" else REALAIGYM_COMMAND_COLUMNS
     roles = {}
     for item in args.columns.split(","):
         role, sep, name = item.partition("=")
@@ -81,12 +88,12 @@ def _column_map(args: argparse.Namespace) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pendulab identify``; return the exit status."""
-    from ..identify.datasets import C1_EXCITATION, c1_record
+    from ..identify.datasets import A0_SYSID, C1_EXCITATION, a0_record, c1_record
     from ..identify.pipeline import identify
-    from ..identify.plant_file import save_plant
-    from ..identify.published import C1_GEOMETRY, DFKI_C1
+    from ..identify.published import A0_GEOMETRY, C1_GEOMETRY, DFKI_A0, DFKI_C1
     from ..identify.records import read_record
     from ..identify.regressor import FIXED_NAMES, robot_to_standard
+    from ..model.plant_file import save_plant
 
     columns = _column_map(args)
     if args.dataset is not None and args.records:
@@ -94,12 +101,18 @@ def run(args: argparse.Namespace) -> int:
     if args.dataset is not None:
         if args.dataset not in _DATASETS:
             raise CLIError(f"--dataset {args.dataset!r}: expected one of {list(_DATASETS)}")
-        records = [c1_record(s, columns) for s in C1_EXCITATION]
+        if args.dataset == "a0":
+            records = [a0_record(s, columns) for s in A0_SYSID]
+            geometry, published, robot = A0_GEOMETRY, DFKI_A0, "A.0"
+        else:
+            records = [c1_record(s, columns) for s in C1_EXCITATION]
+            geometry, published, robot = C1_GEOMETRY, DFKI_C1, "C.1"
     else:
         if len(args.records) < 2:
-            raise CLIError(f"need at least two RECORD files (or --dataset c1), got {len(args.records)}")
+            raise CLIError(f"need at least two RECORD files (or --dataset c1 / a0), got {len(args.records)}")
         records = [read_record(path, columns) for path in args.records]
-    fixed = dict(C1_GEOMETRY)
+        geometry, published, robot = C1_GEOMETRY, DFKI_C1, "C.1"
+    fixed = dict(geometry)
     given = parse_settings(args.geometry)
     unknown = sorted(set(given) - set(FIXED_NAMES))
     if unknown:
@@ -115,11 +128,16 @@ def run(args: argparse.Namespace) -> int:
         if len(parts) != 2:
             raise CLIError(f"--torque-limit {args.torque_limit!r}: expected two numbers T1,T2 in N.m")
         limit = tuple(parse_number("--torque-limit", v, positive=True) for v in parts)  # type: ignore[assignment]
-    prior = robot_to_standard(DFKI_C1["1.0"])
+    prior = robot_to_standard(published["1.0"])
     bar = ProgressBar("output-error fit", enabled=not args.no_progress and sys.stderr.isatty())
+    # the robot's name labels every study run on this plant (pendulab.evaluate.realai.plant.plant_label)
+    meta = {
+        "robot": robot if args.dataset else "records", "prior": f"DFKI {robot} model 1.0 (masses only)",
+        **({"dataset": args.dataset} if args.dataset else {}),
+    }  # fmt: skip
     result = identify(
         records, fixed, prior, cutoff_hz=cutoff, torque_limit=limit, structure=args.structure,
-        progress=lambda it, rms: bar.iterate(1, unit="iteration"), meta={"prior": "DFKI C.1 model 1.0 (masses only)"},
+        progress=lambda it, rms: bar.iterate(1, unit="iteration"), meta=meta,
     )  # fmt: skip
     bar.close()
     out = Path(args.out)

@@ -8,7 +8,7 @@ import math
 import sys
 from typing import Any
 
-from ._common import CLIError, parse_settings
+from ._common import CLIError, add_plant_option, parse_settings, plant_settings
 
 __all__ = ["register", "run"]
 
@@ -29,6 +29,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--set", metavar="NAME=VALUE", action="append", default=None, help="parameter in SI units, e.g. k1=800; repeatable"
     )
+    add_plant_option(p, "--model rigid; --set overrides its values")
     p.add_argument("--equilibrium", default="all", metavar="NAME", help="down-down | down-up | up-down | up-up | all (default)")
     p.add_argument("--torque", metavar="TAU1,TAU2", help="constant torques [N.m] holding the arm, e.g. 2,0.5")
     p.add_argument("--controllability", action="store_true", help="also report controllability/observability per actuation")
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
     if args.equilibrium != "all" and args.equilibrium not in EQUILIBRIUM_NAMES:
         raise CLIError(f"--equilibrium {args.equilibrium!r}: expected one of {[*EQUILIBRIUM_NAMES, 'all']}")
-    model = make_model(args.model, **parse_settings(args.set))
+    model = make_model(args.model, **{**plant_settings(args, args.model), **parse_settings(args.set)})
     torque = _parse_torque(args.torque)
     eqs = equilibria(model, torque) if args.equilibrium == "all" else [equilibrium(model, args.equilibrium, torque)]
 

@@ -13,7 +13,7 @@ from .._checks import bounded_int
 from .._io import atomic_write_text
 from .._version import __version__
 from . import CLIError
-from ._common import ProgressBar, parse_number
+from ._common import ProgressBar, add_plant_option, parse_number, read_plant
 
 __all__ = ["register", "run_score"]
 
@@ -41,7 +41,10 @@ def register(subparsers: Any) -> None:
         ),
     )
     p.add_argument(
-        "--controller", default=None, metavar="NAME", help="lqr | tvlqr | swingup | nmpc (--realai, --protocol: also best)"
+        "--controller",
+        default=None,
+        metavar="NAME",
+        help=f"scorecard: {' | '.join(_SCORECARD_CONTROLLERS)}; --realai and --protocol: {' | '.join(_REALAI_CONTROLLERS)}",
     )
     p.add_argument(
         "--task", default=None, metavar="TASK", help="swing-up task name (pendulab swingup --list); --realai: pendubot | acrobot"
@@ -92,12 +95,20 @@ def register(subparsers: Any) -> None:
         help="--leaderboard: RealAIGym controllers for all three protocols (default: v2 best,tvlqr,robust,global,replan; "
         "robustness-v2 best,tvlqr,robust; v3 best,global,replan)",
     )
+    add_plant_option(p, "the scorecard of a rigid task, --realai and every --protocol; the controller keeps its design model")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--realai", action="store_true", help="RealAIGym simulation leaderboard score (pendubot | acrobot)")
     mode.add_argument("--leaderboard", action="store_true", help="regenerate the leaderboard (all controllers x tasks)")
     p.set_defaults(func=run_score)
 
+
+#: Controller names, written here so that ``--help`` does not import the controllers (tests/test_cli_plant.py
+#: checks them against ``TASK_CONTROLLERS`` and the RealAIGym ``CONTROLLERS``).
+_SCORECARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc", "robust")
+_REALAI_CONTROLLERS: tuple[str, ...] = (
+    "best", "tvlqr", "lqr", "swingup", "nmpc", "rti", "robust", "global", "replan", "replan_delayed", "library",
+)  # fmt: skip
 
 #: RealAIGym protocols of ``--protocol`` (``v2`` is ``--realai``).
 PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
@@ -155,10 +166,15 @@ def run_score(args: argparse.Namespace) -> int:
         raise CLIError("--quick applies to --protocol robustness-v2 and --leaderboard only")
     if args.controllers is not None and not args.leaderboard:
         raise CLIError("--controllers applies to --leaderboard only (use --controller NAME otherwise)")
+    if args.plant is not None and args.leaderboard:
+        raise CLIError("--plant does not apply to --leaderboard (it scores the nominal and the shipped identified C.1 plant)")
+    plant = read_plant(args)
+    from ..evaluate.realai.plant import plant_label
+
     if args.protocol in ("robustness-v2", "v3"):
         if args.controller is None or args.task is None:
             raise CLIError(f"--protocol {args.protocol} needs --controller and --task")
-        return _run_protocol(args)
+        return _run_protocol(args, plant)
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     runs = _int("--runs", args.runs, 1, MAX_RUNS, "runs per level of each stochastic category", 20)
     if args.leaderboard:
@@ -169,7 +185,7 @@ def run_score(args: argparse.Namespace) -> int:
         _reject(
             args, "--realai (one deterministic leaderboard run)", (*_SCORECARD_ONLY, ("workers", "--workers"), ("runs", "--runs"))
         )
-        return _run_realai(args)
+        return _run_realai(args, plant)
     from ..control.controllers import TASK_CONTROLLERS
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task, task_names
@@ -194,10 +210,14 @@ def run_score(args: argparse.Namespace) -> int:
     seed = _int("--seed", args.seed, 0, 2**63 - 1, "a seed of numpy's SeedSequence", 0)
     budget = parse_number("--max-wall-time", args.max_wall_time, positive=True)
     fed = f"+{args.estimator}" if args.estimator else ""
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"{args.controller}{fed}-{task.name}"
+    out = (
+        Path(args.out)
+        if args.out
+        else Path("pendulab-out") / "score" / f"{args.controller}{fed}-{task.name}{_plant_suffix(plant)}"
+    )
     # estimator None matches records files written before the option (data.get("estimator") is None).
     settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats,
-                "estimator": args.estimator}  # fmt: skip
+                "estimator": args.estimator, "plant": plant_label(plant)}  # fmt: skip
     completed = _resume(out / _RECORDS, settings) if args.resume else ()
 
     def save(records: tuple, complete: bool = False) -> None:
@@ -218,7 +238,7 @@ def run_score(args: argparse.Namespace) -> int:
         with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
             card = score(
                 args.controller, task, runs=runs, categories=cats, seed=seed, workers=workers, progress=progress,
-                completed=completed, on_records=save, max_wall_time=budget, estimator=args.estimator,
+                completed=completed, on_records=save, max_wall_time=budget, estimator=args.estimator, plant=plant,
             )  # fmt: skip
     finally:
         planning.close()
@@ -298,12 +318,18 @@ def _resume(path: Path, settings: dict[str, Any]) -> tuple:
         records = tuple(record_from_dict(r) for r in data["records"])
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CLIError(f"--resume: {path} is not a scorecard records file ({exc})") from None
+    data = {"plant": "nominal", **data}  # records files written before --plant ran the nominal plant
     differ = {k: (data.get(k), v) for k, v in settings.items() if data.get(k) != v}
     if differ:
         what = ", ".join(f"{k} {old!r} there, {new!r} now" for k, (old, new) in differ.items())
         raise CLIError(f"--resume: {path} was written with other settings ({what}); use another --out or drop --resume")
     print(f"--resume: {len(records)} runs already recorded in {path}", file=sys.stderr)
     return records
+
+
+def _plant_suffix(plant: Any) -> str:
+    """Default output directories of a run on an identified plant end in ``-identified`` (the nominal run's stay)."""
+    return "" if plant is None else "-identified"
 
 
 def _protocol_task(args: argparse.Namespace) -> str:
@@ -315,14 +341,14 @@ def _protocol_task(args: argparse.Namespace) -> str:
     return task
 
 
-def _run_protocol(args: argparse.Namespace) -> int:
+def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
     """``--protocol robustness-v2`` and ``--protocol v3``."""
     common = (
         ("runs", "--runs"), ("categories", "--categories"), ("max_wall_time", "--max-wall-time"), ("estimator", "--estimator")
     )  # fmt: skip
     if args.protocol == "v3":
         _reject(args, "--protocol v3", (*common, ("workers", "--workers"), ("resume", "--resume")))
-        return _run_v3(args)
+        return _run_v3(args, plant)
     _reject(args, "--protocol robustness-v2", common)
     task = _protocol_task(args)
     from ..evaluate.realai.controllers import CONTROLLERS
@@ -332,7 +358,11 @@ def _run_protocol(args: argparse.Namespace) -> int:
         raise CLIError(f"--controller {args.controller!r}: --protocol robustness-v2 expects one of {list(CONTROLLERS)}")
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of numpy's legacy RandomState (upstream's np.random.seed)", 0)
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}"
+    out = (
+        Path(args.out)
+        if args.out
+        else Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}{_plant_suffix(plant)}"
+    )
     journal = out / "runs.json"
     if args.resume and not journal.is_file():
         print(f"--resume: no {journal}; starting a new run", file=sys.stderr)
@@ -340,8 +370,9 @@ def _run_protocol(args: argparse.Namespace) -> int:
     bar = ProgressBar(f"robustness-v2 {args.controller} on {task}", not args.no_progress)
     try:
         res = robustness_v2(
-            task, args.controller, seed=seed, workers=workers, progress=bar, journal=journal, resume=args.resume, **quick
-        )
+            task, args.controller, seed=seed, workers=workers, progress=bar, journal=journal, resume=args.resume,
+            plant=plant, **quick,
+        )  # fmt: skip
     except ValueError as exc:
         if "journal" in str(exc):
             raise CLIError(f"--resume: {exc}") from None
@@ -371,10 +402,10 @@ def _run_protocol(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_v3(args: argparse.Namespace) -> int:
+def _run_v3(args: argparse.Namespace, plant: Any) -> int:
     task = _protocol_task(args)
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of the v3 protocol's resets", 0)
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}"
+    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}{_plant_suffix(plant)}"
     try:
         from ..evaluate.realai.v3 import v3_score
     except ImportError as exc:
@@ -389,7 +420,7 @@ def _run_v3(args: argparse.Namespace) -> int:
             plans.close()
     bar = ProgressBar(f"v3 {args.controller} on {task}", not args.no_progress)
     try:
-        res = v3_score(task, args.controller, seed=seed, progress=bar, out=out)
+        res = v3_score(task, args.controller, seed=seed, progress=bar, out=out, plant=plant)
     except ValueError as exc:
         raise CLIError(f"--protocol v3 (--controller {args.controller!r}): {exc}") from None
     finally:
@@ -405,7 +436,7 @@ def _run_v3(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_realai(args: argparse.Namespace) -> int:
+def _run_realai(args: argparse.Namespace, plant: Any) -> int:
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import short_name
 
@@ -415,20 +446,23 @@ def _run_realai(args: argparse.Namespace) -> int:
     from ..evaluate.realai import CONTROLLER_NAMES, realai_score
 
     if args.controller not in CONTROLLER_NAMES:
-        raise CLIError(f"--controller {args.controller!r}: --realai expects one of {list(CONTROLLER_NAMES)}")
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}"
+        raise CLIError(
+            f"--controller {args.controller!r}: the RealAIGym protocols (--realai, --protocol) expect one of "
+            f"{list(CONTROLLER_NAMES)}"
+        )
+    out = (
+        Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}{_plant_suffix(plant)}"
+    )
     planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
-    steps = ProgressBar(f"RealAIGym run ({args.controller} on {task}, 5000 steps of 2 ms)", not args.no_progress)
-    last = [0]
+    steps = ProgressBar(f"RealAIGym run ({args.controller} on {task}, 5000 steps of 2 ms)", not args.no_progress, "step")
     try:
         with observe(lambda: planning.iterate(1, "iter"), lambda d: planning.note(f"building the NLP ({d}) ...")):
 
             def run_progress(done: int, total: int) -> None:
                 planning.close()
-                steps.iterate(done - last[0], "step")
-                last[0] = done
+                steps(done, total)
 
-            result = realai_score(task, args.controller, progress=run_progress)
+            result = realai_score(task, args.controller, progress=run_progress, plant=plant)
     finally:
         planning.close()
         steps.close()

@@ -11,7 +11,17 @@ from typing import Any
 
 import numpy as np
 
-from ._common import CLIError, format_summary, parse_number, parse_settings, summarize, trajectory_format, write_trajectory
+from ._common import (
+    CLIError,
+    add_plant_option,
+    format_summary,
+    parse_number,
+    parse_settings,
+    plant_settings,
+    summarize,
+    trajectory_format,
+    write_trajectory,
+)
 
 __all__ = ["register", "run"]
 
@@ -58,6 +68,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--rtol", metavar="TOL", help="relative tolerance")
     p.add_argument("--atol", metavar="TOL", help="absolute tolerance")
+    add_plant_option(p, "a rigid --model or --scene; --set overrides its values")
     p.add_argument("--out", metavar="FILE", help="write the trajectory: .csv (header t, states, inputs, outputs) or .npz")
     p.add_argument("--plot", metavar="DIR", help="write the figures (PNG) into DIR")
     p.add_argument("--json", action="store_true", help="print the summary as JSON instead of a table")
@@ -89,6 +100,7 @@ def run(args: argparse.Namespace) -> int:
         trajectory_format(args.out)  # fail before simulating
 
     scene = load_scene(args.scene) if args.scene is not None else default_scene(args.model)
+    settings = {**plant_settings(args, scene.model.kind), **settings}
     if settings:
         scene = scene.with_settings(**settings)
     given = {k: v for k, v in overrides.items() if v is not None}

@@ -11,6 +11,7 @@ from typing import Any
 from .._checks import bounded_int
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
+from ._common import add_plant_option
 
 __all__ = ["register"]
 
@@ -46,6 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--starts", type=int, default=0, help="also track the plan from this many randomized starts near the start (success rate)"
     )
+    add_plant_option(p, "a rigid task: the plan and the closed loop use the identified robot")
     p.add_argument("--out", help="output directory (default ./pendulab-out/swingup/TASK)")
     p.add_argument("--max-wall-time", type=float, help="wall-time budget [s] of the planning (IPOPT stops once it is spent)")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout (messages go to stderr)")
@@ -77,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task, task_names
     from ..control.swingup.transcription import INTERVALS_WHY, MAX_INTERVALS
-    from ._common import ProgressBar, parse_number
+    from ._common import ProgressBar, parse_number, plant_settings
 
     if args.list:
         for name in task_names():
@@ -95,11 +97,16 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--starts must be >= 0, got {args.starts}")
     budget = parse_number("--max-wall-time", None if args.max_wall_time is None else str(args.max_wall_time), positive=True)
     task = load_task(args.task or args.scene)
+    robot = plant_settings(args, task.model.kind)
+    if robot:  # plan (and run the closed loop) on the identified robot: its friction and rotor inside the NLP
+        from ..model.model import make_model
+
+        task = task.with_model(make_model("rigid", **robot))
     if args.planning not in (None, "auto", "rigid") and task.model.kind != "elastic":
         raise CLIError(f"--planning {args.planning} applies to elastic tasks only; task {task.name!r} is rigid")
     # With --json, stdout carries the summary alone: every message goes to stderr.
     say = (lambda *a, **k: print(*a, **k, file=sys.stderr)) if args.json else print
-    out = Path(args.out) if args.out else Path("pendulab-out") / "swingup" / task.name
+    out = Path(args.out) if args.out else Path("pendulab-out") / "swingup" / (task.name + ("-identified" if robot else ""))
     out.mkdir(parents=True, exist_ok=True)
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={N or task.N}) ...", file=sys.stderr)
     bar = ProgressBar(f"[swingup] planning {task.name} (IPOPT)", not args.no_progress)

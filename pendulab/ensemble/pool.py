@@ -125,6 +125,9 @@ def shutdown_now(pool: Executor) -> None:
                 p.terminate()
         for p in procs:
             p.join(timeout=5.0)
+            if p.is_alive():  # a worker that a loaded machine has not let handle SIGTERM yet: no worker outlives the pool
+                p.kill()
+                p.join(timeout=5.0)
 
 
 @contextlib.contextmanager

@@ -28,6 +28,8 @@ from ..control.controllers import controller_for_task
 from ..control.feedback import SampledController
 from ..control.swingup.tasks import resolve_task
 from ..ensemble.pool import default_workers, map_runs
+from ..model.model import rigid
+from ..model.plant_file import IdentifiedPlant
 
 # Category, categories_for, record_from_dict: re-exported (the old pendulab.control.scorecard had them).
 from .card import CategoryScore, RunKey, RunRecord, Scorecard, record_from_dict, run_key  # noqa: F401
@@ -132,6 +134,7 @@ def score(
     on_records: Callable[[tuple[RunRecord, ...]], None] | None = None,
     max_wall_time: float | None = None,
     estimator: Any = None,
+    plant: IdentifiedPlant | None = None,
 ) -> Scorecard:
     """Robustness scorecard of a controller on a swing-up task.
 
@@ -172,6 +175,10 @@ def score(
         :func:`~pendulab.control.robust.build_estimator` on the task's model at the controller's
         sample time from the start state, and reset with the controller before each run). The
         measurement-noise and delay categories then act on the filter's input.
+    plant : IdentifiedPlant, optional
+        Run every episode on an identified robot (``pendulab identify``; a rigid task only)
+        instead of the task's model; the controller is still designed on the task's model (as on
+        the real robot), the model-parameter categories perturb the identified values.
 
     Returns
     -------
@@ -203,7 +210,17 @@ def score(
     # Every selection is checked before the controller is designed (a tvlqr or nmpc plan takes seconds).
     names = _check_selection(resolve_task(task), categories, levels)
     est_name = _check_estimator(estimator)
+    plant_model = None
+    if plant is not None:
+        if not isinstance(plant, IdentifiedPlant):
+            raise TypeError(
+                f"plant must be an IdentifiedPlant (pendulab.model.plant_file.load_plant), got {type(plant).__name__}"
+            )
+        plant_model = rigid(**plant.rigid_kwargs())
+        resolve_task(task).with_model(plant_model)  # a kind mismatch raises here, before the design
     tk, cname, ctrl, x0 = _resolve(controller, task, estimator)
+    if plant_model is not None:  # the controller above is designed on the task; the episodes below run on the plant
+        tk = tk.with_model(plant_model)
     plan: list[tuple[str, int, float, int, tuple[int, ...]]] = []
     for name in names:
         cat = CATEGORIES[name]

@@ -47,6 +47,7 @@ UNITS: dict[str, tuple[dict[str, int], tuple[str, float] | None]] = {
     "N/m": ({"kg": 1, "s": -2}, None),
     "N.s/m": ({"kg": 1, "s": -1}, None),
     "N.m.s/rad": ({"kg": 1, "m": 2, "s": -1, "rad": -1}, None),
+    "1": ({}, None),  # dimensionless (the gear ratio)
 }
 #: ``min`` of a variable that must be > 0: FMI has no exclusive bound; the smallest positive double
 #: (subnormal 2**-1074) makes ``value >= min`` the same as ``value > 0`` for every double.

@@ -5,12 +5,12 @@ fitted by a physically consistent regression on the symbolic inverse dynamics
 (:mod:`~pendulab.identify.regressor`, :mod:`~pendulab.identify.fit`), refined on the measured angles
 by multiple shooting (:mod:`~pendulab.identify.output_error`), the structure chosen by held-out
 error (:mod:`~pendulab.identify.pipeline`), written as a plant file
-(:mod:`~pendulab.identify.plant_file`) and judged leave-one-record-out beside published sets
+(:mod:`~pendulab.model.plant_file`) and judged leave-one-record-out beside published sets
 (:mod:`~pendulab.identify.validation`). See ``docs/identification.md``.
 """
 
+from ..model.plant_file import IdentifiedPlant, load_plant, save_plant
 from .pipeline import STRUCTURES, Identification, identify
-from .plant_file import IdentifiedPlant, load_plant, save_plant
 from .records import REALAIGYM_COLUMNS, ColumnMap, Record, RecordError, read_record
 
 __all__ = [

@@ -1,7 +1,8 @@
 """Identification end to end: structures compared, the chosen one fitted, refined and given intervals.
 
-1. Every record is prepared (:func:`pendulab.identify.preprocess.prepare`) and reduced to its
-   normal equations.
+1. Every record is prepared (:func:`pendulab.identify.preprocess.prepare`; records sampled
+   differently on one common grid, :func:`~pendulab.identify.preprocess.common_interval`) and
+   reduced to its normal equations.
 2. **Structure from the data.** The nested structures :data:`STRUCTURES` (ideal rigid links;
    + viscous friction; + Coulomb friction; + rotor inertia; + torque-reading offsets) are fitted by
    the consistent regression and compared by the leave-one-record-out torque residual and by
@@ -19,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.plant_file import IdentifiedPlant
 from .fit import INERTIAL, Normals, fit_regression, normals, realize, regressor_rows
 from .output_error import OutputErrorFit, fit_output_error
-from .plant_file import IdentifiedPlant
-from .preprocess import DEFAULT_CUTOFF_HZ, Prepared, prepare
+from .preprocess import DEFAULT_CUTOFF_HZ, Prepared, common_interval, prepare
 from .records import Record
 from .regressor import STANDARD_NAMES, BaseParameters, base_parameters, standard_to_robot
 
@@ -249,7 +250,8 @@ def identify(
         raise ValueError(f"structure must be 'auto' or one of {names}, got {structure!r}")
     if len(records) < 2:
         raise ValueError(f"identification needs at least two records (one is held out to compare structures), got {len(records)}")
-    preps = tuple(prepare(r, cutoff_hz, torque_limit) for r in records)
+    grid = common_interval(records)  # records sampled differently share the coarsest grid (the output-error fit needs one)
+    preps = tuple(prepare(r, cutoff_hz, torque_limit, grid) for r in records)
     data = [normals(p, fixed) for p in preps]
     scores = compare_structures(data, preps, fixed, prior, cutoff_hz)
     chosen = choose_structure(scores) if structure == "auto" else scores[names.index(structure)]

@@ -4,7 +4,9 @@ Decisions (each measured on RealAIGym's C.1 records, see ``docs/identification.m
 
 * **Non-uniform stamps** (2.0-3.7 ms on the robot) are resampled onto a uniform grid at the
   record's median interval by linear interpolation; the few long intervals are far shorter than
-  the motion's time scales (the excitation is below 5 Hz).
+  the motion's time scales (the excitation is below 5 Hz). Records sampled differently (A.0's
+  sys-id runs at 2 ms beside one at 1.5 ms) are fitted together on one grid,
+  :func:`common_interval`: the coarsest record's, so no record is given samples finer than its own.
 * **Zero-phase differentiation**: the angles pass a zero-phase Butterworth low-pass (4th order,
   applied forwards and backwards, so no lag between angles, rates, accelerations and torques),
   then central differences give rates and accelerations. The torque passes the *same* filter for
@@ -20,6 +22,7 @@ Decisions (each measured on RealAIGym's C.1 records, see ``docs/identification.m
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,13 +30,16 @@ from scipy.signal import butter, sosfiltfilt
 
 from .records import Record, RecordError
 
-__all__ = ["Prepared", "prepare", "quantum", "DEFAULT_CUTOFF_HZ"]
+__all__ = ["Prepared", "prepare", "quantum", "common_interval", "DEFAULT_CUTOFF_HZ", "GRID_TOLERANCE"]
 
 #: Default low-pass cutoff [Hz]: above the excitation's band, below the quantization noise (see the module docstring).
 DEFAULT_CUTOFF_HZ = 8.0
 
 #: Largest fraction of a record's samples that may be saturated.
 MAX_SATURATED_FRACTION = 0.5
+
+#: Records whose median intervals agree to this fraction keep their own grids (the output-error fit's tolerance).
+GRID_TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -111,8 +117,38 @@ def quantum(x: np.ndarray) -> float:
     return float(gaps.min()) if gaps.size else 0.0
 
 
+def common_interval(records: Sequence[Record]) -> float | None:
+    """The grid interval records must share to be fitted together, or None if their own grids agree.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records (at least one).
+
+    Returns
+    -------
+    float or None
+        None if every record's median interval is within :data:`GRID_TOLERANCE` of the others'
+        (each keeps its own grid); else the largest median interval [s].
+
+    Raises
+    ------
+    ValueError
+        No records.
+    """
+    if not records:
+        raise ValueError("common_interval needs at least one record")
+    medians = np.array([float(np.median(np.diff(r.t))) for r in records])
+    if medians.max() <= medians.min() * (1.0 + GRID_TOLERANCE):
+        return None
+    return float(medians.max())
+
+
 def prepare(
-    record: Record, cutoff_hz: float = DEFAULT_CUTOFF_HZ, torque_limit: tuple[float, float] = (np.inf, np.inf)
+    record: Record,
+    cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+    torque_limit: tuple[float, float] = (np.inf, np.inf),
+    dt: float | None = None,
 ) -> Prepared:
     """Resample, filter and differentiate one record (see the module docstring).
 
@@ -124,6 +160,9 @@ def prepare(
         Low-pass cutoff [Hz], below half the sampling rate.
     torque_limit : tuple of float, default (inf, inf)
         Per joint, the magnitude at which the input torque saturates [N.m].
+    dt : float, optional
+        Grid interval [s]; default the record's median interval (:func:`common_interval` gives the
+        one of several records fitted together).
 
     Returns
     -------
@@ -134,11 +173,15 @@ def prepare(
     ------
     ValueError
         ``cutoff_hz`` not positive or not below half the sampling rate; ``torque_limit`` not two
-        positive numbers.
+        positive numbers; ``dt`` not positive or longer than a tenth of the record.
     RecordError
         The record is too short for the filter, or more than half its samples are saturated.
     """
-    dt = float(np.median(np.diff(record.t)))
+    if dt is None:
+        dt = float(np.median(np.diff(record.t)))
+    elif not (np.isfinite(dt) and 0.0 < dt <= 0.1 * record.duration):
+        raise ValueError(f"dt must be in (0, {0.1 * record.duration:.4g}] s (a tenth of {record.name!r}), got {dt!r}")
+    dt = float(dt)
     nyquist = 0.5 / dt
     if not (np.isfinite(cutoff_hz) and 0.0 < cutoff_hz < nyquist):
         raise ValueError(

@@ -3,8 +3,10 @@
 A record is a table of samples in joint coordinates (``q2`` relative to link 1, as robots and
 RealAIGym write them): time stamps, the two joint angles, optionally the measured joint rates, and
 the two joint torques the user names as the *input* (a measured torque, or the commanded one).
-RealAIGym's CSV columns are :data:`REALAIGYM_COLUMNS`; anyone's data maps its own names with
-:class:`ColumnMap`. Time stamps need not be uniform (the robot's loop runs at 2.0-3.7 ms), but
+RealAIGym's CSV columns are :data:`REALAIGYM_COLUMNS` (the measured torque as the input; its
+commanded torque: :data:`REALAIGYM_COMMAND_COLUMNS`; its 2022 ``*_measured.csv`` files, which hold only
+the command: :data:`REALAIGYM_2022_COLUMNS`); anyone's data maps its own names with :class:`ColumnMap`.
+Time stamps need not be uniform (the robot's loop runs at 1.2-5.8 ms), but
 they must increase strictly: a repeated or backwards stamp is an error, not something to guess
 around. Every check raises :class:`RecordError` (a ``ValueError``) naming the record and the column.
 """
@@ -18,7 +20,16 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["RecordError", "ColumnMap", "REALAIGYM_COLUMNS", "Record", "read_record", "make_record"]
+__all__ = [
+    "RecordError",
+    "ColumnMap",
+    "REALAIGYM_COLUMNS",
+    "REALAIGYM_COMMAND_COLUMNS",
+    "REALAIGYM_2022_COLUMNS",
+    "Record",
+    "read_record",
+    "make_record",
+]
 
 #: Fewest samples a record may have: differentiation and filtering need a few filter lengths.
 MIN_SAMPLES = 50
@@ -66,6 +77,16 @@ class ColumnMap:
 REALAIGYM_COLUMNS = ColumnMap(
     time="time", angles=("pos_meas1", "pos_meas2"), torques=("tau_meas1", "tau_meas2"), rates=("vel_meas1", "vel_meas2")
 )
+
+#: RealAIGym's record columns with the commanded torque as the input.
+REALAIGYM_COMMAND_COLUMNS = ColumnMap(
+    time="time", angles=("pos_meas1", "pos_meas2"), torques=("tau_con1", "tau_con2"), rates=("vel_meas1", "vel_meas2")
+)
+
+#: RealAIGym's 2022 ``*_measured.csv`` layout (design A.0's runs of 2022-08-12): one torque per joint,
+#: the *commanded* one (continuous values, not a reading's steps; it matches ``tau_con`` of the same
+#: excitation recorded again in the later layout).
+REALAIGYM_2022_COLUMNS = ColumnMap(time="time", angles=("pos1", "pos2"), torques=("tau1", "tau2"), rates=("vel1", "vel2"))
 
 
 @dataclass(frozen=True)

@@ -427,6 +427,14 @@ class Registry(Mapping[str, MethodSpec]):
     def __len__(self) -> int:
         return len(self._specs)
 
+    def __repr__(self) -> str:
+        # what print(pl.METHODS) shows: the names, grouped by family, not an object address
+        families: dict[str, list[str]] = {}
+        for spec in self._specs.values():
+            families.setdefault(spec.family, []).append(spec.name)
+        groups = "; ".join(f"{family}: {', '.join(names)}" for family, names in families.items())
+        return f"<{len(self._specs)} integration methods: {groups}>"
+
     def resolve(self, method: Any) -> MethodSpec:
         """Look up a method by name (case-insensitive; deprecated names warn).
 

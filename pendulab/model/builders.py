@@ -21,7 +21,11 @@ import casadi as ca
 from .lagrange import LagrangeSystem, lagrange_equations
 from .params import ElasticParams, RigidParams
 
-__all__ = ["SymbolicModel", "build_rigid", "build_elastic", "STATE_NAMES"]
+__all__ = ["SymbolicModel", "build_rigid", "build_elastic", "STATE_NAMES", "COULOMB_SHARPNESS"]
+
+#: Slope of the smoothed Coulomb friction ``cf atan(COULOMB_SHARPNESS q')`` at rest [s/rad]
+#: (RealAIGym's ``DoublePendulumPlant`` uses 100).
+COULOMB_SHARPNESS = 100.0
 
 #: State names of each model kind (the one place they are typed): angles, [spring lengths,] their rates.
 STATE_NAMES: dict[str, tuple[str, ...]] = {
@@ -50,7 +54,7 @@ class SymbolicModel:
         Kinetic energy, total potential energy (gravity + springs) and the
         spring part of it [J].
     dissipation : casadi.SX
-        Power dissipated by the dampers, 2 D [W].
+        Power dissipated by the dampers (2 D) and the Coulomb friction [W].
     power_in : casadi.SX
         Power delivered by the torques, tau1 w1 + tau2 (w2 - w1) [W].
     positions : casadi.SX, shape (4, 1)
@@ -96,6 +100,22 @@ def _joint_terms(theta: ca.SX, omega: ca.SX, u: ca.SX, b1: ca.SX, b2: ca.SX) -> 
     return Q_theta, D, power
 
 
+def _drivetrain_terms(theta: ca.SX, omega: ca.SX, Ir: ca.SX, gr: ca.SX, cf1: ca.SX, cf2: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """A robot's geared motors: rotor kinetic energy, Coulomb friction's generalized forces and its power.
+
+    The rotors turn at ``gr q'`` about the joints (RealAIGym's ``DoublePendulumPlant``): kinetic
+    energy ``1/2 q'^T M_r q'`` with ``M_r = [[gr^2 Ir + Ir, -gr Ir], [-gr Ir, gr^2 Ir]]`` in joint
+    rates ``q' = (omega1, omega2 - omega1)``; the friction ``cf atan(100 q')`` opposes each joint rate.
+    """
+    joint_angle = ca.vertcat(theta[0], theta[1] - theta[0])
+    J = ca.jacobian(joint_angle, theta)
+    rate = J @ omega
+    M_rotor = ca.vertcat(ca.horzcat(gr**2 * Ir + Ir, -gr * Ir), ca.horzcat(-gr * Ir, gr**2 * Ir))
+    T_rotor = 0.5 * ca.dot(rate, M_rotor @ rate)
+    friction = ca.vertcat(cf1 * ca.atan(COULOMB_SHARPNESS * rate[0]), cf2 * ca.atan(COULOMB_SHARPNESS * rate[1]))
+    return T_rotor, -J.T @ friction, ca.dot(friction, rate)
+
+
 def _assemble(
     kind: str,
     q: ca.SX,
@@ -112,9 +132,11 @@ def _assemble(
     positions: ca.SX,
     stretch: ca.SX,
     state_names: tuple[str, ...],
+    extra_kinetic: ca.SX | float = 0.0,
+    extra_dissipation: ca.SX | float = 0.0,
 ) -> SymbolicModel:
     # Velocities are derived, not typed: v = (d pos / dq) q'.
-    T = 0
+    T = extra_kinetic
     V = spring_V
     for mass, pos in com_positions:
         vel = ca.jtimes(pos, q, qd)
@@ -137,7 +159,7 @@ def _assemble(
         kinetic=T,
         potential=V,
         spring=spring_V,
-        dissipation=2 * D,
+        dissipation=2 * D + extra_dissipation,
         power_in=power_in,
         positions=positions,
         stretch=stretch,
@@ -147,16 +169,17 @@ def _assemble(
 
 @cache
 def build_rigid() -> SymbolicModel:
-    """Rigid double pendulum, 2 DOF, parameters in ``RigidParams`` order."""
+    """Rigid double pendulum, 2 DOF, parameters in ``RigidParams`` order (links, then a robot's drivetrain)."""
     theta = ca.SX.sym("theta", 2)
     omega = ca.SX.sym("omega", 2)
     u = ca.SX.sym("tau", 2)
     p = ca.SX.sym("p", len(RigidParams.names()))
-    m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2 = ca.vertsplit(p)
+    m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2, Ir, gr, cf1, cf2 = ca.vertsplit(p)
     e1, e2 = _unit(theta[0]), _unit(theta[1])
     com1 = lc1 * e1
     com2 = L1 * e1 + lc2 * e2
     Q, D, power = _joint_terms(theta, omega, u, b1, b2)
+    T_rotor, Q_friction, P_friction = _drivetrain_terms(theta, omega, Ir, gr, cf1, cf2)
     return _assemble(
         "rigid",
         theta,
@@ -166,13 +189,15 @@ def build_rigid() -> SymbolicModel:
         com_positions=[(m1, com1), (m2, com2)],
         point_inertias=[(I1, omega[0]), (I2, omega[1])],
         spring_V=ca.SX(0),
-        Q=Q,
+        Q=Q + Q_friction,
         D=D,
         power_in=power,
         g=g,
         positions=ca.vertcat(L1 * e1, L1 * e1 + L2 * e2),
         stretch=ca.SX.zeros(2, 1),
         state_names=STATE_NAMES["rigid"],
+        extra_kinetic=T_rotor,
+        extra_dissipation=P_friction,
     )
 
 

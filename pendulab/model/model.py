@@ -9,6 +9,7 @@ parameter vector ``p`` as an explicit input so that parameters stay tunable
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -21,6 +22,7 @@ from .._checks import check_spring_lengths
 from .builders import SymbolicModel, build_elastic, build_rigid
 from .functions import _vectorized, model_functions
 from .params import ElasticParams, ParamInfo, RigidParams, param_table
+from .plant_file import load_plant
 from .signals import _INPUT_INFO, _OUTPUT_INFO, _STATE_DESCRIPTIONS, ACTUATIONS, INPUT_NAMES, SignalInfo, _state_unit
 from .statics import static_spring_lengths
 
@@ -542,11 +544,15 @@ def make_model(kind: str, **params: float) -> Model:
     return Model(kind, cls(**params), model_functions(kind))
 
 
-def rigid(**params: float) -> Model:
+def rigid(plant: str | os.PathLike[str] | None = None, **params: float) -> Model:
     """Rigid double pendulum (2 DOF), state (theta1, theta2, omega1, omega2).
 
     Parameters
     ----------
+    plant : path-like, optional
+        A plant file (``pendulab identify --out DIR`` writes ``DIR/plant.json``,
+        :mod:`pendulab.model.plant_file`): the identified robot's links, friction and rotor
+        inertia are the starting values, ``params`` override them.
     **params : float
         Parameter values by name in SI units, as in :class:`RigidParams`.
 
@@ -558,8 +564,21 @@ def rigid(**params: float) -> Model:
     Raises
     ------
     ValueError
-        An unknown parameter name or an invalid value (via :func:`make_model`).
+        An unknown parameter name or an invalid value (via :func:`make_model`), or a plant
+        file that is not valid (:func:`pendulab.model.plant_file.load_plant`).
+    FileNotFoundError
+        No plant file at ``plant``.
+    KeyError
+        A plant file with a parameter missing or unknown.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> pl.rigid(m1=0.6, L1=0.3).params.L1
+    0.3
     """
+    if plant is not None:
+        params = {**load_plant(plant).rigid_kwargs(), **params}
     return make_model("rigid", **params)
 
 

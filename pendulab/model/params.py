@@ -19,6 +19,7 @@ __all__ = [
     "RigidParams",
     "ElasticParams",
     "param_table",
+    "ordered_values",
 ]
 
 
@@ -80,6 +81,41 @@ def param_table(params_or_cls: Any) -> tuple[ParamInfo, ...]:
             )
         )
     return tuple(out)
+
+
+def ordered_values(params_cls: type, values: dict[str, Any]) -> list[Any]:
+    """Values by name (numbers or CasADi expressions) in the class's vector order, defaults filled in.
+
+    Code that builds a parameter vector (e.g. a symbolic one for a CasADi Function) goes through
+    this, never by position, so a parameter added to a class cannot shift what it means.
+
+    Parameters
+    ----------
+    params_cls : type
+        :class:`RigidParams` or :class:`ElasticParams`.
+    values : dict of str to Any
+        Values by parameter name; the others take the class's defaults.
+
+    Returns
+    -------
+    list
+        One entry per ``params_cls.names()``.
+
+    Raises
+    ------
+    ValueError
+        An unknown name, or a missing one whose default is derived (``None``, e.g. ``lc1``).
+    """
+    unknown = sorted(set(values) - set(params_cls.names()))
+    if unknown:
+        raise ValueError(f"unknown parameter name(s) {unknown} for {params_cls.__name__}; expected {list(params_cls.names())}")
+    out = []
+    for f in dataclasses.fields(params_cls):
+        value = values.get(f.name, f.default)
+        if value is None:
+            raise ValueError(f"{params_cls.__name__}.{f.name} has a derived default; give its value")
+        out.append(value)
+    return out
 
 
 class _ParamsBase:
@@ -165,6 +201,14 @@ class RigidParams(_ParamsBase):
         means ``L2``.
     I1, I2 : float, default 0.0
         Inertias of links 1 and 2 about their centres of mass [kg.m2] (>= 0).
+    Ir : float, default 0.0
+        Rotor inertia of each joint's geared motor about its own axis [kg.m2] (>= 0); a real
+        robot's (RealAIGym's ``Ir``), zero for ideal links.
+    gr : float, default 1.0
+        Gear ratio of the motors [1] (> 0); it only matters when ``Ir > 0``.
+    cf1, cf2 : float, default 0.0
+        Coulomb friction of joints 1 and 2 [N.m] (>= 0), smoothed as
+        ``cf atan(100 q')`` (:data:`pendulab.model.builders.COULOMB_SHARPNESS`).
 
     Raises
     ------
@@ -185,6 +229,11 @@ class RigidParams(_ParamsBase):
     lc2: float | None = _p(None, "m", "joint to centre of mass of link 2 (None: L2)", positive=False)
     I1: float = _p(0.0, "kg.m2", "inertia of link 1 about its centre of mass", positive=False)
     I2: float = _p(0.0, "kg.m2", "inertia of link 2 about its centre of mass", positive=False)
+    # The drivetrain of a real robot (pendulab.model.robot); appended so the ideal links' vector indices stay.
+    Ir: float = _p(0.0, "kg.m2", "rotor inertia of each geared motor", positive=False)
+    gr: float = _p(1.0, "1", "gear ratio of the motors", positive=True)
+    cf1: float = _p(0.0, "N.m", "Coulomb friction of joint 1 (ground-link 1)", positive=False)
+    cf2: float = _p(0.0, "N.m", "Coulomb friction of joint 2 (link 1-link 2)", positive=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()

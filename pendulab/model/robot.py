@@ -12,11 +12,13 @@ github.com/dfki-ric-underactuated-lab/double_pendulum, commit 1e8544e):
   ``cf_i atan(100 q_i')`` on the joint rates;
 * link inertias ``I1, I2`` about the *joints* (``I_com = I_joint - m r^2``).
 
-Nothing is typed by hand: the links' ``T`` and ``V`` are pendulab's own symbolic rigid model, the
-rotor term is added to ``T`` as ``1/2 (J w)^T M_r (J w)`` with ``J = d(q1, theta2 - theta1)/d theta``,
-the joint torques enter as ``J^T tau`` and :func:`pendulab.model.lagrange.lagrange_equations`
-derives the equations of motion. The same symbols give the forward dynamics (:func:`robot_rhs`)
-and the inverse dynamics (:func:`robot_inverse_dynamics`) that system identification regresses.
+Nothing is typed by hand, and there is one Lagrangian: pendulab's rigid model carries the
+drivetrain (:class:`~pendulab.model.params.RigidParams` ``Ir, gr, cf1, cf2``), so the robot is the
+rigid model in RealAIGym's parametrization (inertias about the joints, ``I_com = I_joint - m r^2``),
+substituted into its symbolic equations. The same symbols give the forward dynamics
+(:func:`robot_rhs`) and the inverse dynamics (:func:`robot_inverse_dynamics`) that system
+identification regresses; :func:`robot_to_rigid` turns a robot parameter set into
+:func:`pendulab.rigid` arguments.
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from .builders import build_rigid
-from .lagrange import LagrangeSystem, lagrange_equations
+from .builders import COULOMB_SHARPNESS, build_rigid
+from .lagrange import LagrangeSystem
+from .params import RigidParams
 
 __all__ = [
     "ROBOT_PARAM_NAMES",
@@ -41,6 +44,7 @@ __all__ = [
     "robot_inverse_dynamics",
     "check_robot_params",
     "robot_params_vector",
+    "robot_to_rigid",
 ]
 
 #: Parameter vector (RealAIGym's names): masses [kg], link lengths [m], joint-to-centre-of-mass
@@ -51,11 +55,8 @@ ROBOT_PARAM_NAMES: tuple[str, ...] = ("m1", "m2", "l1", "l2", "r1", "r2", "b1", 
 #: Units of :data:`ROBOT_PARAM_NAMES`.
 ROBOT_PARAM_UNITS: Mapping[str, str] = {
     "m1": "kg", "m2": "kg", "l1": "m", "l2": "m", "r1": "m", "r2": "m", "b1": "N.m.s/rad", "b2": "N.m.s/rad",
-    "cf1": "N.m", "cf2": "N.m", "g": "m/s2", "I1": "kg.m2", "I2": "kg.m2", "Ir": "kg.m2", "gr": "-",
+    "cf1": "N.m", "cf2": "N.m", "g": "m/s2", "I1": "kg.m2", "I2": "kg.m2", "Ir": "kg.m2", "gr": "1",
 }  # fmt: skip
-
-#: Slope of the smoothed Coulomb friction ``cf atan(COULOMB_SHARPNESS q')`` at rest [s/rad] (upstream's 100).
-COULOMB_SHARPNESS = 100.0
 
 
 @dataclass(frozen=True)
@@ -86,7 +87,7 @@ class RobotSymbols:
 
 @cache
 def build_robot() -> RobotSymbols:
-    """Derive the robot's equations of motion (see the module docstring).
+    """The rigid model's equations of motion in RealAIGym's parameters (see the module docstring).
 
     Returns
     -------
@@ -97,25 +98,45 @@ def build_robot() -> RobotSymbols:
     theta, omega = sm.q, sm.qd
     p = ca.SX.sym("p", len(ROBOT_PARAM_NAMES))
     P = dict(zip(ROBOT_PARAM_NAMES, ca.vertsplit(p), strict=True))
-    # pendulab's rigid parameters (m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2) with inertias about the centres of mass.
-    rigid_p = ca.vertcat(
-        P["m1"], P["m2"], P["l1"], P["l2"], P["g"], P["b1"], P["b2"], P["r1"], P["r2"],
-        P["I1"] - P["m1"] * P["r1"] ** 2, P["I2"] - P["m2"] * P["r2"] ** 2,
-    )  # fmt: skip
-    T_links = ca.substitute(sm.kinetic, sm.p, rigid_p)
-    V = ca.substitute(sm.potential, sm.p, rigid_p)
-    D = ca.substitute(sm.dissipation, sm.p, rigid_p) / 2  # pendulab's D is twice the Rayleigh function of joint dampers
-    joint = ca.vertcat(theta[0], theta[1] - theta[0])
-    J = ca.jacobian(joint, theta)
-    rate = J @ omega
-    Ir, gr = P["Ir"], P["gr"]
-    M_rotor = ca.vertcat(ca.horzcat(gr**2 * Ir + Ir, -gr * Ir), ca.horzcat(-gr * Ir, gr**2 * Ir))
-    T = T_links + 0.5 * ca.dot(rate, M_rotor @ rate)
-    tau = ca.SX.sym("tau", 2)
-    coulomb = ca.vertcat(P["cf1"] * ca.atan(COULOMB_SHARPNESS * rate[0]), P["cf2"] * ca.atan(COULOMB_SHARPNESS * rate[1]))
-    Q = J.T @ (tau - coulomb)
-    eom = lagrange_equations(theta, omega, T, V, D, Q)
-    return RobotSymbols(theta=theta, omega=omega, tau=tau, p=p, eom=eom, joint_map=ca.DM(ca.evalf(J)))
+    rigid_p = ca.vertcat(*(_rigid_expression(P, n) for n in RigidParams.names()))
+    eom = LagrangeSystem(*(ca.substitute(e, sm.p, rigid_p) for e in (sm.eom.M, sm.eom.rhs, sm.eom.qdd, sm.eom.bias)))
+    J = ca.jacobian(ca.vertcat(theta[0], theta[1] - theta[0]), theta)
+    return RobotSymbols(theta=theta, omega=omega, tau=sm.u, p=p, eom=eom, joint_map=ca.DM(ca.evalf(J)))
+
+
+def _rigid_expression(P: Mapping[str, ca.SX], name: str) -> ca.SX:
+    """One :class:`RigidParams` value in RealAIGym's parameters (works on symbols and on floats)."""
+    if name in _RIGID_FROM_ROBOT:
+        return P[_RIGID_FROM_ROBOT[name]]
+    i = name[-1]  # I1 or I2: about the centre of mass
+    return P["I" + i] - P["m" + i] * P["r" + i] ** 2
+
+
+#: RigidParams names taken over unchanged (renamed) from RealAIGym's; I1, I2 are shifted to the centres of mass.
+_RIGID_FROM_ROBOT: Mapping[str, str] = {
+    "m1": "m1", "m2": "m2", "L1": "l1", "L2": "l2", "g": "g", "b1": "b1", "b2": "b2", "lc1": "r1", "lc2": "r2",
+    "Ir": "Ir", "gr": "gr", "cf1": "cf1", "cf2": "cf2",
+}  # fmt: skip
+
+
+def robot_to_rigid(params: Mapping[str, float]) -> dict[str, float]:
+    """:func:`pendulab.rigid` arguments of a robot parameter set: the same robot as a pendulab model.
+
+    Parameters
+    ----------
+    params : mapping of str to float
+        Values of :data:`ROBOT_PARAM_NAMES` (validated, :func:`check_robot_params`).
+
+    Returns
+    -------
+    dict of str to float
+        Values of :class:`~pendulab.model.params.RigidParams` (inertias about the centres of
+        mass, clipped at 0 where a point mass sits on the bound ``I = m r^2`` within rounding).
+    """
+    P = check_robot_params(params)
+    return {
+        n: max(0.0, float(_rigid_expression(P, n))) if n in ("I1", "I2") else P[_RIGID_FROM_ROBOT[n]] for n in RigidParams.names()
+    }
 
 
 @cache
@@ -212,17 +233,22 @@ def check_robot_params(params: Mapping[str, float], name: str = "params") -> dic
     return out
 
 
-def robot_params_vector(params: Mapping[str, float]) -> np.ndarray:
+def robot_params_vector(params: Mapping[str, float], *, validate: bool = True) -> np.ndarray:
     """The values of :data:`ROBOT_PARAM_NAMES` in order, validated (:func:`check_robot_params`).
 
     Parameters
     ----------
     params : mapping of str to float
         Parameters by name.
+    validate : bool, default True
+        Check them first. ``False`` only where a protocol deliberately simulates values outside
+        the physical range (RealAIGym's robustness grid varies Coulomb friction down to -0.2 N.m).
 
     Returns
     -------
     numpy.ndarray, shape (15,)
         The parameter vector of :func:`robot_rhs` and :func:`robot_inverse_dynamics`.
     """
-    return np.array(list(check_robot_params(params).values()))
+    if validate:
+        return np.array(list(check_robot_params(params).values()))
+    return np.array([float(params[n]) for n in ROBOT_PARAM_NAMES])

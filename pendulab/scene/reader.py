@@ -13,6 +13,7 @@ import numpy as np
 
 from ..integrate import METHODS
 from ..model.model import make_model
+from ..model.plant_file import load_plant
 from .core import (
     _DEFAULT_OUTPUTS,
     _KNOWN_SECTIONS,
@@ -137,11 +138,20 @@ def load_scene(path_or_name: str | Path) -> Scene:
     description = rd.string("scene", "description", head.get("description", ""))
 
     model_table = rd.table("model", required=True)
-    rd.only("model", model_table, ("kind", "params"), "keys")
+    rd.only("model", model_table, ("kind", "params", "plant"), "keys")
     kind = rd.string("model", "kind", model_table.get("kind", _MISSING), tuple(_PARAM_CLASSES))
     params_table = rd.table("model.params")
     rd.only("model.params", params_table, _PARAM_CLASSES[kind].names(), f"{kind} parameters")
     params = {k: rd.real("model.params", k, v) for k, v in params_table.items()}
+    if "plant" in model_table:
+        # An identified robot (pendulab identify's plant.json, relative to the scene file); [model.params] override it.
+        plant = rd.string("model", "plant", model_table["plant"])
+        if kind != "rigid":
+            raise rd.error("model", "plant", plant, "kind = 'rigid' (a plant file describes a rigid robot)")
+        try:
+            params = {**load_plant(path.parent / plant).rigid_kwargs(), **params}
+        except (OSError, ValueError, KeyError) as exc:
+            raise rd.error("model", "plant", plant, f"a valid plant file ({exc.args[0] if exc.args else exc})") from None
     try:
         model = make_model(kind, **params)
     except (ValueError, TypeError) as exc:

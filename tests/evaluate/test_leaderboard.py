@@ -19,6 +19,7 @@ from pendulab.evaluate.realai.leaderboard_published import (
 from pendulab.evaluate.realai.leaderboard_tables import protocol_tables
 from pendulab.evaluate.realai.robustness import CATEGORIES, PUBLISHED_ROBUSTNESS, robustness_score
 from pendulab.evaluate.realai.v3_definition import PUBLISHED_V3
+from pendulab.model.plant_file import load_plant
 
 
 def _half_unit(x: float) -> float:
@@ -70,7 +71,9 @@ def test_tables_list_every_published_row_exactly_even_with_nothing_run():
     assert "| published History SAC (`history_sac`) | 1 | 1.15 | 7.67 | 2.36 | 0.007 | 62.07 | 0.682 |" in text
     assert "| published mcpilco (`mcpilco`) | 1 | 1.45 | 19.43 | 3.22 | 0.097 | 253.59 | 0.316 |" in text
     assert "0.799 (one unseeded run)" in text and "0.658 (one unseeded run)" in text
-    assert text.count("| pendulab `best` | not run (test) |") == 6
+    # 6 rows in the three protocol tables, plus one per task in the identified-robot table (its four cells)
+    assert text.count("| pendulab `best` | not run (test) |") == 8
+    assert text.count("| pendulab `best` | not run (test) | not run (test) | not run (test) | not run (test) |") == 2
     assert "1e8544e" in text  # upstream's commit is cited
 
 
@@ -81,12 +84,15 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
     from pendulab.commands.leaderboard import write_leaderboard
 
     calls = {"v2": 0, "robustness-v2": 0, "v3": 0}
+    plants = []
 
     def counting(module, attr, key):
         inner = getattr(module, attr)
 
         def wrapped(*a, **k):
             calls[key] += 1
+            if key != "robustness-v2":
+                plants.append(k.get("plant"))
             return inner(*a, **k)
 
         monkeypatch.setattr(module, attr, wrapped)
@@ -96,8 +102,19 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
     counting(v3, "run_v3", "v3")
     root = tmp_path / "journals"
     run = run_protocols(["lqr"], tasks=["pendubot"], quick=True, root=root, workers=1)
-    assert calls == {"v2": 1, "robustness-v2": 13, "v3": 1}
-    assert run.counts() == {"v2": (1, 0), "robustness-v2": (13, 0), "v3": (1, 0)}
+    # v2 and v3 twice: on the nominal plant and on the shipped identified C.1 robot
+    assert calls == {"v2": 2, "robustness-v2": 13, "v3": 2}
+    assert run.counts() == {
+        "v2": (1, 0),
+        "robustness-v2": (13, 0),
+        "v3": (1, 0),
+        "v2-identified": (1, 0),
+        "v3-identified": (1, 0),
+    }
+    assert sum(p is None for p in plants) == 2 and {p.params["cf1"] for p in plants if p is not None} == {
+        load_plant("c1").params["cf1"]
+    }
+    assert run.case("v2-identified", "pendubot", "lqr").summary["simulation"]["plant"].startswith("identified")
     rv2 = run.case("robustness-v2", "pendubot", "lqr").summary
     assert set(rv2["rates"]) == set(CATEGORIES)
     assert all(0.0 <= r <= 1.0 and math.isfinite(r) for r in rv2["rates"].values())
@@ -108,17 +125,18 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
 
     out = tmp_path / "page" / "leaderboard.md"
     write_leaderboard(out, controllers=["lqr"], quick=True, resume=True, root=root, tasks=["pendubot"], progress=False)
-    assert calls == {"v2": 1, "robustness-v2": 13, "v3": 1}  # nothing ran again
+    assert calls == {"v2": 2, "robustness-v2": 13, "v3": 2}  # nothing ran again
     text = out.read_text()
-    for heading in ("## RealAIGym simulation leaderboard v2", "## RealAIGym robustness leaderboard v2", "## RealAIGym v3"):
+    for heading in ("## RealAIGym simulation leaderboard v2", "## RealAIGym robustness leaderboard v2", "## RealAIGym v3",
+                    "## On the identified robot"):  # fmt: skip
         assert heading in text
-    assert "NOT comparable" in text and "reused: v2 1, robustness-v2 13, v3 1" in text
+    assert "NOT comparable" in text and "reused: v2 1, robustness-v2 13, v3 1, v2-identified 1, v3-identified 1" in text
     assert (out.parent / "figures" / "leaderboard_robustness_pendubot.png").stat().st_size > 10_000
     assert (out.parent / "figures" / "leaderboard_v3.png").is_file()
 
     # Past a wall-time budget complete journals are still read back and nothing runs; without resume nothing runs.
     late = run_protocols(["lqr"], tasks=["pendubot"], quick=True, resume=True, root=root, max_wall_time=1e-9)
-    assert [c.status for c in late.cases] == ["done"] * 3 and calls == {"v2": 1, "robustness-v2": 13, "v3": 1}
+    assert [c.status for c in late.cases] == ["done"] * 5 and calls == {"v2": 2, "robustness-v2": 13, "v3": 2}
     fresh = run_protocols(["lqr"], tasks=["pendubot"], quick=True, root=root, max_wall_time=1e-9)
     assert all(c.status == "not run" and "budget" in c.reason for c in fresh.cases)
 

@@ -125,7 +125,7 @@ def test_edited_fmu_state_is_rejected_like_a_set_value(fmu_builds, fuzz, capsys,
     state = d.get_state()
     blob = d.serialize(state)
     d.free_state(state)
-    offsets = fuzz.field_offsets(fuzz.NX[kind], 2, 11)
+    offsets = fuzz.field_offsets(fuzz.NX[kind], 2, fuzz.NP[kind])
     bad = _edit(blob, offsets[field][0], value)
     before = d.get("theta1", "m1", "tau1")
     capsys.readouterr()

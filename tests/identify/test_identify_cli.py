@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pendulab.cli import main
-from pendulab.identify.plant_file import load_plant
+from pendulab.model.plant_file import load_plant
 
 
 def _csv(tmp_path, rec, name):

@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from pendulab.identify.plant_file import FORMAT, IdentifiedPlant, load_plant, save_plant
 from pendulab.identify.published import DFKI_C1
-from pendulab.model.robot import robot_inverse_dynamics, robot_params_vector
+from pendulab.model.plant_file import FORMAT, IdentifiedPlant, load_plant, save_plant
+from pendulab.model.robot import ROBOT_PARAM_NAMES, robot_inverse_dynamics, robot_params_vector
 
 
 def test_round_trip(tmp_path):
@@ -64,3 +64,10 @@ def test_not_json(tmp_path):
     path.write_text("{not json")
     with pytest.raises(ValueError, match="not JSON"):
         load_plant(path)
+
+
+def test_the_parameter_vector_refuses_unphysical_values_unless_a_protocol_asks():
+    bad = {**DFKI_C1["1.0"], "cf1": -0.2}  # a level of RealAIGym's robustness grid
+    with pytest.raises(ValueError, match="cf1"):
+        robot_params_vector(bad)
+    assert robot_params_vector(bad, validate=False)[ROBOT_PARAM_NAMES.index("cf1")] == -0.2

@@ -48,6 +48,7 @@ import numpy as np
 from ...model.counterpart import rigid_counterpart
 from ...model.functions import model_functions
 from ...model.model import Model
+from ...model.params import ElasticParams, RigidParams, ordered_values
 
 __all__ = ["PLANNING", "STATE_MAPS", "PredictionChoice", "choose_prediction", "prediction_model", "SlowStateMap", "LENGTH_PARAMS"]
 
@@ -194,8 +195,11 @@ def _momentum_map(fe: dict, fr: dict) -> ca.Function:
     x, lengths, p = ca.SX.sym("x", 8), ca.SX.sym("l", 2), ca.SX.sym("p", fe["rhs"].size1_in(2))
     Me = fe["mass_matrix"](x, p)  # over (theta1, theta2, r1, r2)
     p_theta = Me[0:2, :] @ ca.vertcat(x[4:6], x[6:8])
-    # Rigid point-mass parameters m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2 (the counterpart's order).
-    pr = ca.vertcat(p[0], p[1], lengths[0], lengths[1], p[4], p[5], p[6], lengths[0], lengths[1], 0, 0)
+    # The rigid point-mass counterpart at the given lengths (by name: the vectors' order is the classes').
+    e = dict(zip(ElasticParams.names(), ca.vertsplit(p), strict=True))
+    rigid = {"m1": e["m1"], "m2": e["m2"], "L1": lengths[0], "L2": lengths[1], "g": e["g"], "b1": e["b1"], "b2": e["b2"],
+             "lc1": lengths[0], "lc2": lengths[1]}  # fmt: skip
+    pr = ca.vertcat(*ordered_values(RigidParams, rigid))
     Mr = fr["mass_matrix"](ca.vertcat(x[0:2], ca.SX.zeros(2)), pr)
     omega = ca.solve(Mr, p_theta)
     return ca.Function("momentum_map", [x, lengths, p], [ca.vertcat(x[0:2], omega)])

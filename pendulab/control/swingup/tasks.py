@@ -29,6 +29,7 @@ controller sample time, ``[initial]`` the start state by name and an optional
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -137,6 +138,32 @@ class Task:
     def model(self) -> Model:
         """The problem's model (the scene's, with the problem's parameters)."""
         return self.problem.model
+
+    def with_model(self, model: Model) -> Task:
+        """The same task on another model of the same kind, e.g. an identified robot (``pl.rigid(plant=FILE)``).
+
+        Parameters
+        ----------
+        model : Model
+            The new model (start, limits, horizon and solver settings stay the task's).
+
+        Returns
+        -------
+        Task
+            A new task (its plan is computed afresh, on ``model``).
+
+        Raises
+        ------
+        TypeError
+            ``model`` is not a Model.
+        ValueError
+            ``model`` is of another kind than the task's.
+        """
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
+        if model.kind != self.model.kind:
+            raise ValueError(f"task {self.name!r} is {self.model.kind}; a {model.kind} model cannot replace its model")
+        return dataclasses.replace(self, problem=dataclasses.replace(self.problem, model=model))
 
     @property
     def rest_lengths(self) -> tuple[float, float]:

@@ -20,6 +20,7 @@ from pathlib import Path
 from ...control.feedback import SampledController
 from ...control.realai.spec import TASKS
 from ...control.swingup.tasks import short_name
+from ...model.plant_file import IdentifiedPlant
 from .controllers import CONTROLLERS, resolve_controller
 from .criteria import CRITERIA, PUBLISHED, score_v2, to_relative
 from .robustness import RobustnessResult, robustness_v2
@@ -54,6 +55,7 @@ def realai_score(
     *,
     csv_path: str | Path | None = None,
     progress: Callable[[int, int], None] | None = None,
+    plant: IdentifiedPlant | None = None,
 ) -> RealAIResult:
     """Score a controller on the RealAIGym simulation leaderboard v2.
 
@@ -71,6 +73,9 @@ def realai_score(
         Also write the run (t, theta1, theta2, omega1, omega2, tau1, tau2; absolute angles; every 2 ms).
     progress : callable, optional
         ``progress(done, total)`` in 2 ms steps of the leaderboard run.
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -90,7 +95,7 @@ def realai_score(
     if task not in TASKS:
         raise ValueError(f"task must be one of {list(TASKS)} (or swingup_pendubot, swingup_acrobot), got {task!r}")
     name, ctrl = resolve_controller(task, controller)
-    result = run_leaderboard(task, ctrl, name, progress=progress)
+    result = run_leaderboard(task, ctrl, name, progress=progress, plant=plant)
     if csv_path is not None:
         result.write_csv(csv_path)
     return result

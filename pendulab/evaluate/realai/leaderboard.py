@@ -7,7 +7,10 @@ Every finished case is recorded atomically under ``root`` (default ``./pendulab-
 * ``robustness-v2/TASK-CONTROLLER/runs.json``: the robustness-v2 journal of
   :func:`~.robustness.robustness_v2` (rewritten after every batch of runs; ``pendulab score --protocol robustness-v2
   --out DIR`` writes the same file, so such a run is picked up too);
-* ``v3/TASK-CONTROLLER-seedS.json``: one v3 episode (:meth:`~.v3_result.V3Result.to_dict`).
+* ``v3/TASK-CONTROLLER-seedS.json``: one v3 episode (:meth:`~.v3_result.V3Result.to_dict`);
+* ``v2-identified/...``, ``v3-identified/...``: the same v2 and v3 cases on the identified robot (the shipped
+  identification of design C.1 from its measured records, :data:`pendulab.model.plant_file.SHIPPED_PLANTS`), the controllers
+  designed as for the nominal plant, as they would meet the real robot.
 
 With ``resume=True`` a recorded case is read back instead of run (robustness v2: only its missing runs are run);
 a record written with other settings is an error. Ctrl-C ends the current case; everything recorded before stays.
@@ -45,8 +48,10 @@ __all__ = [
     "run_protocols",
 ]
 
-#: The three protocols, in table order.
-PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
+#: The three protocols, then v2 and v3 on the identified robot (:data:`IDENTIFIED`), in table order.
+PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3", "v2-identified", "v3-identified")
+#: Protocols run on the identified robot: protocol -> (the protocol it runs, the shipped plant's name).
+IDENTIFIED: Mapping[str, tuple[str, str]] = {"v2-identified": ("v2", "c1"), "v3-identified": ("v3", "c1")}
 #: Leaderboard tasks.
 TASKS: tuple[str, ...] = ("pendubot", "acrobot")
 #: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
@@ -57,6 +62,8 @@ DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
     "v2": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "robustness-v2": ("best", "tvlqr", "robust"),
     "v3": ("best", "global", "replan", "library"),
+    "v2-identified": ("best", "tvlqr", "robust", "rti", "global", "replan"),
+    "v3-identified": ("best", "global", "replan", "library"),
 }
 #: Journal directory (relative to the current directory).
 DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"
@@ -351,10 +358,11 @@ def run_protocols(
 def _finished(case: Case, settings: ProtocolSettings, jroot: Path) -> bool:
     """Whether a case's journal holds all of it (reading it back runs nothing)."""
     task, name = case.task, case.controller
-    if case.protocol == "v2":
-        return (jroot / "v2" / f"{task}-{name}.json").is_file()
-    if case.protocol == "v3":
-        return all((jroot / "v3" / f"{task}-{name}-seed{s}.json").is_file() for s in settings.v3_seeds)
+    base = IDENTIFIED.get(case.protocol, (case.protocol,))[0]
+    if base == "v2":
+        return (jroot / case.protocol / f"{task}-{name}.json").is_file()
+    if base == "v3":
+        return all((jroot / case.protocol / f"{task}-{name}-seed{s}.json").is_file() for s in settings.v3_seeds)
     from .robustness_grid import plan_runs
 
     journal = jroot / "robustness-v2" / f"{task}-{name}" / "runs.json"
@@ -388,12 +396,21 @@ def _run_case(
     if not run_new and not _finished(case, settings, jroot):
         case.reason += "wall-time budget reached before this case finished; resume continues it"
         return
-    if case.protocol == "v2":
-        path = jroot / "v2" / f"{task}-{name}.json"
-        keys = {"protocol": "v2", "task": task, "controller": name}
+    base, plant = case.protocol, None
+    if case.protocol in IDENTIFIED:
+        from ...model.plant_file import load_plant
+        from .plant import plant_label
+
+        base, plant_name = IDENTIFIED[case.protocol]
+        plant = load_plant(plant_name)
+    # a journal names its plant: a re-identified shipped plant is stale, not read back
+    on = {} if plant is None else {"plant": plant_label(plant)}
+    if base == "v2":
+        path = jroot / case.protocol / f"{task}-{name}.json"
+        keys = {"protocol": case.protocol, "task": task, "controller": name, **on}
         summary = _read(path, keys) if resume else None
         if summary is None:
-            summary = _run_v2(task, name, report)
+            summary = _run_v2(task, name, report, plant)
             _write(path, keys, summary)
             case.executed = 1
         else:
@@ -408,11 +425,11 @@ def _run_case(
     else:
         seeds = []
         for seed in settings.v3_seeds:
-            path = jroot / "v3" / f"{task}-{name}-seed{seed}.json"
-            keys = {"protocol": "v3", "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps}
+            path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
+            keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
             summary = _read(path, keys) if resume else None
             if summary is None:
-                summary = _run_v3(task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"))
+                summary = _run_v3(task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"), plant)
                 _write(path, keys, summary)
                 case.executed += 1
             else:

@@ -56,13 +56,13 @@ class _Timed:
         return u
 
 
-def _run_v2(task: str, name: str, progress: Callable[[int, int], None] | None) -> dict[str, Any]:
+def _run_v2(task: str, name: str, progress: Callable[[int, int], None] | None, plant: Any = None) -> dict[str, Any]:
     from .simulate import run_leaderboard
 
     w0 = time.perf_counter()
     _, ctrl = resolve_controller(task, name)
     timed = _Timed(ctrl)
-    res = run_leaderboard(task, timed, name, progress=progress)
+    res = run_leaderboard(task, timed, name, progress=progress, plant=plant)
     d = res.to_dict()
     d["wall_time"] = time.perf_counter() - w0
     d["controller_time"] = {
@@ -97,12 +97,14 @@ def _run_robustness(
     return d, n - before, before
 
 
-def _run_v3(task: str, name: str, seed: int, steps: int, progress: Callable[[int, int], None] | None) -> dict[str, Any]:
+def _run_v3(
+    task: str, name: str, seed: int, steps: int, progress: Callable[[int, int], None] | None, plant: Any = None
+) -> dict[str, Any]:
     from .v3 import run_v3
 
     w0 = time.perf_counter()
     _, ctrl = resolve_controller(task, name)
-    res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress)
+    res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress, plant=plant)
     d = res.to_dict()
     d["duration"] = steps * DT
     d["uptime_fraction"] = res.uptime / (steps * DT)

@@ -12,20 +12,27 @@ C.1 / model 1.0 as ``leaderboard/{pendubot,acrobot}/robustness_v2/sim_parameters
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Callable, Mapping
 from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from ...control.realai.spec import TASKS, check_task
+from ...control.realai.spec import TASKS, check_task, leaderboard_model
 from ...identify.published import DFKI_C1
+from ...model.model import Model, rigid
+from ...model.plant_file import IdentifiedPlant
 from ...model.pycode import to_python
-from ...model.robot import ROBOT_PARAM_NAMES, robot_rhs
+from ...model.robot import ROBOT_PARAM_NAMES, robot_rhs, robot_to_rigid
 
 __all__ = [
     "PARAM_NAMES",
     "MODEL_1_0",
+    "plant_label",
+    "protocol_model",
+    "protocol_params",
     "MODEL_VARIATIONS",
     "nominal_params",
     "vary",
@@ -63,6 +70,77 @@ def nominal_params(task: str) -> dict[str, float]:
     """
     check_task(task)
     return {**MODEL_1_0, "Ir": 0.0, "b1": 0.0, "b2": 0.0, "cf1": 0.0, "cf2": 0.0}
+
+
+def protocol_params(task: str, plant: IdentifiedPlant | None = None) -> dict[str, float]:
+    """The robot a protocol simulates: the task's nominal plant, or an identified one.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+    plant : IdentifiedPlant, optional
+        An identified robot (``pendulab identify``; :func:`pendulab.model.plant_file.load_plant`):
+        its links, friction and rotor inertia replace the nominal plant. The controllers keep
+        the model they were designed on, as on the real robot.
+
+    Returns
+    -------
+    dict of str to float
+        Values of :data:`PARAM_NAMES`.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``task``.
+    TypeError
+        ``plant`` is not an :class:`~pendulab.model.plant_file.IdentifiedPlant`.
+    """
+    check_task(task)
+    if plant is None:
+        return nominal_params(task)
+    if not isinstance(plant, IdentifiedPlant):
+        raise TypeError(f"plant must be an IdentifiedPlant (pendulab.model.plant_file.load_plant), got {type(plant).__name__}")
+    return dict(plant.params)
+
+
+def protocol_model(task: str, plant: IdentifiedPlant | None = None) -> Model:
+    """:func:`protocol_params` as a pendulab model (absolute angles; the rigid model carries the drivetrain).
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+    plant : IdentifiedPlant, optional
+        An identified robot (see :func:`protocol_params`).
+
+    Returns
+    -------
+    Model
+        The task's leaderboard model, or the identified robot.
+    """
+    if plant is None:
+        return leaderboard_model(task)
+    return rigid(**robot_to_rigid(protocol_params(task, plant)))
+
+
+def plant_label(plant: IdentifiedPlant | None) -> str:
+    """How a result names its plant: ``"nominal"`` or ``"identified (<robot>, <sha256 prefix of the parameters>)"``.
+
+    Parameters
+    ----------
+    plant : IdentifiedPlant, optional
+        The plant simulated.
+
+    Returns
+    -------
+    str
+        A label that differs whenever a parameter differs (journals compare it).
+    """
+    if plant is None:
+        return "nominal"
+    digest = hashlib.sha256(json.dumps(plant.params, sort_keys=True).encode()).hexdigest()[:12]
+    return f"identified ({plant.meta.get('robot', 'robot')}, {digest})"
 
 
 def vary(params: Mapping[str, float], name: str, value: float) -> dict[str, float]:
@@ -127,27 +205,6 @@ def protocol_rhs_python() -> Callable[[np.ndarray, np.ndarray, list[float]], np.
         ``f(x, tau, p) -> ndarray, shape (4,)`` with the arguments of :func:`protocol_rhs`.
     """
     return to_python(protocol_rhs())
-
-
-def params_vector(params: Mapping[str, float]) -> list[float]:
-    """The values of :data:`PARAM_NAMES` in order.
-
-    Parameters
-    ----------
-    params : mapping of str to float
-        Parameters by name.
-
-    Returns
-    -------
-    list of float
-        ``[params[n] for n in PARAM_NAMES]``.
-
-    Raises
-    ------
-    KeyError
-        A parameter is missing.
-    """
-    return [float(params[n]) for n in PARAM_NAMES]
 
 
 def actuated_joint(task: str) -> int:

@@ -55,8 +55,9 @@ from ...control.feedback import SampledController
 from ...control.realai.spec import DT, check_task
 from ...control.swingup.tasks import short_name
 from ...ensemble.pool import default_workers, map_runs
+from ...model.plant_file import IdentifiedPlant
 from .controllers import resolve_controller
-from .plant import MODEL_VARIATIONS
+from .plant import MODEL_VARIATIONS, plant_label
 from .robustness_episode import _hold_ratio, run_protocol_episode
 from .robustness_grid import (
     CATEGORIES,
@@ -116,6 +117,7 @@ _JOURNAL_DEFAULTS: Mapping[str, Any] = {
     "model_params": list(MODEL_VARIATIONS),
     "u_noise_repetitions": REPETITIONS,
     "every_step": False,
+    "plant": "nominal",
 }
 
 
@@ -151,6 +153,7 @@ def robustness_v2(
     model_params: Sequence[str] | None = None,
     u_noise_repetitions: int = REPETITIONS,
     every_step: bool = False,
+    plant: IdentifiedPlant | None = None,
 ) -> RobustnessResult:
     """Score a controller on the RealAIGym robustness leaderboard v2 protocol.
 
@@ -183,6 +186,10 @@ def robustness_v2(
         Call the controller every 2 ms step (as upstream's simulator calls its controllers) instead of on
         its own sample grid with the output held. A 10 ms controller fed fresh noisy measurements every
         2 ms averages the velocity noise out; held, one noisy sample drives 10 ms.
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model; the model
+        variations are relative to the identified values.
 
     Returns
     -------
@@ -208,7 +215,7 @@ def robustness_v2(
     w0 = time.perf_counter()
     plan = plan_runs(
         task, levels=levels, repetitions=repetitions, perturbation_repetitions=perturbation_repetitions,
-        categories=categories, model_params=model_params, u_noise_repetitions=u_noise_repetitions,
+        categories=categories, model_params=model_params, u_noise_repetitions=u_noise_repetitions, plant=plant,
     )  # fmt: skip
     name, ctrl = resolve_controller(task, controller)
     if not every_step:
@@ -225,6 +232,7 @@ def robustness_v2(
         "model_params": list(_check_names("model_params", model_params, MODEL_VARIATIONS)),
         "u_noise_repetitions": int(u_noise_repetitions),
         "every_step": bool(every_step),
+        "plant": plant_label(plant),
     }
     jpath = None if journal is None else Path(journal)
     done: dict[int, dict[str, Any]] = _read_journal(jpath, settings) if (resume and jpath is not None) else {}
@@ -234,7 +242,7 @@ def robustness_v2(
     states = _rng_states(plan, seed, _n_steps())
 
     def one(i: int) -> dict[str, Any]:
-        return run_protocol_episode(task, ctrl, plan[i], states[i], every_step=every_step)
+        return run_protocol_episode(task, ctrl, plan[i], states[i], every_step=every_step, plant=plant)
 
     def save() -> None:
         if jpath is not None:
@@ -266,5 +274,5 @@ def robustness_v2(
     score = robustness_score(rates) if all(c in rates for c in CATEGORIES) else math.nan
     return RobustnessResult(
         task, name, seed, rates, score, successes, _levels(plan), records,
-        time.perf_counter() - w0, DT if every_step else float(ctrl.sample_time), complete,
+        time.perf_counter() - w0, DT if every_step else float(ctrl.sample_time), complete, plant_label(plant),
     )  # fmt: skip

@@ -11,7 +11,9 @@ import numpy as np
 
 from ...control.feedback import SampledController, full_input
 from ...control.realai.spec import DT, TORQUE_LIMIT
-from .plant import actuated_joint, nominal_params, params_vector, protocol_rhs_python, vary
+from ...model.plant_file import IdentifiedPlant
+from ...model.robot import robot_params_vector
+from .plant import actuated_joint, protocol_params, protocol_rhs_python, vary
 from .robustness_grid import CATEGORIES, DRAWS_PER_STEP, EPSILON, GOAL, RunSpec, _n_steps, _pert_kwargs, random_gauss_perturbation
 
 __all__ = [
@@ -59,6 +61,7 @@ def run_protocol_episode(
     seed: int = 0,
     record: bool = False,
     every_step: bool = False,
+    plant: IdentifiedPlant | None = None,
 ) -> dict[str, Any]:
     """One run of the protocol: upstream's ``Simulator.simulate`` loop with the run's perturbation.
 
@@ -80,6 +83,9 @@ def run_protocol_episode(
     every_step : bool
         Call the controller every 2 ms step, as upstream's simulator calls its controllers, whatever
         its ``sample_time`` (default: on its own sample grid, the output held in between).
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -99,7 +105,7 @@ def run_protocol_episode(
     rng = np.random.RandomState(seed)
     if rng_state is not None:
         rng.set_state(rng_state)
-    params = nominal_params(task)
+    params = protocol_params(task, plant)
     meas_sigma = np.zeros(4)
     u_sigma = np.zeros(2)
     k_resp = 1.0
@@ -124,7 +130,7 @@ def run_protocol_episode(
     n_steps = _n_steps()
     Z = rng.standard_normal((n_steps, DRAWS_PER_STEP))
     f = protocol_rhs_python()
-    p = params_vector(params)
+    p = robot_params_vector(params, validate=False).tolist()  # upstream's grid leaves the physical range (cf < 0)
     limit = np.zeros(2)
     limit[act] = TORQUE_LIMIT
     drive = np.zeros(2)

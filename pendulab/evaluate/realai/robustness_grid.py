@@ -11,7 +11,8 @@ import numpy as np
 
 from ..._checks import bounded_int
 from ...control.realai.spec import DT
-from .plant import MODEL_VARIATIONS, nominal_params
+from ...model.plant_file import IdentifiedPlant
+from .plant import MODEL_VARIATIONS, protocol_params
 
 __all__ = [
     "CATEGORIES",
@@ -87,13 +88,16 @@ def _par_list(x0: float, min_rel: float, max_rel: float, n: int) -> np.ndarray:
     return li * x0
 
 
-def protocol_grid(task: str) -> dict[str, Any]:
+def protocol_grid(task: str, plant: IdentifiedPlant | None = None) -> dict[str, Any]:
     """The levels of every category (``benchmark_controller.py``).
 
     Parameters
     ----------
     task : {"pendubot", "acrobot"}
         Leaderboard task.
+    plant : IdentifiedPlant, optional
+        The varied robot: an identified one (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -102,7 +106,7 @@ def protocol_grid(task: str) -> dict[str, Any]:
         and ``m2r2`` in kg.m); the other categories -> ndarray (21,) of levels;
         ``"perturbation"``: None (runs, not levels).
     """
-    p = nominal_params(task)
+    p = protocol_params(task, plant)
     return {
         "model": {
             "Ir": np.linspace(0.0, 1e-4, N_VAR),
@@ -165,6 +169,7 @@ def plan_runs(
     categories: Sequence[str] | None = None,
     model_params: Sequence[str] | None = None,
     u_noise_repetitions: int = REPETITIONS,
+    plant: IdentifiedPlant | None = None,
 ) -> list[RunSpec]:
     """Every run of the protocol in the benchmark's order.
 
@@ -186,6 +191,9 @@ def plan_runs(
         Model parameters to vary (upstream's ``mpar_vars``), in :data:`~.plant.MODEL_VARIATIONS` order; default all ten.
     u_noise_repetitions : int
         Repetitions of each torque-noise level (10 in upstream's protocol, whatever ``repetitions`` is).
+    plant : IdentifiedPlant, optional
+        The varied robot: an identified one (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -197,7 +205,7 @@ def plan_runs(
     ValueError
         Bad ``levels``, repetition counts, categories or model parameters.
     """
-    grid = protocol_grid(task)
+    grid = protocol_grid(task, plant)
     cats = _check_names("categories", categories, CATEGORIES)
     params = _check_names("model_params", model_params, MODEL_VARIATIONS)
     u_noise_repetitions = bounded_int("u_noise_repetitions", u_noise_repetitions, high=MAX_REPETITIONS, why="runs per level")

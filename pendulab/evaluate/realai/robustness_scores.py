@@ -136,6 +136,9 @@ class RobustnessResult:
         Wall time of this call [s] (resumed runs not included).
     sample_time : float
         Controller sample time [s].
+    plant : str
+        The simulated plant (:func:`~pendulab.evaluate.realai.plant.plant_label`); the model
+        variations are relative to it.
     complete : bool
         The full protocol (21 levels, 10 repetitions, 50 perturbation runs) was run.
     """
@@ -151,6 +154,7 @@ class RobustnessResult:
     wall_time: float
     sample_time: float
     complete: bool
+    plant: str = "nominal"
 
     @property
     def ctrl_time_median(self) -> float:
@@ -196,6 +200,7 @@ class RobustnessResult:
             "controller": self.controller,
             "seed": self.seed,
             "complete": self.complete,
+            "plant": self.plant,
             "score": None if math.isnan(self.score) else float(self.score),
             "rates": {k: float(v) for k, v in self.rates.items()},
             "successes": self.successes,

@@ -36,10 +36,12 @@ from typing import Any
 import numpy as np
 
 from ...control.feedback import SampledController, full_input
-from ...control.realai.spec import DT, N_STEPS, T_FINAL, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
+from ...control.realai.spec import DT, N_STEPS, T_FINAL, TASKS, TORQUE_LIMIT, check_task
 from ...model.model import INPUT_NAMES, Model
+from ...model.plant_file import IdentifiedPlant
 from ...model.pycode import to_python
 from .criteria import CRITERIA, PUBLISHED, criteria, score_v2, to_relative
+from .plant import plant_label, protocol_model
 
 __all__ = ["RealAIResult", "rk4_rollout", "run_leaderboard"]
 
@@ -66,6 +68,8 @@ class RealAIResult:
         RealAI score v2.
     success : bool
         The end effector stays above 0.9 (L1 + L2) before the last sample.
+    plant : str
+        The simulated plant (:func:`~pendulab.evaluate.realai.plant.plant_label`).
     """
 
     task: str
@@ -76,6 +80,7 @@ class RealAIResult:
     criteria: dict[str, float]
     score: float
     success: bool
+    plant: str = "nominal"
 
     @property
     def swingup_time(self) -> float:
@@ -101,7 +106,7 @@ class RealAIResult:
             "criteria": {k: float(self.criteria[k]) for k in CRITERIA},
             "published_best": {"name": name, "score": best},
             "beats_published": bool(self.score > best),
-            "simulation": {"integrator": "rk4", "dt": DT, "t_final": T_FINAL, "torque_limit": TORQUE_LIMIT, "damping": 0.0},
+            "simulation": {"integrator": "rk4", "dt": DT, "t_final": T_FINAL, "torque_limit": TORQUE_LIMIT, "plant": self.plant},
         }
 
     def write_csv(self, path: str | Path) -> Path:
@@ -181,7 +186,12 @@ def rk4_rollout(model: Model, x0: np.ndarray, policy: Any, n_steps: int, dt: flo
 
 
 def run_leaderboard(
-    task: str, controller: SampledController, name: str = "custom", *, progress: Callable[[int, int], None] | None = None
+    task: str,
+    controller: SampledController,
+    name: str = "custom",
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    plant: IdentifiedPlant | None = None,
 ) -> RealAIResult:
     """Run ``controller`` through the leaderboard simulation of ``task`` and score it.
 
@@ -197,6 +207,9 @@ def run_leaderboard(
         Controller name for the result.
     progress : callable, optional
         ``progress(done, total)`` in 2 ms steps, every 100 steps and at the end.
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -216,7 +229,7 @@ def run_leaderboard(
         raise TypeError(
             f"controller must be a SampledController (callable with sample_time, input_names), got {type(controller)}"
         )
-    model = leaderboard_model(task)
+    model = protocol_model(task, plant)
     ratio = _hold_ratio(controller)
     limit = np.zeros(len(INPUT_NAMES))
     limit[TASKS[task]] = TORQUE_LIMIT
@@ -241,4 +254,4 @@ def run_leaderboard(
     prm = model.params
     values = criteria(t, to_relative(x), u, prm.L1, prm.L2)
     success = values["swingup_time"] < t[-1]
-    return RealAIResult(task, name, t, x, u, values, score_v2(values, success), bool(success))
+    return RealAIResult(task, name, t, x, u, values, score_v2(values, success), bool(success), plant_label(plant))

@@ -45,9 +45,11 @@ import numpy as np
 from ..._checks import bounded_int
 from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
-from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
+from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task
 from ...model.model import INPUT_NAMES, Model
+from ...model.plant_file import IdentifiedPlant
 from .controllers import resolve_controller
+from .plant import plant_label, protocol_model
 from .simulate import rk4_rollout
 from .v3_definition import (
     N_RESETS,
@@ -175,6 +177,7 @@ def run_v3(
     seed: int = 0,
     n_steps: int = N_STEPS_V3,
     progress: Callable[[int, int], None] | None = None,
+    plant: IdentifiedPlant | None = None,
 ) -> V3Result:
     """Run an entry through the v3 protocol on pendulab's model and score it.
 
@@ -193,6 +196,9 @@ def run_v3(
         RK4 steps (default the protocol's 30000; fewer for a shortened check).
     progress : callable, optional
         ``progress(done, total)`` in 2 ms steps, every 500 steps and at the end.
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -213,7 +219,7 @@ def run_v3(
         proto = entry
     else:
         proto = ProtocolController(task, entry)
-    model = leaderboard_model(task)
+    model = protocol_model(task, plant)
     grav = _gravity_compensation(model)
     kp, ki, kd = PID_GAINS
     errors1: list[float] = []
@@ -289,6 +295,8 @@ def run_v3(
         threshold=threshold,
         call_times=calls,
         wall_time=time.perf_counter() - t_wall,
+        plant=plant_label(plant),
+        link_lengths=(prm.L1, prm.L2),
     )
 
 
@@ -299,6 +307,7 @@ def v3_score(
     seed: int = 0,
     progress: Callable[[int, int], None] | None = None,
     out: str | Path | None = None,
+    plant: IdentifiedPlant | None = None,
 ) -> V3Result:
     """Score a controller on the RealAIGym v3 simulation protocol (60 s, 15 random resets, uptime / 60).
 
@@ -316,6 +325,9 @@ def v3_score(
         ``progress(done, total)`` in 2 ms steps.
     out : str or Path, optional
         Directory: writes ``v3.csv``, ``v3.png`` (height, resets, torques) and, last, ``v3.json``.
+    plant : IdentifiedPlant, optional
+        Simulate an identified robot (``pendulab identify``) instead of the nominal plant
+        (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
 
     Returns
     -------
@@ -335,7 +347,7 @@ def v3_score(
         raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")
     task = check_task(short_name(task))
     name, ctrl = resolve_controller(task, controller)
-    result = run_v3(task, ctrl, name, seed=seed, progress=progress)
+    result = run_v3(task, ctrl, name, seed=seed, progress=progress, plant=plant)
     if out is not None:
         from .v3_figure import plot_v3
 

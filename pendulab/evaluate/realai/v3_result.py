@@ -52,6 +52,10 @@ class V3Result:
         Wall time of each controller call [s].
     wall_time : float
         Wall time of the run [s].
+    plant : str
+        The simulated plant (:func:`~pendulab.evaluate.realai.plant.plant_label`).
+    link_lengths : tuple of float
+        L1, L2 of the simulated plant [m] (the end-effector height).
     """
 
     task: str
@@ -69,11 +73,16 @@ class V3Result:
     threshold: float
     call_times: np.ndarray = field(repr=False)
     wall_time: float = 0.0
+    plant: str = "nominal"
+    link_lengths: tuple[float, float] | None = None
 
     @property
     def height(self) -> np.ndarray:
         """End-effector height [m] at each sample."""
-        return _end_height(leaderboard_model(self.task), self.x)
+        if self.link_lengths is None:
+            return _end_height(leaderboard_model(self.task), self.x)
+        L1, L2 = self.link_lengths
+        return -L1 * np.cos(self.x[:, 0]) - L2 * np.cos(self.x[:, 1])
 
     def interval_uptimes(self) -> list[dict[str, float]]:
         """Uptime per segment between resets (before the first reset, then from each reset's start).
@@ -144,6 +153,7 @@ class V3Result:
                 "n_resets": N_RESETS,
                 "reset_length": RESET_LENGTH,
                 "upstream": "dfki-ric-underactuated-lab/double_pendulum@1e8544e leaderboard/*/simulation_v3",
+                "plant": self.plant,
             },
             "wall_time_s": float(self.wall_time),
         }

@@ -18,12 +18,18 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write_text
-from ..model.robot import ROBOT_PARAM_NAMES, ROBOT_PARAM_UNITS, check_robot_params
+from .robot import ROBOT_PARAM_NAMES, ROBOT_PARAM_UNITS, check_robot_params, robot_to_rigid
 
-__all__ = ["FORMAT", "IdentifiedPlant", "load_plant", "save_plant"]
+__all__ = ["FORMAT", "SHIPPED_PLANTS", "IdentifiedPlant", "load_plant", "save_plant"]
 
 #: The file format's name and version.
 FORMAT = "pendulab.identified-plant/1"
+
+#: Plant files shipped with pendulab, by name (``load_plant("c1")``, ``--plant c1``; a file of that name wins).
+#: ``c1``: RealAIGym's design C.1 as ``pendulab identify --dataset c1 --out DIR`` identifies it from the robot's
+#: eight measured excitation records (validated in ``benchmarks/results/identify.md``); regenerate it with that
+#: command and copy ``DIR/plant.json`` to ``pendulab/model/plants/c1.json``.
+SHIPPED_PLANTS: Mapping[str, Path] = {"c1": Path(__file__).parent / "plants" / "c1.json"}
 
 
 @dataclass(frozen=True)
@@ -58,23 +64,14 @@ class IdentifiedPlant:
         object.__setattr__(self, "torque_offset", off)
 
     def rigid_kwargs(self) -> dict[str, float]:
-        """Arguments of :func:`pendulab.rigid` for this robot's links and viscous friction.
-
-        ``pendulab.rigid`` models ideal links with viscous joint damping; the Coulomb friction and
-        the rotor inertia need the robot model (:mod:`pendulab.model.robot`), which the protocols,
-        the scorecard and the FMU of the identified robot use.
+        """Arguments of :func:`pendulab.rigid` for this robot: links, friction and rotor inertia.
 
         Returns
         -------
         dict of str to float
-            ``m1, m2, L1, L2, g, b1, b2, lc1, lc2, I1, I2`` (inertias about the centres of mass).
+            Values of :class:`~pendulab.model.params.RigidParams` (:func:`pendulab.model.robot.robot_to_rigid`).
         """
-        p = self.params
-        return {
-            "m1": p["m1"], "m2": p["m2"], "L1": p["l1"], "L2": p["l2"], "g": p["g"], "b1": p["b1"], "b2": p["b2"],
-            "lc1": p["r1"], "lc2": p["r2"], "I1": max(0.0, p["I1"] - p["m1"] * p["r1"] ** 2),
-            "I2": max(0.0, p["I2"] - p["m2"] * p["r2"] ** 2),
-        }  # fmt: skip
+        return robot_to_rigid(self.params)
 
 
 def save_plant(plant: IdentifiedPlant, path: str | os.PathLike[str]) -> Path:
@@ -112,7 +109,8 @@ def load_plant(path: str | os.PathLike[str]) -> IdentifiedPlant:
     Parameters
     ----------
     path : path-like
-        A file written by :func:`save_plant` (``pendulab identify --out``).
+        A file written by :func:`save_plant` (``pendulab identify --out``), or the name of a
+        shipped plant (:data:`SHIPPED_PLANTS`) when no file of that name exists.
 
     Returns
     -------
@@ -129,8 +127,10 @@ def load_plant(path: str | os.PathLike[str]) -> IdentifiedPlant:
         A parameter missing or unknown.
     """
     p = Path(path)
+    if not p.exists() and str(path) in SHIPPED_PLANTS:
+        p = SHIPPED_PLANTS[str(path)]
     if not p.is_file():
-        raise FileNotFoundError(f"plant file not found: {p}")
+        raise FileNotFoundError(f"plant file not found: {p} (shipped plants: {sorted(SHIPPED_PLANTS)})")
     try:
         doc = json.loads(p.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
