@@ -105,6 +105,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    from .commands.outputs import forget_output_directories, mark_interrupted
+
+    command = list(sys.argv[1:] if argv is None else argv)
+    args.argv = command  # errors name the option spelling the user typed (commands._common.typed_flag)
+    forget_output_directories()
+
+    def _interrupted() -> int:
+        status = _interrupted_status()
+        for marker in mark_interrupted(command):
+            print(f"pendulab: what the run finished is listed in {marker}", file=sys.stderr)
+        return status
+
     with _sticky_interrupt() as guard:
         try:
             try:
@@ -132,7 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 _REINTERRUPT_S = 0.5
 
 
-def _interrupted() -> int:
+def _interrupted_status() -> int:
     print("pendulab: interrupted", file=sys.stderr)
     return 130
 

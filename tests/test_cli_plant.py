@@ -82,3 +82,30 @@ def test_cosim_of_the_identified_robot_under_lqr(tmp_path):
     # stops it within a few hundredths of a radian of the top (measured 0.022 / 0.025 rad)
     assert abs(summary["x_final"]["theta1"] - 3.141592653589793) < 0.1
     assert abs(summary["x_final"]["theta2"] - 3.141592653589793) < 0.1
+
+
+def test_one_cli_vocabulary_across_commands():
+    """Parameters, initial state and model kind have one name in every command that takes them, old names kept."""
+    import argparse
+
+    from pendulab.cli import build_parser
+    from pendulab.commands._common import VOCABULARY
+
+    def parsers(parser, name="pendulab"):
+        yield name, parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for key, child in action.choices.items():
+                    yield from parsers(child, f"{name} {key}")
+
+    takes = {concept: [] for concept in VOCABULARY}
+    for name, parser in parsers(build_parser()):
+        flags = {o: a for a in parser._actions for o in a.option_strings}
+        for concept, (primary, *aliases) in VOCABULARY.items():
+            given = [f for f in (primary, *aliases) if f in flags]
+            if given:
+                assert primary in flags, f"{name}: {concept} spelt {given}, expected {primary}"
+                takes[concept].append(name)
+    assert {"pendulab simulate", "pendulab modes", "pendulab fmu export", "pendulab cosim"} <= set(takes["parameters"])
+    assert {"pendulab fmu export", "pendulab cosim"} <= set(takes["initial state"])
+    assert {"pendulab simulate", "pendulab fmu export", "pendulab cosim", "pendulab ssp export"} <= set(takes["model kind"])

@@ -264,9 +264,11 @@ def test_bad_input():
         mode_ratio_errors(0.0, 10.0)
 
 
-def test_cli_scene_check_json_and_errors(capsys):
-    assert main(["scene", "check", "stiff_moderate_amplitude", "--json"]) == 0
+def test_cli_scene_check_json_and_errors(capsys, tmp_path):
+    assert main(["scene", "check", "stiff_moderate_amplitude", "--json", "--out", str(tmp_path)]) == 0
     data = json.loads(capsys.readouterr().out)
+    assert json.loads((tmp_path / "check.json").read_text()) == data  # --out keeps what --json prints
+    assert "chosen:" in (tmp_path / "check.md").read_text()
     assert data["a_priori"] and data["chosen"] in ("rigid", "rigid+quasi-static")
     assert [lv["name"] for lv in data["levels"]] == ["linearized", "rigid", "rigid+quasi-static", "elastic"]
     assert data["verification"] is None and data["trusted_until_s"] == 5.0

@@ -46,3 +46,14 @@ def test_modes_bad_input_exits_2(argv, fragment, capsys):
     assert main(["modes", *argv]) == 2
     err = capsys.readouterr().err
     assert fragment in err and len(err.strip().splitlines()) == 1
+
+
+def test_modes_out_writes_the_json_and_the_figures(tmp_path, capsys):
+    out = tmp_path / "modes"
+    assert main(["modes", "--model", "rigid", "--equilibrium", "down-down", "--out", str(out), "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    written = json.loads((out / "modes.json").read_text())
+    assert written["equilibria"] == printed["equilibria"]  # the file is what --json prints
+    assert (out / "modes_rigid_down-down.png").stat().st_size > 10_000
+    assert main(["modes", "--model", "rigid", "--out", str(out), "--plot", str(tmp_path / "other")]) == 2
+    assert "--plot only without --out" in capsys.readouterr().err

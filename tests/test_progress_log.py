@@ -34,3 +34,23 @@ def test_a_disabled_bar_is_silent(capsys):
     bar.note("x")
     bar.close()
     assert capsys.readouterr().err == ""
+
+
+def test_the_swingup_animation_reports_every_frame(tmp_path):
+    from types import SimpleNamespace
+
+    from PIL import Image
+
+    import pendulab as pl
+    from pendulab.viz.swingup import animate_episode
+
+    model = pl.rigid()
+    closed = pl.simulate(model, model.state(theta1=1.0), 1.0, 0.02)
+    ep = SimpleNamespace(
+        closed_loop=closed, height=None, result=SimpleNamespace(horizon=0.5),
+        task=SimpleNamespace(name="test", rest_lengths=(1.0, 1.0)),
+    )  # fmt: skip
+    calls = []
+    path = animate_episode(ep, tmp_path / "a.gif", fps=10, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(k, 11) for k in range(1, 12)]  # 0 ... 1 s at 10 frames per second
+    assert Image.open(path).n_frames == 11

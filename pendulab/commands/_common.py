@@ -34,6 +34,41 @@ PLANT_HELP = (
 )
 
 
+#: One CLI vocabulary: the option names every command uses for the same thing (the first is the name shown
+#: in help; the others are older spellings kept as aliases). tests/test_cli_plant.py checks every command.
+VOCABULARY: dict[str, tuple[str, ...]] = {
+    "parameters": ("--set", "--param"),
+    "initial state": ("--init", "--initial"),
+    "model kind": ("--model", "--kind"),
+}
+
+
+def add_vocabulary_option(parser: Any, concept: str, dest: str, help: str, **kwargs: Any) -> None:
+    """Declare the option of a :data:`VOCABULARY` concept on a parser, with its aliases.
+
+    ``parameters`` and ``initial state`` take ``NAME=VALUE`` items, repeatable and several per flag
+    (``--set a=1 --set b=2`` or ``--set a=1 b=2``); ``model kind`` takes ``rigid`` or ``elastic``.
+    """
+    names = VOCABULARY[concept]
+    if concept == "model kind":
+        parser.add_argument(*names, dest=dest, choices=("rigid", "elastic"), help=help, **kwargs)
+    else:
+        parser.add_argument(*names, dest=dest, action="extend", nargs="+", metavar="NAME=VALUE", help=help, **kwargs)
+
+
+def typed_flag(args: Any, concept: str) -> str:
+    """The spelling of a :data:`VOCABULARY` option the user typed (errors name it), else its primary name.
+
+    The entry point keeps the command line in ``args.argv``.
+    """
+    names = VOCABULARY[concept]
+    for token in getattr(args, "argv", ()):
+        flag = token.split("=", 1)[0]
+        if flag in names:
+            return flag
+    return names[0]
+
+
 def add_plant_option(parser: Any, scope: str = "") -> None:
     """Declare ``--plant FILE`` on a parser (one wording everywhere; ``scope`` adds where it applies)."""
     parser.add_argument("--plant", default=None, metavar="FILE", help=PLANT_HELP + (f" ({scope})" if scope else ""))
@@ -90,20 +125,20 @@ def parse_number(option: str, text: str | None, *, positive: bool = False) -> fl
     return value
 
 
-def parse_settings(items: Sequence[str] | None) -> dict[str, float]:
-    """Parse repeated ``--set name=value`` into a dict (later values win)."""
+def parse_settings(items: Sequence[str] | None, option: str = "--set") -> dict[str, float]:
+    """Parse repeated ``--set name=value`` (or another ``option``'s items) into a dict (later values win)."""
     out: dict[str, float] = {}
     for item in items or ():
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep or not name:
-            raise CLIError(f"--set {item!r}: expected name=value, e.g. --set k1=500 or --set theta1=2.0")
+            raise CLIError(f"{option} {item!r}: expected name=value, e.g. {option} k1=500 or {option} theta1=2.0")
         try:
             value = float(text)
         except ValueError:
-            raise CLIError(f"--set {item!r}: value {text.strip()!r} of {name!r} is not a number") from None
+            raise CLIError(f"{option} {item!r}: value {text.strip()!r} of {name!r} is not a number") from None
         if not math.isfinite(value):
-            raise CLIError(f"--set {item!r}: value of {name!r} must be finite")
+            raise CLIError(f"{option} {item!r}: value of {name!r} must be finite")
         out[name] = value
     return out
 

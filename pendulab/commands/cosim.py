@@ -14,7 +14,8 @@ import numpy as np
 from .._checks import bounded_int, relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
-from ._common import add_plant_option, plant_settings
+from ._common import add_plant_option, add_vocabulary_option, plant_settings, typed_flag
+from .outputs import output_directory
 
 _DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0, "nmpc": 10.0}
 _CONTROLLERS = ("lqr", "swingup", "tvlqr", "nmpc")  # = pendulab.control.controllers.CONTROLLERS (not imported at parser build)
@@ -28,13 +29,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "Writes cosim.csv, cosim.png, cosim.gif and summary.json to --out. `pendulab cosim sweep --help` for the "
         "communication-step study.",
     )
-    p.add_argument("--fmu", type=Path, help="pendulab FMU; default: export one for --kind into --out")
-    p.add_argument(
-        "--kind",
-        choices=("rigid", "elastic"),
-        default=None,
-        help="model exported when neither --fmu nor --task is given (default rigid)",
-    )
+    p.add_argument("--fmu", type=Path, help="pendulab FMU; default: export one for --model into --out")
+    add_vocabulary_option(p, "model kind", "kind", "model exported when neither --fmu nor --task is given (default rigid)")
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of the exported FMU")
     p.add_argument("--controller", choices=_CONTROLLERS, default="lqr")
     p.add_argument(
@@ -61,14 +57,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="driven torques (default full; not with --task)",
     )
-    p.add_argument(
-        "--param", nargs="*", default=[], metavar="NAME=VALUE", help="FMU parameters (also used for the controller design)"
-    )
-    p.add_argument("--init", nargs="*", default=[], metavar="NAME=VALUE", help="initial state entries, e.g. theta1=3.0")
+    add_vocabulary_option(p, "parameters", "param", "FMU parameters (also used for the controller design)", default=[])
+    add_vocabulary_option(p, "initial state", "init", "initial state entries, e.g. theta1=3.0", default=[])
     add_plant_option(
         p,
         "rigid: the FMU gets the identified robot's parameters; with --task the controller keeps the task's model, "
-        "without it --param overrides and the controller is designed on the identified robot",
+        "without it --set overrides and the controller is designed on the identified robot",
     )
     p.add_argument(
         "--estimator",
@@ -238,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
 
     # With --json, stdout carries the summary alone: every message goes to stderr.
     say = (lambda msg: print(msg, file=sys.stderr)) if args.json else print
-    out: Path = args.out
+    out: Path = output_directory(args.out)
     for flag, value in (("--comm-step", args.comm_step), ("--sample-time", args.sample_time), ("--t-final", args.t_final)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise CLIError(f"{flag} must be a positive number [s], got {value!r}")
@@ -252,14 +246,19 @@ def run(args: argparse.Namespace) -> int:
     measurement = _measurement(args)
     task = _load_task(args.task) if args.task is not None else None
     if task is not None:
-        given = [f for f, v in (("--reference", args.reference), ("--param", args.param), ("--u-max", args.u_max),
-                                ("--actuation", args.actuation), ("--kind", args.kind)) if v not in (None, [])]  # fmt: skip
+        options = (
+            ("--reference", args.reference), (typed_flag(args, "parameters"), args.param), ("--u-max", args.u_max),
+            ("--actuation", args.actuation), (typed_flag(args, "model kind"), args.kind),
+        )  # fmt: skip
+        given = [flag for flag, value in options if value not in (None, [])]
         if given:
             raise CLIError(
                 f"--task sets the model, actuation, torque limit and plan; {', '.join(given)} cannot be combined with it"
             )
     elif args.fmu is not None and args.kind is not None:
-        raise CLIError("--kind chooses the model to export; it does not apply with --fmu (the FMU says its kind)")
+        raise CLIError(
+            f"{typed_flag(args, 'model kind')} chooses the model to export; it does not apply with --fmu (the FMU says its kind)"
+        )
     kind = args.kind or "rigid"
     robot = plant_settings(args, task.model.kind if task is not None else kind)
     actuation = args.actuation or "full"
@@ -296,7 +295,7 @@ def run(args: argparse.Namespace) -> int:
         sim = task.model if plant_model is None else plant_model
         params = {n: float(getattr(sim.params, n)) for n in info.parameter_names if n in sim.param_names}
     else:
-        params = {**robot, **_named_values(args.param, info.parameter_names, "--param")}
+        params = {**robot, **_named_values(args.param, info.parameter_names, typed_flag(args, "parameters"))}
     model = info.model(params)
     reference = None
     if args.reference is not None:
@@ -443,7 +442,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     kinds = [k.strip() for k in args.kinds.split(",") if k.strip()]
     if not kinds or any(k not in ("rigid", "elastic") for k in kinds):
         raise CLIError(f"--kinds must list rigid and/or elastic, got {args.kinds!r}")
-    out: Path = args.out
+    out: Path = output_directory(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = []
     for kind in kinds:

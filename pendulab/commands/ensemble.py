@@ -12,6 +12,7 @@ from typing import Any
 from .._checks import relative_tolerance, require_extra
 from . import CLIError
 from ._common import ProgressBar
+from .outputs import output_directory
 
 __all__ = ["register", "run_flipmap", "DEFAULT_K"]
 
@@ -132,7 +133,7 @@ def run_flipmap(args: argparse.Namespace) -> int:
     if args.scheduler is not None and not args.scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
         raise CLIError(f"--scheduler {args.scheduler!r}: expected a Dask scheduler address like tcp://127.0.0.1:8786")
     compare = args.compare if args.compare is not None else args.model == "elastic"
-    out = Path(args.out)
+    out = output_directory(args.out)
     if out.exists() and not out.is_dir():
         raise CLIError(f"--out {args.out!r}: exists and is not a directory")
     require_extra("heyoka", "taylor", "pendulab ensemble flipmap")

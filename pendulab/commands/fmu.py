@@ -9,20 +9,7 @@ import zipfile
 from pathlib import Path
 
 from . import CLIError
-from ._common import add_plant_option, plant_settings
-
-
-def _parse_sets(items: list[str]) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name:
-            raise CLIError(f"--set expects name=value, got {item!r}")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError as exc:
-            raise CLIError(f"--set {name}: value must be a number, got {value!r}") from exc
-    return out
+from ._common import add_plant_option, add_vocabulary_option, parse_settings, plant_settings, typed_flag
 
 
 def _binary_folders(path: Path) -> list[str]:
@@ -34,8 +21,13 @@ def _export(args: argparse.Namespace) -> int:
     from ..fmu import export
     from ..model.model import make_model
 
-    model = make_model(args.model, **{**plant_settings(args, args.model), **_parse_sets(args.set or [])})
-    x0 = model.state(**_parse_sets(args.initial or [])) if args.initial else None
+    model = make_model(
+        args.model, **{**plant_settings(args, args.model), **parse_settings(args.set, typed_flag(args, "parameters"))}
+    )
+    x0 = model.state(**parse_settings(args.initial, typed_flag(args, "initial state"))) if args.initial else None
+    # code generation and the C compiler take seconds (a minute on a loaded machine): say so first
+    platforms = f" for {args.platforms}" if args.platforms else ""
+    print(f"pendulab fmu export: generating C code and compiling the {args.model} FMU{platforms} ...", file=sys.stderr)
     path = export(
         model, args.out, args.fmi_version, timestamp=not args.no_timestamp, x0=x0, platforms=args.platforms,
         flip_events=args.flip_events,
@@ -82,7 +74,9 @@ def _export_controller(args: argparse.Namespace) -> int:
     from ..fmu.controller_export import design_controller, export_controller
 
     if args.task is not None and (args.kind is not None or args.u_max is not None):
-        raise CLIError("--task sets the model and the torque limit; --kind and --u-max do not apply with it")
+        raise CLIError(
+            f"--task sets the model and the torque limit; {typed_flag(args, 'model kind')} and --u-max do not apply with it"
+        )
     if args.sample_time is not None and not (args.sample_time > 0 and args.sample_time < float("inf")):
         raise CLIError(f"--sample-time must be a positive period [s], got {args.sample_time!r}")
     try:
@@ -126,8 +120,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     e = sub.add_parser("export", help="compile and write an FMU")
     e.add_argument("--model", choices=("rigid", "elastic"), required=True)
-    e.add_argument("--set", action="append", metavar="NAME=VALUE", help="parameter start value (repeatable)")
-    e.add_argument("--initial", action="append", metavar="STATE=VALUE", help="state start value (repeatable)")
+    add_vocabulary_option(e, "parameters", "set", "parameter start values")
+    add_vocabulary_option(e, "initial state", "initial", "state start values, e.g. theta1=1.0")
     add_plant_option(e, "--model rigid; --set overrides its values")
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)
     e.add_argument("--out", type=Path, required=True, help="output .fmu file")
@@ -156,7 +150,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     c.add_argument("--controller", choices=("lqr", "tvlqr", "swingup", "nmpc"), required=True, help="nmpc: explains why not")
     c.add_argument("--task", help="swing-up task (model, actuation, torque limit, sample time; tvlqr tracks its optimized plan)")
-    c.add_argument("--kind", choices=("rigid", "elastic"), default=None, help="model without --task (default rigid)")
+    add_vocabulary_option(c, "model kind", "kind", "model without --task (default rigid)", default=None)
     c.add_argument("--sample-time", type=float, help="controller sample time [s] (default: the task's dt, else 0.01)")
     c.add_argument("--u-max", type=float, default=None, help="torque limit [N.m] without --task (default 20)")
     c.add_argument("--fmi-version", type=int, choices=(2, 3), default=2)

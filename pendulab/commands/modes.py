@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from pathlib import Path
 from typing import Any
 
 from ._common import CLIError, add_plant_option, parse_settings, plant_settings
@@ -35,6 +36,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--controllability", action="store_true", help="also report controllability/observability per actuation")
     p.add_argument("--json", action="store_true", help="print JSON instead of tables")
     p.add_argument("--plot", metavar="DIR", help="write mode-shape figures (and, elastic, the stiffness chart) into DIR")
+    p.add_argument("--out", metavar="DIR", help="write modes.json (what --json prints) and the figures into DIR")
     p.set_defaults(func=run)
 
 
@@ -79,14 +81,22 @@ def run(args: argparse.Namespace) -> int:
         result["controllability"] = [r.as_dict() for r in rows]
         text.append("== controllability (staircase rank, finite-horizon Gramian T = 1 s; encoders theta1, theta2)")
         text.append(format_report(rows))
-    if args.plot is not None:
+    if args.out is not None and args.plot is not None and args.plot != args.out:
+        raise CLIError("--out DIR writes the figures into DIR; give --plot only without --out, or the same DIR")
+    figure_dir = args.out if args.out is not None else args.plot
+    if figure_dir is not None:
         from ..viz.modes import save_mode_figures
 
         print("pendulab modes: drawing figures ...", file=sys.stderr)
-        written = save_mode_figures(model, args.plot, eqs)
+        written = save_mode_figures(model, figure_dir, eqs)
         result["figures"] = [str(p) for p in written]
         for path in written:
             print(f"pendulab modes: wrote {path}", file=sys.stderr)
+    if args.out is not None:
+        from .._io import atomic_write_text
+
+        path = atomic_write_text(Path(args.out) / "modes.json", json.dumps(result, indent=2) + "\n")
+        print(f"pendulab modes: wrote {path}", file=sys.stderr)
     if args.json:
         print(json.dumps(result, indent=2))
     else:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from . import CLIError
 
@@ -21,13 +22,22 @@ def _check(args: argparse.Namespace) -> int:
     if args.measure:
         from ..bench.hierarchy import check_scene
 
-        report = check_scene(scene, repeats=3 if args.repeats is None else args.repeats, tolerance=args.tolerance)
-        print(json.dumps(report.to_dict(), indent=1) if args.json else report.table())
-        return 0
-    from ..scene.choice import choose_model
+        result = check_scene(scene, repeats=3 if args.repeats is None else args.repeats, tolerance=args.tolerance)
+    else:
+        from ..scene.choice import choose_model
 
-    choice = choose_model(scene, tolerance=args.tolerance, verify=args.verify)
-    print(json.dumps(choice.to_dict(), indent=1) if args.json else choice.table())
+        result = choose_model(scene, tolerance=args.tolerance, verify=args.verify)
+    if args.out is not None:
+        from pathlib import Path
+
+        from .._io import atomic_write_text
+
+        out = Path(args.out)
+        atomic_write_text(out / "check.md", result.table() + "\n")
+        # last: a check.json means the check finished
+        path = atomic_write_text(out / "check.json", json.dumps(result.to_dict(), indent=1) + "\n")
+        print(f"pendulab scene check: wrote {path} and check.md", file=sys.stderr)
+    print(json.dumps(result.to_dict(), indent=1) if args.json else result.table())
     return 0
 
 
@@ -45,6 +55,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     c.add_argument("file", help="scene TOML file or shipped scene name")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
+    c.add_argument("--out", metavar="DIR", help="also write the result to DIR/check.json and DIR/check.md")
     c.add_argument("--tolerance", type=float, default=None, help="override the scene's [outputs] tolerance")
     c.add_argument(
         "--verify",

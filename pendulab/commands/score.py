@@ -14,6 +14,7 @@ from .._io import atomic_write_text
 from .._version import __version__
 from . import CLIError
 from ._common import ProgressBar, add_plant_option, parse_number, read_plant
+from .outputs import output_directory
 
 __all__ = ["register", "run_score"]
 
@@ -210,10 +211,8 @@ def run_score(args: argparse.Namespace) -> int:
     seed = _int("--seed", args.seed, 0, 2**63 - 1, "a seed of numpy's SeedSequence", 0)
     budget = parse_number("--max-wall-time", args.max_wall_time, positive=True)
     fed = f"+{args.estimator}" if args.estimator else ""
-    out = (
-        Path(args.out)
-        if args.out
-        else Path("pendulab-out") / "score" / f"{args.controller}{fed}-{task.name}{_plant_suffix(plant)}"
+    out = output_directory(
+        args.out or Path("pendulab-out") / "score" / f"{args.controller}{fed}-{task.name}{_plant_suffix(plant)}"
     )
     # estimator None matches records files written before the option (data.get("estimator") is None).
     settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats,
@@ -358,10 +357,8 @@ def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
         raise CLIError(f"--controller {args.controller!r}: --protocol robustness-v2 expects one of {list(CONTROLLERS)}")
     workers = _int("--workers", args.workers, 1, 1024, "worker processes")
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of numpy's legacy RandomState (upstream's np.random.seed)", 0)
-    out = (
-        Path(args.out)
-        if args.out
-        else Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}{_plant_suffix(plant)}"
+    out = output_directory(
+        args.out or Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}{_plant_suffix(plant)}"
     )
     journal = out / "runs.json"
     if args.resume and not journal.is_file():
@@ -405,7 +402,7 @@ def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
 def _run_v3(args: argparse.Namespace, plant: Any) -> int:
     task = _protocol_task(args)
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of the v3 protocol's resets", 0)
-    out = Path(args.out) if args.out else Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}{_plant_suffix(plant)}"
+    out = output_directory(args.out or Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}{_plant_suffix(plant)}")
     try:
         from ..evaluate.realai.v3 import v3_score
     except ImportError as exc:
@@ -450,9 +447,7 @@ def _run_realai(args: argparse.Namespace, plant: Any) -> int:
             f"--controller {args.controller!r}: the RealAIGym protocols (--realai, --protocol) expect one of "
             f"{list(CONTROLLER_NAMES)}"
         )
-    out = (
-        Path(args.out) if args.out else Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}{_plant_suffix(plant)}"
-    )
+    out = output_directory(args.out or Path("pendulab-out") / "score" / f"realai-{args.controller}-{task}{_plant_suffix(plant)}")
     planning = ProgressBar(f"planning {args.controller} on {task} (IPOPT)", not args.no_progress)
     steps = ProgressBar(f"RealAIGym run ({args.controller} on {task}, 5000 steps of 2 ms)", not args.no_progress, "step")
     try:

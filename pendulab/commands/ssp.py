@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 
 from . import CLIError
+from ._common import add_vocabulary_option, typed_flag
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -28,7 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     e.add_argument("--controller", choices=("lqr", "tvlqr", "swingup", "nmpc"), default="lqr", help="nmpc: explains why not")
     e.add_argument("--task", help="swing-up task: model, actuation, torque limit, start state, horizon and sample time")
-    e.add_argument("--kind", choices=("rigid", "elastic"), default=None, help="plant model without --task (default rigid)")
+    add_vocabulary_option(e, "model kind", "kind", "plant model without --task (default rigid)", default=None)
     e.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version of both FMUs")
     e.add_argument("--sample-time", type=float, help="controller sample time [s] (default: the task's dt, else 0.01)")
     e.add_argument("--t-final", type=float, help="default experiment stop time [s] (default: the task's horizon, else 10)")
@@ -59,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from ..cosim.ssp import export_ssp
 
     if args.task is not None and args.kind is not None:
-        raise CLIError("--task sets the model; --kind does not apply with it")
+        raise CLIError(f"--task sets the model; {typed_flag(args, 'model kind')} does not apply with it")
     for flag, value in (("--sample-time", args.sample_time), ("--t-final", args.t_final)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise CLIError(f"{flag} must be a positive time [s], got {value!r}")

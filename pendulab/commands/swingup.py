@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from ..control.swingup.tasks import load_task, task_names
     from ..control.swingup.transcription import INTERVALS_WHY, MAX_INTERVALS
     from ._common import ProgressBar, parse_number, plant_settings
+    from .outputs import output_directory
 
     if args.list:
         for name in task_names():
@@ -106,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"--planning {args.planning} applies to elastic tasks only; task {task.name!r} is rigid")
     # With --json, stdout carries the summary alone: every message goes to stderr.
     say = (lambda *a, **k: print(*a, **k, file=sys.stderr)) if args.json else print
-    out = Path(args.out) if args.out else Path("pendulab-out") / "swingup" / (task.name + ("-identified" if robot else ""))
+    out = output_directory(args.out or Path("pendulab-out") / "swingup" / (task.name + ("-identified" if robot else "")))
     out.mkdir(parents=True, exist_ok=True)
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={N or task.N}) ...", file=sys.stderr)
     bar = ProgressBar(f"[swingup] planning {task.name} (IPOPT)", not args.no_progress)
@@ -141,7 +142,11 @@ def run(args: argparse.Namespace) -> int:
     _optimal_csv(ep, out / "optimal.csv")
     figs = plot_episode(ep, out)
     if not args.no_gif:
-        figs.append(animate_episode(ep, out / "swingup.gif"))
+        frames = ProgressBar("[swingup] writing swingup.gif", not args.no_progress, "frame")
+        try:
+            figs.append(animate_episode(ep, out / "swingup.gif", progress=frames))
+        finally:
+            frames.close()
     if args.fmu:
         summary.update(_fmu_loop(ep, out))
     if args.starts:

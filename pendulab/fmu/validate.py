@@ -2,7 +2,7 @@
 
 By default the FMU is checked **at its own parameters and start values** (the
 start values of its ``modelDescription.xml``, e.g. an FMU exported with
-``--set k1=1e5 --initial theta1=1.0`` runs with k1 = 1e5 and theta1 = 1.0): each
+``--set k1=1e5 --init theta1=1.0`` runs with k1 = 1e5 and theta1 = 1.0): each
 validation scene of its model kind lends only its horizon, output step, sine
 torque, solver tolerance and bound. Named scenes (``scenes=[...]``, CLI
 ``--scene``) run as they are, with the scene's parameters and initial state.

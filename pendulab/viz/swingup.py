@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -168,7 +169,13 @@ def _error_figure(ep: Episode, finish) -> None:
     finish(fig, "error.png")
 
 
-def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: float | None = None) -> Path:
+def animate_episode(
+    ep: Episode,
+    path: str | Path,
+    fps: int = 25,
+    max_seconds: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
     """Animated GIF of the closed-loop episode (swing-up and hold), real time at ``fps``.
 
     The links are drawn straight from the pivot through both bobs, with a trace
@@ -184,6 +191,9 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
         Frames per second of simulated time.
     max_seconds : float, optional
         Simulated time shown [s] (default: the whole closed loop).
+    progress : callable, optional
+        ``progress(done, total)`` in frames, after each frame is drawn (writing a GIF takes minutes
+        on a loaded machine: the CLI shows a bar with it).
 
     Returns
     -------
@@ -231,7 +241,8 @@ def animate_episode(ep: Episode, path: str | Path, fps: int = 25, max_seconds: f
     anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     try:
         with atomic_path(path) as tmp:  # an interrupted animation never leaves a truncated GIF
-            anim.save(tmp, writer=PillowWriter(fps=fps))
+            report = None if progress is None else (lambda i, n: progress(i + 1, n))
+            anim.save(tmp, writer=PillowWriter(fps=fps), progress_callback=report)
     finally:
         plt.close(fig)
     return path

@@ -192,5 +192,8 @@ def test_sigint_stops_cleanly(name, moment, tmp_path):
         (out / "big.csv").unlink()  # the earlier run's file, untouched: fine (not a 300 s trajectory)
     names = _check_outputs(out)
     if "summary.json" in names:
-        # The summary is written last: when it exists, the run's other outputs are complete (checked above).
-        assert len(names) > 1
+        # An interrupted run's directory is marked: summary.json says "interrupted" and lists what was finished
+        # (a complete run's summary, written last, would not be there after an interrupt).
+        marker = json.loads((out / "summary.json").read_text())
+        assert marker["status"] == "interrupted", marker
+        assert sorted(Path(f).name for f in marker["finished_files"]) == sorted(n for n in names if n != "summary.json")
