@@ -61,3 +61,20 @@ def test_every_help_text_is_plain():
     texts = list(walk(build_parser()))
     assert len(texts) > 200  # the whole tree was walked
     assert not [t for t in texts if "``" in t]
+
+
+def test_every_command_has_out_and_json():
+    import argparse
+
+    from pendulab.cli import build_parser
+
+    def leaves(parser, name="pendulab"):
+        subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        for action in subs:
+            for key, child in action.choices.items():
+                yield from leaves(child, f"{name} {key}")
+        if not subs or not any(isinstance(a, argparse._SubParsersAction) and a.required for a in subs):
+            yield name, {o for a in parser._actions for o in a.option_strings}
+
+    missing = {name: sorted({"--out", "--json"} - flags) for name, flags in leaves(build_parser()) if name != "pendulab"}
+    assert {name: m for name, m in missing.items() if m} == {}

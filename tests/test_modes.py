@@ -85,3 +85,18 @@ def test_modes_at_a_state_and_bad_input():
         pl.modes(model, "upside")
     with pytest.raises(ValueError, match=r"x must have shape \(4,\)"):
         pl.modes(model, np.zeros(8))
+
+
+def test_the_table_gives_a_frequency_only_to_modes_that_oscillate():
+    from pendulab.analysis.modes import mode_table
+
+    model = pl.rigid()
+    down = pl.modes(model, "down-down")
+    up = pl.modes(model, "up-up")
+    rows_down = mode_table(down).splitlines()[2:]
+    rows_up = mode_table(up).splitlines()[2:]
+    for row, m in zip(rows_down, down, strict=True):
+        assert m.kind == "oscillatory" and f"{m.freq_hz:.4g}" in row.split()
+    for row, m in zip(rows_up, up, strict=True):
+        # a real eigenvalue is a growth or decay rate, not a frequency: the f [Hz] column says "-"
+        assert m.kind in ("unstable", "decaying") and row.split()[4] == "-"

@@ -218,9 +218,9 @@ def mode_table(mode_list: Sequence[Mode]) -> str:
     Returns
     -------
     str
-        One row per mode: label, kind, omega_n [rad/s], f [Hz], damping
-        ratio, time constant [s] (``-`` if infinite) and shape; ``"(no modes)"``
-        for an empty list.
+        One row per mode: label, kind, omega_n [rad/s], f [Hz] (``-`` for a mode that does
+        not oscillate: a real eigenvalue has a rate, not a frequency), damping ratio, time
+        constant [s] (``-`` if infinite) and shape; ``"(no modes)"`` for an empty list.
     """
     if not mode_list:
         return "(no modes)"
@@ -231,8 +231,9 @@ def mode_table(mode_list: Sequence[Mode]) -> str:
     lines = [head, "-" * len(head)]
     for m in mode_list:
         tau = "-" if math.isinf(m.time_constant) else f"{m.time_constant:.4g}"
+        freq = f"{m.freq_hz:.4g}" if m.kind == "oscillatory" else "-"
         lines.append(
-            f"{m.label:<28} {m.kind:<11} {m.omega_n:>15.5g} {m.freq_hz:>8.4g} {m.damping_ratio:>7.3f} {tau:>8}  "
+            f"{m.label:<28} {m.kind:<11} {m.omega_n:>15.5g} {freq:>8} {m.damping_ratio:>7.3f} {tau:>8}  "
             + " ".join(f"{s:>7.3f}" for s in m.shape)
         )
     return "\n".join(lines)

@@ -250,11 +250,16 @@ def _hierarchy(args: argparse.Namespace) -> int:
             cells.append(f"**{r['chosen']}** ({errs})")
         lines.append(f"| {k:.0e} | " + " | ".join(cells) + " |")
     atomic_write_text(out / "hierarchy_table.md", "\n".join(lines) + "\n")
-    print("\n".join(lines))
     scene_lines = _shipped_scene_table(quick=args.quick)
     atomic_write_text(out / "hierarchy_scenes.md", "\n".join(scene_lines) + "\n")
-    print("\n".join(scene_lines))
-    print(f"wrote {path}, {out / 'hierarchy_table.md'} and {out / 'hierarchy_scenes.md'}")
+    files = [str(path), str(out / "hierarchy_table.md"), str(out / "hierarchy_scenes.md")]
+    if args.json:
+        finite = [{k: (v if not isinstance(v, float) or math.isfinite(v) else None) for k, v in r.items()} for r in rows]
+        print(json.dumps({"stiffness": list(ks), "amplitudes": list(amps), "rows": finite, "files": files}, indent=1))
+    else:
+        print("\n".join(lines))
+        print("\n".join(scene_lines))
+    print(f"wrote {', '.join(files)}", file=sys.stderr if args.json else sys.stdout)
     return 0
 
 
@@ -340,8 +345,11 @@ def _ensemble(args: argparse.Namespace) -> int:
     text = eb.ensemble_markdown(bench)
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out, text)
-    print(text)
-    print(f"wrote {out}")
+    if args.json:
+        print(json.dumps({"out": str(out), "report": text}))
+    else:
+        print(text)
+    print(f"wrote {out}", file=sys.stderr if args.json else sys.stdout)
     return 0
 
 
@@ -388,6 +396,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     hi.add_argument("--out", default=_OUT_HIERARCHY, help=f"output directory (default ./{_OUT_HIERARCHY}{_DOCS_NOTE})")
     hi.add_argument("--quick", action="store_true", help="3 x 2 grid (CI smoke run)")
     hi.add_argument("--tolerance", type=float, default=1e-2, help="error tolerance on theta1, theta2 [rad], x2, y2 [m]")
+    hi.add_argument("--json", action="store_true", help="print one JSON summary on stdout (messages go to stderr)")
     hi.set_defaults(func=_hierarchy)
 
     rf = sub.add_parser("references", help="recompute the stored reference solutions of the cases")
@@ -414,4 +423,5 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     en.add_argument("--elastic-grid", type=int, default=100, help="grid of the elastic/rigid timing (0: skip; default 100)")
     en.add_argument("--k", type=float, default=None, help="elastic stiffness [N/m] (default: the flipmap command's)")
     en.add_argument("--out", default="benchmarks/results/ensemble.md", help="Markdown results file")
+    en.add_argument("--json", action="store_true", help="print one JSON summary on stdout (messages go to stderr)")
     en.set_defaults(func=_ensemble)

@@ -106,6 +106,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--tolerance", type=float, default=1e-10)
     s.add_argument("--native", action="store_true", help="run the native sampled loop instead of the FMU")
     s.add_argument("--out", type=Path, default=Path("pendulab-out/cosim-sweep"), help="output directory")
+    s.add_argument(
+        "--json", action="store_true", help="print the critical steps as one JSON object on stdout (messages go to stderr)"
+    )
     s.set_defaults(func=run_sweep)
 
 
@@ -476,20 +479,18 @@ def run_sweep(args: argparse.Namespace) -> int:
         ]
         print(
             f"{res.kind}: critical comm step predicted {res.h_crit_pred * 1e3:.2f} ms, measured {res.h_crit_meas * 1e3:.2f} ms, "
-            f"large perturbation lost from {res.h_crit_large * 1e3:.2f} ms"
+            f"large perturbation lost from {res.h_crit_large * 1e3:.2f} ms",
+            file=sys.stderr if args.json else sys.stdout,
         )
     # Atomic writes; the summaries (sweep.json, then the sweep.md table) last.
     atomic_write_text(out / "sweep.csv", "\n".join(",".join(str(v) for v in row) for row in rows) + "\n")
-    atomic_write_text(
-        out / "sweep.json",
-        json.dumps(
-            [
-                {"kind": r.kind, "h_crit_pred": r.h_crit_pred, "h_crit_meas": r.h_crit_meas, "h_crit_large": r.h_crit_large}
-                for r in results
-            ],
-            indent=2,
-        ),
-    )
+    critical = [
+        {"kind": r.kind, "h_crit_pred": r.h_crit_pred, "h_crit_meas": r.h_crit_meas, "h_crit_large": r.h_crit_large}
+        for r in results
+    ]
+    atomic_write_text(out / "sweep.json", json.dumps(critical, indent=2))
     atomic_write_text(out / "sweep.md", "\n".join(lines))
-    print(f"wrote {out / 'sweep.png'}, sweep.md, sweep.csv, sweep.json")
+    print(f"wrote {out / 'sweep.png'}, sweep.md, sweep.csv, sweep.json", file=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        print(json.dumps({"out": str(out), "critical_steps": critical}))
     return 0

@@ -82,11 +82,12 @@ def test_cosim_cli_bad_input(cosim_fmu, tmp_path, capsys):
     assert "--steps" in capsys.readouterr().err
 
 
-def test_cosim_sweep_cli(cosim_fmu, tmp_path):
+def test_cosim_sweep_cli(cosim_fmu, tmp_path, capsys):
     out = tmp_path / "sweep"
     args = ["cosim", "sweep", "--kinds", "rigid", "--fmu-rigid", str(cosim_fmu("rigid", 2)), "--steps", "0.17,0.18"]
-    assert main([*args, "--out", str(out)]) == 0
+    assert main([*args, "--out", str(out), "--json"]) == 0
     crit = json.loads((out / "sweep.json").read_text())[0]
+    assert json.loads(capsys.readouterr().out)["critical_steps"] == [crit]  # --json prints what sweep.json holds
     assert 0.17 < crit["h_crit_pred"] < 0.18  # predicted crossing (175.2 ms)
     assert abs(crit["h_crit_meas"] - crit["h_crit_pred"]) < 1e-3
     assert "| 0.17 |" in (out / "sweep.md").read_text()
