@@ -20,6 +20,13 @@ controller is wrapped with :class:`pendulab.control.robust.EstimatedController`.
 from __future__ import annotations
 
 from .bank import MultipleModelEstimator
-from .ekf import MAX_DELAY_STEPS, ExtendedKalmanFilter, StateEstimator, delay_steps
+from .ekf import MAX_DELAY_STEPS, EstimationError, ExtendedKalmanFilter, StateEstimator, delay_steps
 
-__all__ = ["StateEstimator", "ExtendedKalmanFilter", "MultipleModelEstimator", "delay_steps", "MAX_DELAY_STEPS"]
+__all__ = [
+    "StateEstimator",
+    "ExtendedKalmanFilter",
+    "MultipleModelEstimator",
+    "EstimationError",
+    "delay_steps",
+    "MAX_DELAY_STEPS",
+]

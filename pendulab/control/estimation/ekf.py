@@ -10,12 +10,33 @@ import casadi as ca
 import numpy as np
 
 from ..._checks import bounded_int, check_model, positive_float
+from ...analysis.linearize import linearize
 from ...model.model import INPUT_NAMES, Model
 
-__all__ = ["StateEstimator", "ExtendedKalmanFilter", "delay_steps", "MAX_DELAY_STEPS"]
+__all__ = ["StateEstimator", "ExtendedKalmanFilter", "EstimationError", "delay_steps", "MAX_DELAY_STEPS", "STD_RANGE"]
 
 #: Longest measurement delay [samples] a filter keeps a torque history for.
 MAX_DELAY_STEPS: int = 200
+
+#: Admissible non-zero standard deviations: their squares (the covariances the filter works with) and the
+#: ratios of those must stay normal doubles (1e-200 squared underflows to 0, 1e200 squared overflows).
+STD_RANGE: tuple[float, float] = (1e-100, 1e100)
+
+
+#: Largest magnitude of a measured state entry [rad, rad/s, m, m/s] or a torque [N.m] the filter takes: far
+#: beyond any double pendulum, and small enough that their squares in the covariance update stay finite.
+MAX_MAGNITUDE: float = 1e6
+
+#: Largest ``sample_time`` times the fastest rate of the model at the prior (largest |eigenvalue| of its
+#: linearization): classic RK4 is stable up to 2.78; beyond, the prediction itself diverges.
+MAX_STEP_RATE: float = 2.5
+
+
+class EstimationError(RuntimeError):
+    """A filter step produced a non-finite estimate or covariance (or a singular innovation covariance).
+
+    The filter is left as it was before the step: nothing non-finite is ever returned or kept.
+    """
 
 
 @runtime_checkable
@@ -87,6 +108,13 @@ def _std_vector(name: str, value: Any, n: int, *, allow_zero: bool) -> np.ndarra
     if not np.all(np.isfinite(a)) or np.any(a < 0.0) or (not allow_zero and np.any(a == 0.0)):
         what = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{name} must be finite standard deviations {what}, got {a.tolist()!r}")
+    lo, hi = STD_RANGE
+    nonzero = a[a != 0.0]
+    if np.any(nonzero < lo) or np.any(nonzero > hi):
+        raise ValueError(
+            f"{name} must be standard deviations in [{lo:g}, {hi:g}]{' or 0' if allow_zero else ''} (their squares are the "
+            f"filter's covariances and must stay normal doubles), got {a.tolist()!r}"
+        )
     return a
 
 
@@ -197,6 +225,13 @@ class ExtendedKalmanFilter:
         self.H[np.arange(len(self.measured)), self._idx] = 1.0
         self._angles = np.array([i for i, n in enumerate(self.measured) if n.startswith("theta")], dtype=int)
         self.x0 = model.state() if x0 is None else model.check_state(x0, "x0").astype(float)
+        rate = float(np.max(np.abs(np.linalg.eigvals(linearize(model, self.x0).A))))
+        if rate * self.sample_time > MAX_STEP_RATE:
+            raise ValueError(
+                f"sample_time {self.sample_time:g} s is too long for the filter's RK4 prediction: the model's fastest rate "
+                f"at the prior is {rate:.4g} 1/s and sample_time x rate must be <= {MAX_STEP_RATE} "
+                f"(sample_time <= {MAX_STEP_RATE / rate:.3g} s)"
+            )
         x0s = _std_vector("x0_std", x0_std, nx, allow_zero=False)
         self.P0 = np.diag(np.concatenate([x0s, np.full(nd, 0.5)]) ** 2)
         if torque_limit is None:
@@ -271,8 +306,11 @@ class ExtendedKalmanFilter:
             ``u`` is not two finite torques.
         """
         uc = np.asarray(u, dtype=float).reshape(-1)
-        if uc.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(uc)):
-            raise ValueError(f"u must be finite torques (tau1, tau2) [N.m] of shape (2,), got {np.asarray(u).tolist()!r}")
+        if uc.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(uc)) or np.any(np.abs(uc) > MAX_MAGNITUDE):
+            raise ValueError(
+                f"u must be finite torques (tau1, tau2) [N.m] of shape (2,), at most {MAX_MAGNITUDE:g} in magnitude, "
+                f"got {np.asarray(u).tolist()!r}"
+            )
         ua = self.u_applied + self.response * (uc - self.u_applied)
         self.u_applied = np.clip(ua, -self.torque_limit, self.torque_limit)
         self._hist.append(self.u_applied.copy())
@@ -299,8 +337,33 @@ class ExtendedKalmanFilter:
         ------
         ValueError
             Wrong shape or non-finite ``y`` or ``u``.
+        EstimationError
+            The step produced a non-finite estimate or covariance (e.g. a measurement or torque of 1e300,
+            a sample time far beyond the dynamics' time scales); the filter is restored to its state
+            before the call.
         """
         ym = self._measurement(y)
+        saved = (self.z.copy(), self.P.copy(), self.k, self.u_applied.copy(), list(self._hist), self.x_hat.copy(), self.nis)
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                x_hat = self._step_filter(ym, u)
+        except np.linalg.LinAlgError as exc:
+            x_hat, reason = None, f"singular innovation covariance ({exc})"
+        else:
+            reason = "a non-finite estimate or covariance"
+        if x_hat is None or not (np.all(np.isfinite(self.z)) and np.all(np.isfinite(self.P)) and np.all(np.isfinite(x_hat))):
+            self.z, self.P, self.k, self.u_applied, hist, self.x_hat, self.nis = saved
+            self._hist.clear()
+            self._hist.extend(hist)
+            raise EstimationError(
+                f"EKF update at t = {t!r} s gave {reason} (measurement {np.asarray(ym).tolist()!r}, torque "
+                f"{None if u is None else np.asarray(u, dtype=float).tolist()!r}, sample time {self.sample_time:g} s); "
+                "the filter is left as before the update"
+            )
+        return x_hat
+
+    def _step_filter(self, ym: np.ndarray, u: Any) -> np.ndarray:
+        """The update itself (see :meth:`update`), without the output check."""
         if u is not None and self.k > 0:
             self.apply_command(u)
         n = self.n_delay
@@ -341,9 +404,9 @@ class ExtendedKalmanFilter:
         a = np.asarray(y, dtype=float).reshape(-1)
         if a.shape == (self.model.nx,) and len(self.measured) != self.model.nx:
             a = a[self._idx]
-        if a.shape != (len(self.measured),) or not np.all(np.isfinite(a)):
+        if a.shape != (len(self.measured),) or not np.all(np.isfinite(a)) or np.any(np.abs(a) > MAX_MAGNITUDE):
             raise ValueError(
-                f"y must be finite measurements of {list(self.measured)} (or a full state of {self.model.nx}), "
-                f"got {np.asarray(y).tolist()!r}"
+                f"y must be finite measurements of {list(self.measured)} (or a full state of {self.model.nx}), at most "
+                f"{MAX_MAGNITUDE:g} in magnitude, got {np.asarray(y).tolist()!r}"
             )
         return a
