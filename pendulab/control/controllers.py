@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._checks import check_model, positive_float
+from ..analysis.linearize import linearize
 from ..model.model import INPUT_NAMES, Model
 from .feedback import SampledController, actuated_inputs, balance_controller, energy_swingup, upright_state
 from .tracking import swingup_reference, tvlqr, tvlqr_tracker
@@ -93,9 +94,52 @@ def make_controller(
     check_model(model)
     if not isinstance(name, str):
         raise TypeError(f"name must be a controller name (one of {list(CONTROLLERS)}), got {type(name).__name__}")
-    h = positive_float("sample_time", sample_time)
+    h = check_sample_time(model, sample_time)
+    if u_max is not None:
+        u_max = positive_float("u_max", u_max, "[N.m] (a torque limit of 0 or less drives nothing)")
     ctrl, x0 = _make_plain(name, model, h, u_max, t_ref, reference, actuation, nmpc_solver)
     return _with_estimator(ctrl, x0, model, estimator, u_max), x0
+
+
+#: Shortest controller sample time [s]: 1e5 calls per simulated second (a budget, not physics).
+MIN_SAMPLE_TIME: float = 1e-5
+#: Longest sample time, as ``sample_time`` x the fastest unstable rate of the upright equilibrium: held for
+#: longer, a sample lets the unstable mode grow e^2 = 7.4-fold before the controller can answer.
+MAX_UNSTABLE_GROWTH: float = 2.0
+
+
+def check_sample_time(model: Model, sample_time: Any) -> float:
+    """A controller sample time that can control ``model``: at least :data:`MIN_SAMPLE_TIME`, at most
+    :data:`MAX_UNSTABLE_GROWTH` / (fastest unstable rate at the upright equilibrium).
+
+    Parameters
+    ----------
+    model : Model
+        The plant the controller is designed for.
+    sample_time : float
+        [s].
+
+    Returns
+    -------
+    float
+        The sample time.
+
+    Raises
+    ------
+    ValueError
+        Not a positive finite number, or outside that range (the message gives the range).
+    """
+    h = positive_float("sample_time", sample_time, "[s]")
+    A = linearize(model, upright_state(model)).A
+    rate = float(max(np.max(np.linalg.eigvals(A).real), 0.0))
+    longest = MAX_UNSTABLE_GROWTH / rate if rate > 0.0 else np.inf
+    if not MIN_SAMPLE_TIME <= h <= longest:
+        raise ValueError(
+            f"sample_time must be in [{MIN_SAMPLE_TIME:g}, {longest:.3g}] s for this model (at least {MIN_SAMPLE_TIME:g} s: "
+            f"a budget of 1e5 calls per second; at most {MAX_UNSTABLE_GROWTH:g} / {rate:.4g} 1/s, the fastest unstable rate "
+            f"upright), got {h!r}"
+        )
+    return h
 
 
 def _with_estimator(
@@ -235,9 +279,10 @@ def controller_for_task(
     if name == "nmpc":
         from .nmpc import nmpc_for_task
 
-        ctrl0, x0 = nmpc_for_task(task, sample_time=0.02 if sample_time is None else sample_time, solver=nmpc_solver)
+        h = check_sample_time(model, 0.02 if sample_time is None else sample_time)
+        ctrl0, x0 = nmpc_for_task(task, sample_time=h, solver=nmpc_solver)
         return _with_estimator(ctrl0, x0, model, estimator, pb.torque_limit), x0
-    h = positive_float("sample_time", task.dt if sample_time is None else sample_time)
+    h = check_sample_time(model, task.dt if sample_time is None else sample_time)
     if name == "lqr":
         ctrl: SampledController = balance_controller(model, h, design="discrete", actuation=pb.actuation, u_max=pb.torque_limit)
     elif name == "tvlqr":
