@@ -174,7 +174,10 @@ def choose_method(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, ato
     A = np.asarray(model.functions["jac_rhs"](x0, u0, model.p)[0], dtype=float)
     omega_max = float(np.max(np.abs(np.linalg.eigvals(A))))
     p = model.params
-    omega_ref = 2.0 * math.sqrt(p.g / min(p.L1, p.L2))
+    # The pendular time scale; without gravity (g = 0) the motion's own rates set it, and a model at rest
+    # without gravity does not move at all (1 rad/s: any method is accurate then).
+    rates = np.abs(np.asarray(x0, dtype=float)[model.nq : model.nq + 2])
+    omega_ref = max(2.0 * math.sqrt(p.g / min(p.L1, p.L2)), float(np.max(rates)), 1.0 if p.g == 0.0 else 0.0)
     tol = min(rtol, atol)
     h_acc = tol ** (1.0 / 5.0) / omega_ref
     omega_limit = STABILITY_LIMIT / h_acc

@@ -76,6 +76,46 @@ __all__ = [
 ]
 
 
+#: Fastest spring mode the a priori rule models [rad/s]: beyond, the modal analysis and the spring terms of
+#: the error bounds lose every digit in double precision (k / m = 1e12 1/s^2).
+MAX_SPRING_RATE: float = 1e6
+
+
+def check_rule_domain(scene: Scene) -> None:
+    """Refuse a scene the a priori rule was not built for, before any work.
+
+    The rule predicts errors from the linear modes about the hanging equilibrium: it needs gravity
+    (``g > 0``: without it there is no restoring pendular mode, and the energy scale of a swing is
+    zero) and springs whose modes double precision still resolves (``sqrt(k / m)`` at most
+    :data:`MAX_SPRING_RATE`).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+
+    Raises
+    ------
+    ValueError
+        Outside that domain; the message names the parameter and says what to run instead.
+    """
+    p = scene.model.params
+    where = f"scene {scene.name!r}"
+    if not p.g > 0.0:
+        raise ValueError(
+            f"{where}: g = {p.g!r}; the a priori rule predicts from the pendular modes about hanging and needs g > 0 "
+            "(use `scene check --measure`, which runs every level)"
+        )
+    if scene.model.kind == "elastic":
+        rate = max(math.sqrt(p.k1 / p.m1), math.sqrt(p.k2 / p.m2))
+        if not rate <= MAX_SPRING_RATE:
+            raise ValueError(
+                f"{where}: springs k1 = {p.k1!r}, k2 = {p.k2!r} N/m ring at {rate:.3g} rad/s, beyond the {MAX_SPRING_RATE:g} "
+                "rad/s the rule resolves in double precision (and beyond what an elastic model of a pendulum means: "
+                "use the rigid model)"
+            )
+
+
 def choose_model(
     scene: Scene,
     *,
@@ -107,7 +147,8 @@ def choose_model(
     TypeError
         ``scene`` is not a :class:`Scene`.
     ValueError
-        No tolerance (neither given nor in the scene), or not a positive number.
+        No tolerance (neither given nor in the scene), or not a positive number; a scene outside
+        the rule's domain (:func:`check_rule_domain`).
     SimulationError
         With ``verify``: the reference or the chosen level failed to integrate.
     """
@@ -119,6 +160,7 @@ def choose_model(
     tol = positive_float("tolerance", tol, "(max abs error of the outputs, in their units)")
     if not isinstance(verify, bool):
         raise TypeError(f"verify must be True or False, got {verify!r}")
+    check_rule_domain(scene)
     start = time.perf_counter()
     f = _features(scene)
     t_grid = time_grid(scene.t_final, scene.dt)
