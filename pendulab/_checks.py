@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from typing import Any
 
 __all__ = [
@@ -215,6 +216,55 @@ def check_spring_lengths(kind: str, x: Any, name: str = "x0") -> None:
         raise ValueError(f"{name}: spring lengths r1, r2 must be > 0 m, got {r.tolist()}")
     row = int(np.argwhere(bad.any(axis=-1))[0][0])
     raise ValueError(f"{name}[{row}]: spring lengths r1, r2 must be > 0 m, got {r[row].tolist()}")
+
+
+class BudgetError(ValueError):
+    """A request whose size (points, runs, repetitions) is beyond its budget, refused before any work."""
+
+
+def within_budget(what: str, size: float, budget_name: str, default: int) -> int:
+    """Check a resource size against its budget before anything is allocated or run.
+
+    The budget is ``default`` unless the environment variable ``budget_name`` sets another (a
+    positive integer): a deliberate large run names it, a typo (``dt = 1e-12``) does not get it.
+
+    Parameters
+    ----------
+    what : str
+        What is counted, for the message (e.g. ``"output points (t_final / dt + 1)"``).
+    size : float
+        The requested size (may be huge or inf).
+    budget_name : str
+        Environment variable overriding the budget, named in the message.
+    default : int
+        The default budget.
+
+    Returns
+    -------
+    int
+        ``size`` as an int.
+
+    Raises
+    ------
+    BudgetError
+        ``size`` beyond the budget (or the variable is not a positive integer).
+    """
+    raw = os.environ.get(budget_name)
+    if raw is None:
+        budget = default
+    else:
+        try:
+            budget = int(raw)
+        except ValueError:
+            budget = 0
+        if budget < 1:
+            raise BudgetError(f"{budget_name} must be a positive integer, got {raw!r}")
+    if not size <= budget:
+        raise BudgetError(
+            f"{what}: {size:.4g} is beyond the budget of {budget:.4g}; set the environment variable {budget_name} "
+            "to a larger number for a deliberately large run"
+        )
+    return int(size)
 
 
 class MissingExtraError(ImportError):

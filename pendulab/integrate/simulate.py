@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import bounded_int, check_model, positive_float, relative_tolerance
+from .._checks import bounded_int, check_model, positive_float, relative_tolerance, within_budget
 from ..model.model import Model
 from .auto import choose_method
 from .energy import energy_flows, trajectory_energy_flows  # noqa: F401  (re-exported: their old home)
@@ -146,6 +146,11 @@ class TimeInput:
 InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any] | TimeInput
 
 
+#: Default budget of output points of one run: 5e6 rows of states, inputs and outputs (about 0.7 GB for the
+#: elastic model); ``PENDULAB_MAX_OUTPUT_POINTS`` raises it for a deliberately large run.
+MAX_OUTPUT_POINTS: int = 5_000_000
+
+
 def time_grid(t_final: float, dt: float) -> np.ndarray:
     """Uniform output grid from 0 to ``t_final`` with step at most ``dt``.
 
@@ -160,7 +165,15 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
     -------
     ndarray, shape (N,)
         ``N = ceil(t_final / dt) + 1`` equally spaced times [s].
+
+    Raises
+    ------
+    BudgetError
+        ``N`` beyond :data:`MAX_OUTPUT_POINTS` (environment variable ``PENDULAB_MAX_OUTPUT_POINTS``
+        overrides it), checked before anything is allocated.
     """
+    points = t_final / dt + 1.0
+    within_budget("output points (t_final / dt + 1)", points, "PENDULAB_MAX_OUTPUT_POINTS", MAX_OUTPUT_POINTS)
     n = max(1, math.ceil(t_final / dt - 1e-9))
     return np.linspace(0.0, t_final, n + 1)
 

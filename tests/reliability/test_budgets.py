@@ -128,3 +128,34 @@ def test_budget_options_do_not_reach_families_without_them():
     """rk4 accepts no options; the budget options are the front end's, so they pass."""
     tr = pl.simulate(pl.rigid(), CHAOTIC, 0.1, method="rk4", options={"max_steps": 1000, "max_wall_time": 10.0})
     assert tr.stats["n_steps"] == 100
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["simulate", "--model", "rigid", "--t-final", "1e12", "--dt", "1e-3"],
+        ["simulate", "--model", "rigid", "--t-final", "1", "--dt", "1e-12"],
+    ],
+)
+def test_output_grids_beyond_the_budget_are_refused_before_allocation(argv, capsys):
+    from pendulab.cli import main
+
+    assert main(argv) == 2  # not a MemoryError of 7 PiB: refused before any array exists
+    err = capsys.readouterr().err
+    assert "beyond the budget of 5e+06" in err and "PENDULAB_MAX_OUTPUT_POINTS" in err
+
+
+def test_the_output_budget_is_named_and_overridable(monkeypatch):
+    import pendulab as pl
+    from pendulab._checks import BudgetError
+
+    model = pl.rigid()
+    with pytest.raises(BudgetError, match="PENDULAB_MAX_OUTPUT_POINTS"):
+        pl.simulate(model, model.state(), 1.0, 1e-7)  # 1e7 + 1 points
+    monkeypatch.setenv("PENDULAB_MAX_OUTPUT_POINTS", "100")
+    with pytest.raises(BudgetError, match="budget of 100"):
+        pl.simulate(model, model.state(), 1.0, 0.001)  # 1001 points: within the default, beyond 100
+    assert len(pl.simulate(model, model.state(), 1.0, 0.02).t) == 51  # 51 points fit the raised-and-lowered budget
+    monkeypatch.setenv("PENDULAB_MAX_OUTPUT_POINTS", "-3")
+    with pytest.raises(BudgetError, match="must be a positive integer"):
+        pl.simulate(model, model.state(), 1.0, 0.02)
