@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -39,3 +40,36 @@ def test_a_run_that_fails_on_bad_input_marks_nothing(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["swingup", "--task", "no-such-task", "--out", str(out)]) == 2
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "make", "message"),
+    [
+        (["score", "--controller", "lqr", "--task", "pendubot"], "file", "is a file, not a directory"),
+        (["swingup", "--task", "pendubot", "--no-progress"], "file", "is a file, not a directory"),
+        (["score", "--controller", "lqr", "--task", "pendubot", "--resume"], "journal-dir", "is not a file"),
+        (["score", "--protocol", "robustness-v2", "--controller", "lqr", "--task", "pendubot", "--quick"], "runs-dir",
+         "is not a file"),
+    ],
+)  # fmt: skip
+def test_unwritable_outputs_are_refused_before_any_work(argv, make, message, tmp_path, capsys, monkeypatch):
+    """Found: robustness-v2 --out on a read-only mount ran its first batch (288 s), then failed; a records.json that
+    was a directory read as "no records"."""
+    import pendulab.control.swingup.episode as episode
+
+    monkeypatch.setattr(episode, "run_episode", _interrupt)  # would mark work as started: must not be reached
+    if make == "file":
+        (tmp_path / "f").write_text("")
+        out = tmp_path / "f" / "run"
+    else:
+        out = tmp_path / "run"
+        (out / ("records.json" if make == "journal-dir" else "runs.json")).mkdir(parents=True)
+    assert main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "interrupted" not in err and "Traceback" not in err
+
+
+@pytest.mark.skipif(not Path("/proc/self").exists(), reason="needs Linux /proc, where nothing can be created")
+def test_a_folder_that_takes_no_entries_is_refused(capsys):
+    assert main(["swingup", "--task", "pendubot", "--out", "/proc/pendulab-out"]) == 2
+    assert "cannot write under /proc" in capsys.readouterr().err

@@ -6,12 +6,13 @@ Kept apart from the heavier helpers so the entry point can import it without Num
 from __future__ import annotations
 
 import json
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
 from .._io import atomic_write_text
 
-__all__ = ["output_directory", "mark_interrupted", "forget_output_directories"]
+__all__ = ["output_directory", "check_writable", "check_journal", "mark_interrupted", "forget_output_directories"]
 
 #: Output directories the running command declared (:func:`output_directory`); :func:`mark_interrupted` marks them.
 _OUTPUT_DIRECTORIES: list[Path] = []
@@ -20,14 +21,51 @@ _OUTPUT_DIRECTORIES: list[Path] = []
 def output_directory(path: str | Path) -> Path:
     """Declare ``path`` an output directory of the command running now, and return it as a Path.
 
-    If the command is interrupted (Ctrl-C), ``pendulab``'s entry point calls :func:`mark_interrupted`,
-    which leaves ``DIR/summary.json`` with ``"status": "interrupted"`` and the files the run did
-    finish, so a directory of partial outputs never passes for a finished run.
+    It is checked writable *before* any work (a protocol that runs minutes must not find out at its
+    first save): the directory, or the nearest existing folder above it, must take a new entry;
+    nothing is left behind by the check. If the command is interrupted (Ctrl-C), ``pendulab``'s entry
+    point calls :func:`mark_interrupted`, which leaves ``DIR/summary.json`` with ``"status":
+    "interrupted"`` and the files the run did finish, so partial outputs never pass for a finished run.
+
+    Raises
+    ------
+    NotADirectoryError
+        ``path`` (or a folder above it) is a file.
+    PermissionError
+        Nothing can be written there (read-only mount, permissions).
     """
     out = Path(path)
+    check_writable(out)
     if out not in _OUTPUT_DIRECTORIES:
         _OUTPUT_DIRECTORIES.append(out)
     return out
+
+
+def check_writable(out: Path) -> None:
+    """Raise unless a directory ``out`` can be created or written into (see :func:`output_directory`)."""
+    probe = out
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise NotADirectoryError(f"output directory {out}: {probe} is a file, not a directory")
+    try:
+        Path(tempfile.mkdtemp(prefix=".pendulab-write-check-", dir=probe)).rmdir()
+    except OSError as exc:
+        raise PermissionError(f"output directory {out}: cannot write under {probe} ({exc.strerror or exc})") from None
+
+
+def check_journal(path: Path) -> None:
+    """Raise unless ``path`` is absent or a regular file (a journal that is a directory is not "no records yet").
+
+    Raises
+    ------
+    IsADirectoryError
+        ``path`` exists and is not a regular file.
+    """
+    if path.exists() and not path.is_file():
+        raise IsADirectoryError(f"journal {path} exists and is not a file; remove it or choose another --out")
 
 
 def mark_interrupted(command: Sequence[str]) -> list[Path]:

@@ -14,7 +14,7 @@ from .._io import atomic_write_text
 from .._version import __version__
 from . import CLIError
 from ._common import ProgressBar, add_plant_option, parse_number, read_plant
-from .outputs import output_directory
+from .outputs import check_journal, output_directory
 
 __all__ = ["register", "run_score"]
 
@@ -217,6 +217,7 @@ def run_score(args: argparse.Namespace) -> int:
     # estimator None matches records files written before the option (data.get("estimator") is None).
     settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats,
                 "estimator": args.estimator, "plant": plant_label(plant)}  # fmt: skip
+    check_journal(out / _RECORDS)
     completed = _resume(out / _RECORDS, settings) if args.resume else ()
 
     def save(records: tuple, complete: bool = False) -> None:
@@ -361,6 +362,7 @@ def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
         args.out or Path("pendulab-out") / "score" / f"robustness-v2-{args.controller}-{task}{_plant_suffix(plant)}"
     )
     journal = out / "runs.json"
+    check_journal(journal)
     if args.resume and not journal.is_file():
         print(f"--resume: no {journal}; starting a new run", file=sys.stderr)
     quick = {"levels": QUICK_LEVELS, "repetitions": 2, "perturbation_repetitions": 5} if args.quick else {}
