@@ -51,6 +51,11 @@ def pooled(scores: list[RecordScore]) -> tuple[np.ndarray, np.ndarray]:
     return torque, np.sqrt((errs**2).mean(axis=1))
 
 
+def summary(scores: dict[str, list[RecordScore]]) -> dict[str, dict[str, list]]:
+    """Pooled torque RMS per joint and prediction RMS per horizon and joint, by model (for the JSON)."""
+    return {m: {"torque_rms": pooled(v)[0].tolist(), "prediction_rms": pooled(v)[1].tolist()} for m, v in scores.items()}
+
+
 def to_json(s: RecordScore) -> dict:
     return {"record": s.record, "model": s.model, "torque_rms": s.torque_rms.tolist(), "torque_n": s.torque_n,
             "prediction": s.prediction.tolist()}  # fmt: skip
@@ -211,7 +216,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "identify.md").write_text("\n".join(lines))
     doc = {
-        "loo": {m: {"torque_rms": pooled(v)[0].tolist(), "prediction_rms": pooled(v)[1].tolist()} for m, v in by_model.items()},
+        "loo": summary(by_model),
         "gain_at_0.25s": [gain[0], gain[1]], "beats_every_dfki_set": beats_all, "chosen": final.chosen,
         "reproducibility": repro, "identify_seconds": times,
         "blind": {m: {"torque_rms": pooled(v)[0].tolist(), "prediction_rms": pooled(v)[1].tolist()} for m, v in blind.items()},

@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_identify import from_json, pooled, table, to_json
+from bench_identify import from_json, pooled, summary, table, to_json
 from tqdm import tqdm
 
 from pendulab.identify.datasets import A0_SWINGUP, A0_SYSID, a0_record
@@ -43,8 +43,8 @@ from pendulab.identify.pipeline import identify
 from pendulab.identify.preprocess import Prepared, prepare
 from pendulab.identify.published import A0_GEOMETRY, DFKI_A0
 from pendulab.identify.records import REALAIGYM_COLUMNS, REALAIGYM_COMMAND_COLUMNS
-from pendulab.identify.regressor import FIXED_NAMES, robot_to_standard
-from pendulab.identify.simulate import HORIZONS, rollout
+from pendulab.identify.regressor import robot_to_standard
+from pendulab.identify.simulate import HORIZONS, open_loop_segments
 from pendulab.identify.validation import RecordScore, leave_one_out, score_record, standard_vector
 from pendulab.model.plant_file import save_plant
 from pendulab.viz.save import save_figure
@@ -113,22 +113,6 @@ def final_fit(kind: str, path: Path, resume: bool) -> dict:
     return doc
 
 
-def summary(scores: dict[str, list[RecordScore]]) -> dict[str, dict[str, list]]:
-    """Pooled torque RMS per joint and prediction RMS per horizon and joint, by model (for the JSON)."""
-    return {m: {"torque_rms": pooled(v)[0].tolist(), "prediction_rms": pooled(v)[1].tolist()} for m, v in scores.items()}
-
-
-def open_loop(prep: Prepared, pi: np.ndarray, every: float, length: float) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Open-loop predictions of ``length`` s from the measured state every ``every`` s: (times, angles (2, steps))."""
-    steps = int(round(length / prep.dt))
-    usable = np.flatnonzero(prep.use)
-    starts = np.arange(usable[0], usable[-1] - steps, int(round(every / prep.dt)))
-    fx = np.array([float(A0_GEOMETRY[k]) for k in FIXED_NAMES])
-    U = np.hstack([prep.tau[s : s + steps].T for s in starts])
-    X = np.asarray(rollout(steps, prep.dt).map(starts.size)(prep.state(starts).T, U, pi, fx)).reshape(4, starts.size, steps)
-    return [(prep.t[s + 1 : s + steps + 1], X[:2, i, :]) for i, s in enumerate(starts)]
-
-
 def a0_figure(
     preps: list[Prepared],
     shown: dict[str, np.ndarray],
@@ -162,7 +146,7 @@ def a0_figure(
             ax = fig.add_subplot(grid[i + 1, j])
             measured = prep.q_measured[:, j]
             for name, pi in reversed(shown.items()):  # pendulab drawn last, on top of DFKI's
-                for t, q in open_loop(prep, pi, every=1.0, length=1.0):
+                for t, q in open_loop_segments(prep, pi, A0_GEOMETRY, every=1.0, length=1.0):
                     ax.plot(t, q[j], color=COLORS[name], lw=1.3 if name == "pendulab" else 1.0, alpha=0.9)
             ax.plot(prep.t, measured, color="k", lw=1.4)
             span = measured.max() - measured.min()

@@ -18,7 +18,7 @@ from ..model.robot import robot_rhs
 from .preprocess import Prepared
 from .regressor import FIXED_NAMES, STANDARD_NAMES, _robot_vector
 
-__all__ = ["joint_rhs", "rollout", "prediction_errors", "HORIZONS"]
+__all__ = ["joint_rhs", "rollout", "prediction_errors", "open_loop_segments", "HORIZONS"]
 
 #: Validation horizons [s] (the identification issue's).
 HORIZONS: tuple[float, ...] = (0.1, 0.25, 0.5, 1.0)
@@ -127,3 +127,34 @@ def prediction_errors(
     X = np.asarray(F(x0, np.hstack(list(U)), pi, fx)).reshape(4, starts.size, steps)
     errs = [X[:2, :, k - 1].T - prep.q_measured[starts + k] for k in k_h]
     return np.stack(errs)
+
+
+def open_loop_segments(
+    prep: Prepared, pi: np.ndarray, fixed: Mapping[str, float], every: float, length: float
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Open-loop predictions of ``length`` seconds started from the measured state every ``every`` seconds.
+
+    Parameters
+    ----------
+    prep : Prepared
+        A prepared record (its measured torques drive the predictions).
+    pi : numpy.ndarray, shape (15,)
+        Standard parameters and torque offsets (:func:`~pendulab.identify.validation.standard_vector`).
+    fixed : mapping of str to float
+        Values of :data:`~pendulab.identify.regressor.FIXED_NAMES`.
+    every, length : float
+        Spacing of the starts and length of each prediction [s].
+
+    Returns
+    -------
+    list of (numpy.ndarray, numpy.ndarray)
+        Per start: times, shape (steps,) [s], and predicted joint angles, shape (2, steps) [rad]; all
+        segments in one mapped CasADi rollout.
+    """
+    steps = int(round(length / prep.dt))
+    usable = np.flatnonzero(prep.use)
+    starts = np.arange(usable[0], usable[-1] - steps, int(round(every / prep.dt)))
+    fx = np.array([float(fixed[k]) for k in FIXED_NAMES])
+    U = np.hstack([prep.tau[s : s + steps].T for s in starts])
+    X = np.asarray(rollout(steps, prep.dt).map(starts.size)(prep.state(starts).T, U, pi, fx)).reshape(4, starts.size, steps)
+    return [(prep.t[s + 1 : s + steps + 1], X[:2, i, :]) for i, s in enumerate(starts)]

@@ -9,25 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from ..identify.preprocess import Prepared
-from ..identify.regressor import FIXED_NAMES
-from ..identify.simulate import HORIZONS, rollout
+from ..identify.simulate import HORIZONS, open_loop_segments
 from ..identify.validation import RecordScore
 from .save import save_figure
 
 __all__ = ["identification_figure"]
-
-
-def _segments(
-    prep: Prepared, pi: np.ndarray, fixed: Mapping[str, float], every: float, length: float
-) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Open-loop predictions of ``length`` seconds started from the measured state every ``every`` seconds."""
-    steps = int(round(length / prep.dt))
-    usable = np.flatnonzero(prep.use)
-    starts = np.arange(usable[0], usable[-1] - steps, int(round(every / prep.dt)))
-    fx = np.array([float(fixed[k]) for k in FIXED_NAMES])
-    U = np.hstack([prep.tau[s : s + steps].T for s in starts])
-    X = np.asarray(rollout(steps, prep.dt).map(starts.size)(prep.state(starts).T, U, pi, fx)).reshape(4, starts.size, steps)
-    return [(prep.t[s + 1 : s + steps + 1], X[:2, i, :]) for i, s in enumerate(starts)]
 
 
 def identification_figure(
@@ -90,7 +76,7 @@ def identification_figure(
             ax = fig.add_subplot(grid[i + 1, j])
             ax.plot(prep.t, prep.q_measured[:, j], color=colors["measured"], lw=1.0, label="measured")
             for c, (name, per_record) in enumerate(list(models.items())[:3]):
-                for k, (t, q) in enumerate(_segments(prep, per_record[i], fixed, every=1.0, length=1.0)):
+                for k, (t, q) in enumerate(open_loop_segments(prep, per_record[i], fixed, every=1.0, length=1.0)):
                     ax.plot(t, q[j], color=palette[c], lw=1.0, alpha=0.9, label=f"{name} (1 s open loop)" if k == 0 else None)
             ax.set_ylabel(f"q{j + 1} [rad]")
             ax.set_title(f"{prep.name}, joint {j + 1}", fontsize=9)

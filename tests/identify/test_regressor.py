@@ -98,3 +98,26 @@ def test_dfki_sets_2_and_3_are_physically_inconsistent(name):
     # pendulab's fit constrains this away; the validation still judges these sets as published.
     with pytest.raises(ValueError, match="I2 .* below m2 r2\\^2"):
         check_robot_params(DFKI_C1[name])
+
+
+def test_open_loop_segments_of_the_true_model_follow_a_synthetic_record():
+    """The open-loop predictions the figures draw: the model that made the record predicts it, a wrong one does not."""
+    from conftest import synthetic_record, true_vector
+
+    from pendulab.identify.preprocess import prepare
+    from pendulab.identify.simulate import open_loop_segments
+
+    prep = prepare(synthetic_record(3, duration=4.0))
+
+    def worst_error(pi):
+        segments = open_loop_segments(prep, pi, C1_GEOMETRY, every=1.0, length=0.25)
+        assert len(segments) >= 2 and all(q.shape == (2, t.size) for t, q in segments)
+        measured = [np.column_stack([np.interp(t, prep.t, prep.q[:, j]) for j in (0, 1)]) for t, _ in segments]
+        return max(float(np.max(np.abs(q.T - m))) for (_, q), m in zip(segments, measured, strict=True))
+
+    wrong = true_vector().copy()
+    wrong[STANDARD_NAMES.index("I1")] *= 1.3  # the shoulder link's inertia 30 % too large
+    right, off = worst_error(true_vector()), worst_error(wrong)
+    # From filtered start states under 0.01 N.m torque-reading noise, 0.25 s ahead: measured 1.9e-3 rad for the
+    # truth against 4.6e-3 for the wrong inertia; 3e-3 lies between, with margin on both sides.
+    assert right < 3e-3 < off, (right, off)
