@@ -11,7 +11,7 @@ from typing import Any
 from .._checks import bounded_int
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
-from ._common import add_plant_option
+from ._common import add_plant_option, docs_page
 
 __all__ = ["register"]
 
@@ -42,7 +42,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--planning",
         choices=("auto", "rigid", "quasi-static", "elastic"),
-        help="planning model of an elastic task (default: the task's; see docs/swingup.md)",
+        help=f"planning model of an elastic task (default: the task's; see {docs_page('swingup')})",
     )
     p.add_argument(
         "--starts", type=int, default=0, help="also track the plan from this many randomized starts near the start (success rate)"
@@ -173,8 +173,11 @@ def run(args: argparse.Namespace) -> int:
     _print_plan(s, say)
     say(f"  replay: max interval defect {s['replay_interval_defect']:.2e}", end="")
     say(f", open-loop deviation {s['replay_open_loop_max_deviation']:.2e}")
+    say("    (the defect is the plan's accuracy; the open-loop replay of an unstable plant drifts away from any")
+    say("    plan, so a large open-loop deviation is expected: the closed loop below is what tracks it)")
     say(f"  swing-up time {s['swing_up_time_s']:.3f} s, max torque {s['max_torque_Nm']:.3f} N.m", end="")
     say(f" (limit {s['torque_limit_Nm']:g}), control energy {s['control_energy_N2m2s']:.4g} N^2.m^2.s")
+    say(f"  tracking torque: {s['tracking_torque_rms_Nm']:.3f} N.m RMS from the plan, {s['tracking_torque_note']}")
     if "closed_loop_starts" in s:
         say(f"  closed loop from randomized starts: {s['closed_loop_successes']}/{s['closed_loop_starts']} succeeded")
     if "fmu_success" in s:

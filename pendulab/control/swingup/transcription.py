@@ -38,13 +38,9 @@ import numpy as np
 from ..._checks import bounded_int
 from ...model.model import model_functions
 from .iterations import IterationCallback, notify_build
-from .problem import SwingUpProblem
+from .problem import DEFAULT_INTERVALS, INTERVALS_WHY, MAX_INTERVALS, SwingUpProblem
 
 __all__ = ["Transcription", "TRANSCRIPTIONS", "get_transcription", "COLLOCATION", "SHOOTING", "MAX_INTERVALS"]
-
-#: Largest number of intervals of one NLP (elastic NLPs of 600 degree-3 intervals took minutes and ~6 GB to build).
-MAX_INTERVALS = 1000
-INTERVALS_WHY = "each interval adds a block of the NLP; an elastic NLP of 600 intervals needs ~6 GB to build"
 
 COLLOCATION: tuple[str, ...] = ("radau", "legendre")
 SHOOTING: tuple[str, ...] = ("shooting",)
@@ -52,6 +48,9 @@ TRANSCRIPTIONS: tuple[str, ...] = COLLOCATION + SHOOTING
 _INTEGRATORS = ("cvodes", "rk")
 #: Weight of the effort regulariser in the "time" objective [1/(N^2.m^2)].
 _TIME_REGULARISER = 1e-3
+#: Largest expanded collocation graph (model instructions x intervals x degree) built as one SX NLP; above it
+#: the NLP stays MX around the mapped interval (build time linear in nothing but the interval).
+_EXPAND_INSTRUCTIONS = 200_000
 
 
 @dataclass(frozen=True)
@@ -304,7 +303,7 @@ def _check_structure(method: str, N: int, degree: int, integrator: str) -> None:
 def get_transcription(
     problem: SwingUpProblem,
     method: str = "radau",
-    N: int = 100,
+    N: int = DEFAULT_INTERVALS,
     degree: int = 3,
     integrator: str = "rk",
     ipopt_options: dict[str, Any] | None = None,
@@ -361,8 +360,12 @@ def _build(
     f = model_functions(kind)["rhs"]
     nx = f.size1_in(0)
     npar = f.size1_in(2)
-    # Collocation: everything SX, expanded. Shooting: MX variables around a mapped interval Function.
-    SX = ca.SX if method in COLLOCATION else ca.MX
+    # Collocation of a small graph: everything SX, expanded (the fastest iterations). A large one (the elastic
+    # model at a high degree) stays MX around the mapped interval Function: expanding it took 21-26 s for the
+    # elastic radau N=156 degree 7 NLP against 0.5-0.9 s unexpanded, at the same time per IPOPT iteration
+    # (MUMPS dominates there). Shooting: MX variables around a mapped interval Function.
+    expand = method in COLLOCATION and f.n_instructions() * N * degree <= _EXPAND_INSTRUCTIONS
+    SX = ca.SX if expand else ca.MX
     X = SX.sym("X", nx, N + 1)
     U = SX.sym("U", 2, N)
     # Parameters: model, fixed horizon, time weight, then the N interval fractions of the mesh
@@ -389,9 +392,9 @@ def _build(
     ipopt = {"print_level": 0, "sb": "yes", "max_iter": 1000, "tol": 1e-8, "acceptable_tol": 1e-6, "mu_strategy": "adaptive"}
     ipopt.update(dict(extra))
     opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False, "error_on_fail": False}
-    if SX is ca.SX:
+    if expand:
         opts["expand"] = True
-    elif integrator == "cvodes":
+    elif method in SHOOTING and integrator == "cvodes":
         # CVODES cannot give exact second derivatives cheaply: quasi-Newton Hessian.
         ipopt.setdefault("hessian_approximation", "limited-memory")
     nw = nlp["x"].numel()
