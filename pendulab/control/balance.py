@@ -83,6 +83,20 @@ def simulate_balance(
         differs from a discrete design's sample time.
     SimulationError
         The integrator failed (see :func:`pendulab.simulate`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import balanced, lqr_balance, simulate_balance
+    >>> model = pl.rigid()
+    >>> design = lqr_balance(model, "pendubot", dt=0.01)
+    >>> x0 = design.x_eq + [0.0, 0.1, 0.0, 0.0]  # elbow link 0.1 rad off
+    >>> for u_max in (10.0, 5.0):  # torque limit [N.m]; the design asks for 12.6 N.m at first
+    ...     traj = simulate_balance(model, design, x0, t_final=5.0, u_max=u_max)
+    ...     print(u_max, float(np.abs(traj.u[:, 0]).max()), balanced(design, traj.x[-1]))
+    10.0 10.0 True
+    5.0 5.0 False
     """
     if design.kind != model.kind:
         raise ValueError(f"design is for the {design.kind} model, got a {model.kind} model")
@@ -110,6 +124,17 @@ def balanced(design: LQRDesign, x: Any, tol: float = 1e-2) -> bool:
     -------
     bool
         True when all errors are finite and every theta/omega error is below ``tol``.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import balanced, lqr_balance
+    >>> design = lqr_balance(pl.rigid())
+    >>> up = design.x_eq  # (pi, pi, 0, 0)
+    >>> balanced(design, up + [0.005, 0.0, 0.0, 0.0]), balanced(design, up + [0.05, 0.0, 0.0, 0.0])
+    (True, False)
+    >>> balanced(design, up + [2 * np.pi, -2 * np.pi, 0.0, 0.0])  # angles are compared modulo 2 pi
+    True
     """
     dx = wrap_state_error(np.asarray(x, dtype=float) - design.x_eq, design.state_names)
     judged = [i for i, n in enumerate(design.state_names) if n.startswith(("theta", "omega"))]
@@ -130,6 +155,19 @@ class ROAResult:
     reached_max : bool
         True when even ``amplitude_max`` converged.
     simulations : int
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import lqr_balance, region_of_attraction
+    >>> model = pl.rigid()
+    >>> design = lqr_balance(model, "full")
+    >>> (row,) = region_of_attraction(model, design, {"in-phase": (1.0, 1.0)}, u_max=20.0, t_final=3.0, tol=0.05)
+    >>> row.direction, np.round(row.vector, 3), row.reached_max  # unit (theta1, theta2) direction
+    ('in-phase', array([0.707, 0.707]), False)
+    >>> print(f"{row.amplitude:.3f} rad in {row.simulations} simulations")
+    0.736 rad in 6 simulations
     """
 
     direction: str
@@ -187,6 +225,16 @@ def region_of_attraction(
     ValueError
         Non-positive ``amplitude_max`` or ``tol``, or a direction that is not
         a finite non-zero 2-vector.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import lqr_balance, region_of_attraction
+    >>> model = pl.rigid()
+    >>> design = lqr_balance(model, "full")
+    >>> (row,) = region_of_attraction(model, design, {"theta1": (1.0, 0.0)}, u_max=20.0, t_final=3.0, tol=0.05)
+    >>> print(f"{row.direction}: caught from {row.amplitude:.2f} rad ({row.simulations} simulations)")
+    theta1: caught from 0.88 rad (6 simulations)
     """
     if not (amplitude_max > 0 and tol > 0):
         raise ValueError(f"amplitude_max and tol must be positive, got {amplitude_max!r} and {tol!r}")
@@ -240,6 +288,19 @@ def format_roa(rows: Sequence[ROAResult], title: str = "") -> str:
         One line per direction: largest converging amplitude [rad] and [deg]
         (prefixed ``>=`` when ``amplitude_max`` converged) and the number of
         simulations.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import format_roa, lqr_balance, region_of_attraction
+    >>> model = pl.rigid()
+    >>> directions = {"theta1": (1.0, 0.0), "anti-phase": (1.0, -1.0)}
+    >>> rows = region_of_attraction(model, lqr_balance(model), directions, u_max=20.0, t_final=3.0, tol=0.05)
+    >>> print(format_roa(rows, title="rigid, full actuation, |tau| <= 20 N.m"))
+    rigid, full actuation, |tau| <= 20 N.m
+    direction    largest converging [rad]   [deg]  sims
+    theta1                          0.884    50.6     6
+    anti-phase  >=                  1.571    90.0     1
     """
     lines = [title] if title else []
     lines.append(f"{'direction':<11} {'largest converging [rad]':>25} {'[deg]':>7} {'sims':>5}")

@@ -65,6 +65,21 @@ def to_statespace(
     ValueError
         Unknown actuation, output or equilibrium name; a state of the wrong
         size; a state that is not an equilibrium (unless ``allow_non_equilibrium``).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import to_statespace
+    >>> sys = to_statespace(pl.rigid(), "up-up", actuation="acrobot")
+    >>> sys.state_labels, sys.input_labels
+    (['theta1', 'theta2', 'omega1', 'omega2'], ['tau2'])
+    >>> np.round(np.sort(sys.poles().real), 2)  # two unstable poles upright [1/s]
+    array([-5.79, -2.4 ,  2.4 ,  5.79])
+    >>> K, S, E = ct.lqr(sys, np.diag([10.0, 10.0, 1.0, 1.0]), 1.0)
+    >>> bool(np.all(E.real < 0))
+    True
     """
     check_model(model)
     check_actuation(actuation)
@@ -120,6 +135,22 @@ def to_nlsys(
         ``model`` is not a pendulab Model.
     ValueError
         Unknown actuation or output name.
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import to_nlsys
+    >>> sys = to_nlsys(pl.rigid(), actuation="pendubot")
+    >>> sys.ninputs, sys.nstates, sys.input_labels
+    (1, 4, ['tau1'])
+    >>> T = np.linspace(0.0, 1.0, 11)
+    >>> tight = {"rtol": 1e-9, "atol": 1e-9}  # solve_ivp's defaults (1e-3) are loose
+    >>> resp = ct.input_output_response(sys, T, 0.0, X0=[0.5, 0.0, 0.0, 0.0], params={"m2": 2.0}, solve_ivp_kwargs=tight)
+    >>> ref = pl.simulate(pl.rigid(m2=2.0), [0.5, 0.0, 0.0, 0.0], 1.0, dt=0.1)
+    >>> bool(np.allclose(resp.states[:, -1], ref.x[-1], atol=1e-4))
+    True
     """
     check_model(model)
     idx = list(check_actuation(actuation))

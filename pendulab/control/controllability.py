@@ -47,6 +47,19 @@ def controllable_subspace(A: np.ndarray, B: np.ndarray, rtol: float = 1e-9) -> t
         Orthonormal basis of span[B, AB, A^2 B, ...]; r is the controllability rank.
     Qu : ndarray, shape (n, n - r)
         Orthonormal basis of its orthogonal complement.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import controllable_subspace, upright_state
+    >>> model = pl.elastic()
+    >>> lin = pl.linearize(model, upright_state(model), inputs="pendubot")
+    >>> Qc, Qu = controllable_subspace(lin.A, lin.B)
+    >>> Qc.shape[1], Qu.shape[1]  # rank 4 of 8: the spring states are out of reach upright
+    (4, 4)
+    >>> bool(np.allclose(Qu.T @ lin.B, 0.0) and np.allclose(Qu.T @ lin.A @ Qc, 0.0))  # invariant complement
+    True
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
@@ -90,6 +103,21 @@ def finite_gramian(A: np.ndarray, B: np.ndarray, horizon: float) -> np.ndarray:
     -------
     ndarray, shape (n, n)
         The symmetric Gramian W(T).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import finite_gramian, upright_state
+    >>> W = finite_gramian(np.array([[-1.0]]), np.array([[1.0]]), 1.0)  # int_0^1 exp(-2 t) dt
+    >>> round(float(W[0, 0]), 4), round(float((1 - np.exp(-2.0)) / 2), 4)
+    (0.4323, 0.4323)
+    >>> model = pl.rigid()
+    >>> for act in ("pendubot", "acrobot"):  # weakest reachable direction upright in 1 s
+    ...     lin = pl.linearize(model, upright_state(model), inputs=act)
+    ...     print(act, f"{np.linalg.eigvalsh(finite_gramian(lin.A, lin.B, 1.0)).min():.2g}")
+    pendubot 7.4e-05
+    acrobot 1.1e-05
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
@@ -128,6 +156,19 @@ class ReportRow:
         controllable).
     outputs : tuple of str
         Measured signals used for observability.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import controllability_report
+    >>> row = controllability_report(pl.elastic(), at=["down-down"], actuations=["acrobot"])[0]  # a ReportRow
+    >>> row.equilibrium, row.ctrb_rank, row.obsv_rank, row.outputs  # 4 of 8 states, from the two encoders
+    ('down-down', 4, 4, ('theta1', 'theta2'))
+    >>> np.round(np.abs(row.uncontrollable_eigenvalues), 2)  # spring modes the elbow torque cannot reach [rad/s]
+    array([13.82, 13.82, 36.18, 36.18])
+    >>> import json
+    >>> json.loads(json.dumps(row.as_dict()))["ctrb_weakest"]  # as_dict() is JSON-friendly
+    ['r1', 'r2', 'v1', 'v2']
     """
 
     equilibrium: str
@@ -207,6 +248,19 @@ def controllability_report(
     ------
     ValueError
         ``horizon`` is not a finite positive number.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import controllability_report
+    >>> for row in controllability_report(pl.rigid(), at=["up-up"]):
+    ...     print(row.actuation, f"{row.ctrb_rank}/{row.n}")
+    full 4/4
+    pendubot 4/4
+    acrobot 4/4
+    >>> row = controllability_report(pl.elastic(), at=["up-up"], actuations=["pendubot"])[0]
+    >>> row.ctrb_rank, row.ctrb_weakest  # the torques cannot reach the springs upright (to first order)
+    (4, ('r1', 'r2', 'v1', 'v2'))
     """
     if not (isinstance(horizon, (int, float)) and np.isfinite(horizon) and horizon > 0):
         raise ValueError(f"horizon must be a positive number of seconds, got {horizon!r}")
@@ -251,6 +305,16 @@ def format_report(rows: Sequence[ReportRow]) -> str:
     str
         A header, a rule and one line per row (ranks as ``rank/n``, smallest
         Gramian eigenvalues and the weakest states), newline-separated.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import controllability_report, format_report
+    >>> print(format_report(controllability_report(pl.rigid(), at=["up-up", "down-down"], actuations=["pendubot"])))
+    equilibrium actuation  ctrb min eig Wc  weakest (ctrb)          obsv min eig Wo  weakest (obsv)
+    -----------------------------------------------------------------------------------------------
+    up-up       pendubot   4/4    7.37e-05  theta1,theta2           4/4     0.00237  omega1,omega2
+    down-down   pendubot   4/4     0.00152  theta1,omega1,omega2    4/4      0.0139  omega1,omega2
     """
     head = (
         f"{'equilibrium':<11} {'actuation':<9} {'ctrb':>5} {'min eig Wc':>10}  {'weakest (ctrb)':<22} "

@@ -90,6 +90,19 @@ def make_controller(
         that did not solve.
     TypeError
         ``model`` is not a Model, ``name`` not a string.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, make_controller
+    >>> model = pl.rigid()
+    >>> ctrl, x0 = make_controller("swingup", model, 0.01, u_max=20.0)  # energy pumping + LQR catch
+    >>> x0  # its natural start: hanging, theta1 = 0.1 rad
+    array([0.1, 0. , 0. , 0. ])
+    >>> traj = pl.simulate(model, x0, 5.0, dt=ctrl.sample_time, u=as_feedback(ctrl, model))
+    >>> np.round(np.cos(traj.x[-1, :2]), 3)  # both links upright
+    array([-1., -1.])
     """
     check_model(model)
     if not isinstance(name, str):
@@ -248,6 +261,20 @@ def controller_for_task(
         ``name`` is not a string, ``task`` neither a Task nor a name.
     FileNotFoundError
         Unknown task name.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, controller_for_task
+    >>> from pendulab.control.swingup.check import height_success
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("acrobot")  # RealAIGym acrobot: tau2 only, 6 N.m, 10 s
+    >>> for name in ("lqr", "tvlqr"):
+    ...     ctrl, x0 = controller_for_task(name, task)
+    ...     traj = pl.simulate(task.model, x0, task.t_final, dt=ctrl.sample_time, u=as_feedback(ctrl, task.model))
+    ...     print(name, height_success(traj, task.rest_lengths).success)
+    lqr False
+    tvlqr True
     """
     from .swingup.tasks import resolve_task
 

@@ -66,6 +66,25 @@ class SampledController(Protocol):
     *args, **kwargs
         Not used (a ``Protocol`` cannot be instantiated; any object with these
         attributes and methods satisfies it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import SampledController, as_feedback
+    >>> class ShoulderDamper:  # any object with these four members is a SampledController
+    ...     sample_time = 0.01
+    ...     input_names = ("tau1",)
+    ...     def reset(self):
+    ...         pass
+    ...     def __call__(self, t, x):
+    ...         return np.array([-0.5 * x[2]])  # tau1 = -0.5 N.m s/rad * omega1
+    >>> isinstance(ShoulderDamper(), SampledController)
+    True
+    >>> model = pl.rigid()
+    >>> traj = pl.simulate(model, model.state(theta1=1.0), 10.0, dt=0.01, u=as_feedback(ShoulderDamper(), model))
+    >>> print(f"energy {model.energy(traj.x[0]):.2f} J -> {model.energy(traj.x[-1]):.2f} J")
+    energy -20.41 J -> -26.99 J
     """
 
     sample_time: float
@@ -97,6 +116,17 @@ def upright_state(model: Model) -> np.ndarray:
     -------
     ndarray, shape (nx,)
         A fresh copy of the equilibrium state (angles [rad], lengths [m], zero rates).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import upright_state
+    >>> np.round(upright_state(pl.rigid()), 4)
+    array([3.1416, 3.1416, 0.    , 0.    ])
+    >>> x = upright_state(pl.elastic(k1=500.0, k2=500.0))  # springs compressed by the weight above them
+    >>> dict(zip(pl.elastic().state_names[:4], np.round(x[:4], 4).tolist()))
+    {'theta1': 3.1416, 'theta2': 3.1416, 'r1': 0.9608, 'r2': 0.9804}
     """
     return equilibrium(model, "up-up").x.copy()
 
@@ -118,6 +148,14 @@ def actuated_inputs(actuation: str | Sequence[str]) -> tuple[str, ...]:
     ------
     ValueError
         Unknown actuation.
+
+    Examples
+    --------
+    >>> from pendulab.control import actuated_inputs
+    >>> actuated_inputs("pendubot"), actuated_inputs("acrobot"), actuated_inputs("full")
+    (('tau1',), ('tau2',), ('tau1', 'tau2'))
+    >>> actuated_inputs(["tau2", "tau1"])  # names in any order come back in input order
+    ('tau1', 'tau2')
     """
     return tuple(INPUT_NAMES[i] for i in ACTUATIONS[actuation_name(actuation)])
 
@@ -182,6 +220,20 @@ class LinearStateFeedback:
         Riccati solution (cost-to-go matrix) of the design, shape (nx, nx).
     design : str
         "continuous" or "discrete".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import LinearStateFeedback, lqr_balance
+    >>> model = pl.rigid()
+    >>> d = lqr_balance(model, "pendubot")
+    >>> ctrl = LinearStateFeedback(model, d.K, d.x_eq, np.zeros(1), 0.01, ("tau1",), u_max=5.0, P=d.P)
+    >>> x = d.x_eq + [0.0, 0.02, 0.0, 0.0]
+    >>> np.round(ctrl(0.0, x), 3), round(ctrl.cost(x), 4)  # u = u_eq - K (x - x_eq), and e' P e
+    (array([2.689]), 0.9766)
+    >>> ctrl(0.0, d.x_eq + [0.0, 0.1, 0.0, 0.0])  # saturated at u_max
+    array([5.])
     """
 
     model: Model
@@ -263,6 +315,19 @@ def balance_controller(
         ``Q`` of the wrong shape.
     UncontrollableError
         The actuation cannot balance the upright equilibrium.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import balance_controller
+    >>> from pendulab.control.feedback import closed_loop_spectral_radius
+    >>> model = pl.rigid()
+    >>> fixed = balance_controller(model, 0.2)  # continuous-time gain, applied every 0.2 s
+    >>> redesigned = balance_controller(model, 0.2, design="discrete")  # LQR of the 0.2 s ZOH discretization
+    >>> for ctrl in (fixed, redesigned):  # below 1: the sampled loop is stable
+    ...     print(ctrl.design, round(closed_loop_spectral_radius(model, ctrl.K, 0.2), 2))
+    continuous 1.47
+    discrete 0.62
     """
     h = positive_float("sample_time", sample_time)
     if design not in ("continuous", "discrete"):
@@ -351,6 +416,22 @@ class EnergySwingUp:
         catch_cost`` after a catch; None: never.
     caught_at : float or None
         Time of the (last) switch to ``balance`` [s]; None while pumping.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import energy_swingup, upright_state
+    >>> model = pl.rigid()
+    >>> ctrl = energy_swingup(model, 0.01, actuation="acrobot", u_max=6.0)
+    >>> ctrl.actuation, ctrl.input_names, round(ctrl.e_up, 2)  # upright energy [J]
+    ('acrobot', ('tau2',), 29.43)
+    >>> ctrl(0.0, model.state())  # hanging at rest: no rate to pump with, so a full kick
+    array([6.])
+    >>> x = upright_state(model) + [0.01, 0.0, 0.0, 0.0]
+    >>> u = ctrl(0.5, x)  # near the top the LQR cost-to-go is below catch_cost: switch to balance
+    >>> ctrl.caught_at, bool(np.allclose(u, ctrl.balance(0.5, x)))
+    (0.5, True)
     """
 
     model: Model
@@ -450,6 +531,19 @@ def energy_swingup(
         Non-positive ``sample_time`` or ``u_max``, or an unknown ``actuation``.
     UncontrollableError
         The actuation cannot balance the upright equilibrium.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, energy_swingup
+    >>> model = pl.rigid()
+    >>> ctrl = energy_swingup(model, 0.01, u_max=20.0)  # pump with tau1, align the links with tau2
+    >>> traj = pl.simulate(model, model.state(theta1=0.1), 5.0, dt=0.01, u=as_feedback(ctrl, model))
+    >>> print(f"caught by the LQR at t = {ctrl.caught_at:.2f} s")
+    caught by the LQR at t = 2.63 s
+    >>> np.round(np.cos(traj.x[-1, :2]), 3)  # both links upright
+    array([-1., -1.])
     """
     h = positive_float("sample_time", sample_time)
     limit = positive_float("u_max", u_max)
@@ -504,6 +598,21 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
     callable
         ``feedback(t, x) -> ndarray, shape (2,)``: the controller output at
         time ``t`` [s] and state ``x``, scattered by :func:`full_input` [N.m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, balance_controller, upright_state
+    >>> model = pl.rigid()
+    >>> ctrl = balance_controller(model, sample_time=0.01, actuation="pendubot")  # drives tau1 only
+    >>> x0 = upright_state(model) + [0.0, 0.05, 0.0, 0.0]  # elbow link tilted by 0.05 rad
+    >>> feedback = as_feedback(ctrl, model)
+    >>> np.round(feedback(0.0, x0), 2)  # (tau1, tau2) [N.m]: the passive elbow gets 0
+    array([6.75, 0.  ])
+    >>> traj = pl.simulate(model, x0, 5.0, dt=ctrl.sample_time, u=feedback)  # torque held over each 10 ms sample
+    >>> bool(np.allclose(traj.x[-1], upright_state(model), atol=1e-3))
+    True
     """
     controller.reset()
 

@@ -74,6 +74,22 @@ class GlobalSwingUp:
         Acrobot: amplitude of the elbow target ``alpha (2/pi) atan(omega1)`` [rad] (unused for the pendubot).
     caught : bool
         In the catch mode.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import global_controller, upright_state
+    >>> ctrl = global_controller("acrobot")  # a GlobalSwingUp on the leaderboard acrobot
+    >>> ctrl.acrobot, ctrl.catch_level, ctrl.release_level
+    (True, 300.0, 1500.0)
+    >>> hanging = ctrl.model.state()
+    >>> ctrl(0.0, hanging), ctrl.caught  # far from the top: pumping (at rest, a full kick)
+    (array([6.]), False)
+    >>> near_top = upright_state(ctrl.model) + [0.02, 0.0, 0.0, 0.0]
+    >>> round(ctrl.cost(near_top), 1)  # LQR cost-to-go e' P e: below catch_level
+    203.2
+    >>> np.round(ctrl(0.002, near_top), 2), ctrl.caught  # so the discrete LQR takes over
+    (array([1.88]), True)
     """
 
     model: Model
@@ -273,6 +289,21 @@ def global_controller(task: str, **options: float) -> GlobalSwingUp:
     ------
     ValueError
         Unknown task or bad option.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, global_controller
+    >>> ctrl = global_controller("pendubot")  # the leaderboard plant, 2 ms, 6 N.m
+    >>> ctrl.sample_time, ctrl.u_max, ctrl.input_names
+    (0.002, 6.0, ('tau1',))
+    >>> x0 = ctrl.model.state(theta1=np.pi - 0.1, theta2=np.pi + 0.1, omega1=0.5)  # thrown near the top
+    >>> round(ctrl.cost(x0)), ctrl.catch_level  # LQR cost-to-go: outside the catch, so it pumps first
+    (1204, 300.0)
+    >>> traj = pl.simulate(ctrl.model, x0, 3.0, dt=ctrl.sample_time, u=as_feedback(ctrl, ctrl.model))
+    >>> ctrl.caught, np.round(np.cos(traj.x[-1, :2]), 3)  # caught, and held upright
+    (True, array([-1., -1.]))
     """
     from .realai.spec import DT, TORQUE_LIMIT, check_task, leaderboard_model
 

@@ -38,7 +38,21 @@ __all__ = [
 
 
 class UncontrollableError(ValueError):
-    """LQR was asked to stabilize a configuration whose unstable or drifting modes the inputs cannot reach."""
+    """LQR was asked to stabilize a configuration whose unstable or drifting modes the inputs cannot reach.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import UncontrollableError, lqr_balance
+    >>> model = pl.rigid(g=0.0)  # no gravity: at rest the shoulder torque moves the links along one direction only
+    >>> try:
+    ...     lqr_balance(model, "pendubot", at=model.state())
+    ... except UncontrollableError as err:
+    ...     print(err)
+    uncontrollable configuration: rigid model with actuation 'pendubot' at 'goal' has controllability rank 2 of 4, ...
+    >>> issubclass(UncontrollableError, ValueError)
+    True
+    """
 
 
 @dataclass(frozen=True)
@@ -70,6 +84,22 @@ class LQRDesign:
         Cost-to-go ``dx' P dx`` of the closed loop (Riccati solution on the
         controllable subspace, plus the free decay of stable uncontrollable
         modes when that cost is finite).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import balanced, lqr_balance
+    >>> model = pl.rigid()
+    >>> design = lqr_balance(model, "acrobot")  # an LQRDesign
+    >>> design.actuation, design.input_indices, design.K.shape, design.equilibrium
+    ('acrobot', (1,), (1, 4), 'up-up')
+    >>> x0 = design.x_eq + [0.05, 0.0, 0.0, 0.0]
+    >>> np.round(design.torque(x0), 2)  # (tau1, tau2) [N.m]: the passive shoulder stays at u_eq = 0
+    array([ 0.  , 13.72])
+    >>> traj = pl.simulate(model, x0, 5.0, dt=0.01, u=design.controller(u_max=20.0))
+    >>> balanced(design, traj.x[-1])
+    True
     """
 
     K: np.ndarray
@@ -152,6 +182,14 @@ def wrap_state_error(dx: np.ndarray, state_names: tuple[str, ...]) -> np.ndarray
     ndarray, shape (..., nx)
         A copy of ``dx`` with the angle differences [rad] in (-pi, pi]; other
         entries unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import wrap_state_error
+    >>> dx = [2 * np.pi + 0.1, -0.2, 7.0, 0.0]  # one full turn too many on theta1; rates are not angles
+    >>> np.round(wrap_state_error(dx, ("theta1", "theta2", "omega1", "omega2")), 3)
+    array([ 0.1, -0.2,  7. ,  0. ])
     """
     dx = np.array(dx, dtype=float)
     for i, n in enumerate(state_names):
@@ -219,6 +257,18 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
         Discrete state matrix.
     Bd : ndarray, shape (n, m)
         Discrete input matrix for an input held over ``dt``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import zoh
+    >>> A = np.array([[0.0, 1.0], [0.0, 0.0]])  # double integrator: position, velocity
+    >>> B = np.array([[0.0], [1.0]])
+    >>> Ad, Bd = zoh(A, B, 0.1)
+    >>> np.round(Ad, 3), np.round(Bd, 4)  # exact: [[1, h], [0, 1]] and [h^2 / 2, h]
+    (array([[1. , 0.1],
+           [0. , 1. ]]), array([[0.005],
+           [0.1  ]]))
     """
     n, m = B.shape
     M = np.zeros((n + m, n + m))
@@ -246,6 +296,14 @@ def actuation_name(actuation: str | Sequence[str]) -> str:
     ------
     ValueError
         Unknown name or not a non-empty set of ("tau1", "tau2").
+
+    Examples
+    --------
+    >>> from pendulab.control import actuation_name
+    >>> actuation_name(("tau1",)), actuation_name(("tau2",)), actuation_name(("tau1", "tau2"))
+    ('pendubot', 'acrobot', 'full')
+    >>> actuation_name("acrobot")  # a name is checked and passed through
+    'acrobot'
     """
     if isinstance(actuation, str):
         check_actuation(actuation)
@@ -318,6 +376,22 @@ def lqr_balance(
         that is not an equilibrium (the message names ``|f(x, u)|``).
     UncontrollableError
         An uncontrollable mode is unstable or a drift (the configuration cannot be balanced).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import lqr_balance
+    >>> design = lqr_balance(pl.rigid(), "pendubot", Q=[10.0, 10.0, 1.0, 1.0])
+    >>> np.round(design.K, 1)  # N.m per rad and per rad/s
+    array([[  -0.3, -135.1,  -23.4,  -39.9]])
+    >>> bool(np.all(design.closed_loop_eigenvalues.real < 0))  # stable upright
+    True
+    >>> sampled = lqr_balance(pl.rigid(), "pendubot", dt=0.02)  # discrete design for a 20 ms controller
+    >>> bool(np.all(np.abs(sampled.closed_loop_eigenvalues) < 1))
+    True
+    >>> np.round(np.abs(lqr_balance(pl.elastic()).uncontrollable_eigenvalues), 2)  # springs left ringing [rad/s]
+    array([36.18, 36.18, 13.82, 13.82])
     """
     check_model(model)
     actuation = actuation_name(actuation)
@@ -426,6 +500,20 @@ def discrete_tvlqr(
     ------
     TypeError
         ``model`` is not a pendulab Model.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import discrete_tvlqr, lqr_balance
+    >>> model = pl.rigid()
+    >>> top = lqr_balance(model, "pendubot", dt=0.01)  # discrete LQR upright: its cost-to-go ends the recursion
+    >>> x_lin, u_lin = np.tile(top.x_eq, (50, 1)), np.zeros((50, 2))  # 0.5 s of "reference" resting upright
+    >>> K = discrete_tvlqr(model, x_lin, u_lin, 0.01, top.Q, top.R, top.P, actuation="pendubot")
+    >>> K.shape  # (intervals, driven torques, states)
+    (50, 1, 4)
+    >>> bool(np.allclose(K, top.K))  # at an equilibrium the recursion stays at the stationary LQR gain
+    True
     """
     check_model(model)
     As, Bs = linearize_along(model, x_lin, u_lin, inputs=actuation_name(actuation))

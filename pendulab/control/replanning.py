@@ -69,6 +69,18 @@ class ReplanningSwingUp:
         Wall time of each solve [s] (diagnostics).
     n_failed : int
         Solves that failed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import ReplanningSwingUp, as_feedback, global_controller
+    >>> ctrl = ReplanningSwingUp(global_controller("pendubot"), "pendubot", horizon=1.5, n_intervals=40)
+    >>> model = ctrl.fallback.model
+    >>> x0 = np.array([2.27, 2.61, -6.87, -6.67])  # thrown: a state a reset may leave behind
+    >>> traj = pl.simulate(model, x0, 3.0, dt=ctrl.sample_time, u=as_feedback(ctrl, model))
+    >>> ctrl.fallback.caught, len(ctrl.plan_times), ctrl.n_failed  # one plan to the nearest upright, then the catch
+    (True, 1, 0)
     """
 
     fallback: GlobalSwingUp
@@ -304,6 +316,16 @@ def replanning_controller(
     ------
     ValueError
         Unknown task, negative ``plan_delay`` or non-positive ``horizon``.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, replanning_controller
+    >>> ctrl = replanning_controller("pendubot")  # plans from the current state, 2 ms TVLQR, LQR catch
+    >>> model = ctrl.fallback.model
+    >>> traj = pl.simulate(model, model.state(), 2.0, dt=ctrl.sample_time, u=as_feedback(ctrl, model))
+    >>> ctrl.fallback.caught, ctrl.n_failed  # upright after one time-optimal plan
+    (True, 0)
     """
     fb = global_controller(task, **options)
     delay = float(plan_delay)

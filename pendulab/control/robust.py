@@ -56,6 +56,24 @@ class EstimatedController:
     ------
     TypeError
         ``controller`` does not keep the SampledController protocol or ``estimator`` lacks reset/update.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import EstimatedController, ExtendedKalmanFilter, as_feedback, balance_controller
+    >>> model = pl.rigid()
+    >>> x0 = model.state(theta1=np.pi + 0.1, theta2=np.pi)
+    >>> sigmas = {"measurement_std": [1e-4, 1e-4, 0.3, 0.3], "process_std": [1e-5, 1e-5, 0.02, 0.02]}
+    >>> ekf = ExtendedKalmanFilter(model, 0.01, x0=x0, **sigmas)
+    >>> rng = np.random.default_rng(0)
+    >>> for ctrl in (balance_controller(model, 0.01), EstimatedController(balance_controller(model, 0.01), ekf)):
+    ...     feedback = as_feedback(ctrl, model)
+    ...     noisy = lambda t, x: feedback(t, x + rng.normal(0.0, [0.0, 0.0, 0.3, 0.3]))  # rate sensors: 0.3 rad/s noise
+    ...     traj = pl.simulate(model, x0, 3.0, dt=0.01, u=noisy)
+    ...     print(type(ctrl).__name__, f"torque jitter {np.abs(np.diff(traj.u[150:, 0])).mean():.2f} N.m")
+    LinearStateFeedback torque jitter 5.01 N.m
+    EstimatedController torque jitter 0.03 N.m
     """
 
     def __init__(
@@ -173,6 +191,20 @@ def robust_controller(
     ------
     ValueError
         Unknown task or ``inner``, or a task plan that did not solve.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, robust_controller
+    >>> from pendulab.control.realai.spec import leaderboard_model
+    >>> ctrl = robust_controller("pendubot")  # TVLQR of the score-designed plan, fed by a delay-identifying estimator
+    >>> ctrl.sample_time, ctrl.input_names, type(ctrl.estimator).__name__
+    (0.002, ('tau1',), 'MultipleModelEstimator')
+    >>> model = leaderboard_model("pendubot")
+    >>> traj = pl.simulate(model, model.state(), 5.0, dt=ctrl.sample_time, u=as_feedback(ctrl, model))
+    >>> ctrl.estimator.hypothesis, np.round(np.cos(traj.x[-1, :2]), 3)  # no delay found; upright
+    ((0.0, 1.0), array([-1., -1.]))
     """
     from .realai.design import best_controller
     from .realai.spec import DT, check_task, leaderboard_task

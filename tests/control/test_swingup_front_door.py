@@ -61,3 +61,24 @@ def test_transcription_only_options_are_an_error_on_elastic_problems():
         swing_up(task.problem, nope=1)
     with pytest.raises(ValueError, match="elastic problems only"):
         swing_up(load_task("pendubot").problem, planning="quasi-static")
+
+
+def test_one_default_N_for_the_cli_and_the_front_door(tmp_path):
+    """Issue 33: the CLI started a task at its N = 40, ``swing_up(task.problem)`` at 100: two plans for one task."""
+    import json
+
+    from pendulab.cli import main
+    from pendulab.control import SwingUpProblem
+    from pendulab.control.swingup.problem import DEFAULT_INTERVALS
+
+    task = load_task("acrobot")
+    res = swing_up(task.problem, refine=False)
+    assert res.N == task.N == task.problem.intervals == 40  # the task's N, carried by its problem
+    # Exit 1: without refinement N = 40 misses the 1e-3 tolerance (the plan is still tracked and reported).
+    assert main(["swingup", "--task", "acrobot", "--no-refine", "--no-gif", "--out", str(tmp_path)]) in (0, 1)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["N"] == res.N and summary["cost"] == pytest.approx(res.cost, rel=1e-6)  # the same NLP, the same optimum
+    bare = SwingUpProblem(task.model, actuation="acrobot")
+    assert bare.intervals == DEFAULT_INTERVALS == 100
+    with pytest.raises(ValueError, match="intervals"):
+        SwingUpProblem(task.model, intervals=1)

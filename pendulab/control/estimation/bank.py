@@ -50,6 +50,20 @@ class MultipleModelEstimator:
     ------
     ValueError
         Empty or invalid candidate lists, non-positive ``window``, or what the EKF raises.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import MultipleModelEstimator
+    >>> model = pl.rigid()
+    >>> traj = pl.simulate(model, model.state(), 0.5, dt=0.01, u=[3.0, 0.0])  # a torque step from hanging at rest
+    >>> y = np.vstack([traj.x[:3], traj.x[:-3]])[: len(traj.t)]  # sensors lagging 3 samples (30 ms)
+    >>> bank = MultipleModelEstimator(model, 0.01, delays=[0.0, 0.01, 0.02, 0.03, 0.04], window=0.3)
+    >>> for t, yk in zip(traj.t, y):
+    ...     x_hat = bank.update(t, yk, [3.0, 0.0])
+    >>> bank.hypothesis, bank.locked  # (delay [s], torque response k); then the EKF runs with that delay
+    ((0.03, 1.0), True)
     """
 
     def __init__(

@@ -47,6 +47,22 @@ class StateEstimator(Protocol):
     ----------
     *args, **kwargs
         Not used (a ``Protocol``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import EstimatedController, ExtendedKalmanFilter, StateEstimator, balance_controller
+    >>> class Encoders:  # any object with reset() and update(t, y, u) is a StateEstimator
+    ...     def reset(self):
+    ...         pass
+    ...     def update(self, t, y, u=None):
+    ...         return np.asarray(y, dtype=float)  # trust the measurement as it is
+    >>> isinstance(Encoders(), StateEstimator), isinstance(ExtendedKalmanFilter(pl.rigid(), 0.01), StateEstimator)
+    (True, True)
+    >>> ctrl = EstimatedController(balance_controller(pl.rigid(), 0.01), Encoders())
+    >>> np.round(ctrl(0.0, [np.pi + 0.01, np.pi, 0.0, 0.0]), 2)  # the LQR fed by the estimate
+    array([-0.39,  0.  ])
     """
 
     def reset(self) -> None:
@@ -183,6 +199,20 @@ class ExtendedKalmanFilter:
     ValueError
         Unknown state names, wrong shapes, negative (or, for measurements, zero) sigmas, a non-positive
         ``sample_time``, a negative delay, ``response`` outside (0, 2].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import ExtendedKalmanFilter
+    >>> model = pl.rigid()
+    >>> traj = pl.simulate(model, model.state(theta1=0.5), 2.0, dt=0.01)  # a free swing
+    >>> y = traj.x + np.random.default_rng(0).normal(0.0, [1e-4, 1e-4, 0.2, 0.2], traj.x.shape)  # noisy rate sensors
+    >>> ekf = ExtendedKalmanFilter(model, 0.01, measurement_std=[1e-4, 1e-4, 0.2, 0.2], x0=traj.x[0])
+    >>> x_hat = np.array([ekf.update(t, yk, [0.0, 0.0]) for t, yk in zip(traj.t, y)])
+    >>> rms = lambda e: np.sqrt(np.mean(e[:, 2:] ** 2))
+    >>> print(f"rate error: measured {rms(y - traj.x):.2f} rad/s, estimated {rms(x_hat - traj.x):.3f} rad/s")
+    rate error: measured 0.21 rad/s, estimated 0.002 rad/s
     """
 
     def __init__(

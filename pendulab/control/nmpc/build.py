@@ -70,6 +70,18 @@ def nmpc_controller(
         ``model`` is not a Model, or an unknown option name.
     ValueError
         Bad options, torque limit, actuation or reference shapes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, nmpc_controller, upright_state
+    >>> model = pl.rigid()
+    >>> ctrl = nmpc_controller(model, actuation="pendubot", u_max=6.0, horizon=10)  # regulation about upright
+    >>> x0 = upright_state(model) + [0.1, 0.0, 0.0, 0.0]
+    >>> traj = pl.simulate(model, x0, 3.0, dt=ctrl.sample_time, u=as_feedback(ctrl, model))
+    >>> bool(np.allclose(traj.x[-1], upright_state(model), atol=1e-2)), ctrl.stats()["failures"]
+    (True, 0)
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")

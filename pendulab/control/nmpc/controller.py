@@ -107,6 +107,19 @@ class NMPCOptions:
     torque_rate : float or None
         Weight of the torque change per sample ``|u_k - u_(k-1)|^2`` [1/(N.m)^2] (the previous
         torques become prediction states). None: no penalty.
+
+    Examples
+    --------
+    >>> from pendulab.control import NMPCOptions
+    >>> opts = NMPCOptions(horizon=30, sample_time=0.01)
+    >>> opts.horizon * opts.sample_time, opts.solver, opts.iterations_cap  # 0.3 s ahead, one SQP iteration per sample
+    (0.3, 'sqp', 1)
+    >>> NMPCOptions(solver="ipopt").iterations_cap
+    50
+    >>> NMPCOptions(horizon=0)
+    Traceback (most recent call last):
+        ...
+    ValueError: horizon must be an integer >= 1, got 0
     """
 
     horizon: int = 20
@@ -208,6 +221,22 @@ class NMPCController:
         Per-sample values of ``ocp.stage_params`` along the reference (quasi-static link lengths).
     stage_goal : ndarray, shape (n_ps,)
         Their values after the reference (upright static lengths).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import nmpc_controller, upright_state
+    >>> model = pl.rigid()
+    >>> ctrl = nmpc_controller(model, actuation="full", u_max=20.0, horizon=10)  # an NMPCController
+    >>> ctrl.sample_time, ctrl.input_names, ctrl.x_ref.shape
+    (0.02, ('tau1', 'tau2'), (1, 4))
+    >>> u = ctrl(0.0, upright_state(model) + [0.1, 0.0, 0.0, 0.0])  # one real-time SQP iteration
+    >>> u.shape, bool(np.all(np.abs(u) <= 20.0))
+    ((2,), True)
+    >>> stats = ctrl.stats()
+    >>> stats["n_calls"], stats["failures"], stats["solver"]
+    (1, 0, 'sqp')
     """
 
     model: Model

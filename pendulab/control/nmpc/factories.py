@@ -56,7 +56,7 @@ def check_options(**options: Any) -> NMPCOptions:
     return NMPCOptions(**options)
 
 
-def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int = 100, degree: int = 3) -> Any:
+def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int | None = None, degree: int = 3) -> Any:
     """Optimal swing-up of ``problem`` on its rigid model (the rigid counterpart of an elastic model).
 
     Parameters
@@ -66,8 +66,8 @@ def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int = 100
         hanging rest and upright states when the model is elastic).
     method : str
         Transcription of :func:`pendulab.control.swingup.swing_up`.
-    N : int
-        Intervals.
+    N : int, optional
+        Intervals (default: the problem's ``intervals``).
     degree : int
         Collocation degree.
 
@@ -124,6 +124,19 @@ def nmpc_for_task(
         ``task`` is neither a Task nor a name; unknown option names.
     FileNotFoundError
         Unknown task name.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import as_feedback, nmpc_for_task
+    >>> from pendulab.control.swingup.check import height_success
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("pendubot")
+    >>> ctrl, x0 = nmpc_for_task(task)  # plans the swing-up once, then tracks it at 50 Hz
+    >>> traj = pl.simulate(task.model, x0, 4.0, dt=ctrl.sample_time, u=as_feedback(ctrl, task.model))
+    >>> check = height_success(traj, task.rest_lengths)
+    >>> check.success, round(check.t_up, 2), ctrl.stats()["failures"]
+    (True, 1.62, 0)
     """
     from ..swingup.tasks import resolve_task
 

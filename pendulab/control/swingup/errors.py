@@ -103,6 +103,17 @@ class ErrorEstimate:
         Names of the nx states (for messages and plots).
     scale_kind : str
         Which normalisation ``scale`` is (an entry of :data:`SCALES`).
+
+    Examples
+    --------
+    >>> from pendulab.control import swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> res = swing_up(load_task("acrobot").problem, N=40)  # error estimate at the default tolerance 1e-3
+    >>> est = res.error
+    >>> est.passed, est.defects.shape  # relative defect per interval and state
+    (True, (50, 4))
+    >>> print(est.summary())
+    error estimate (...): worst relative defect 1.0...e-04 (interval 19, omega1) vs tolerance 1.0e-03: pass
     """
 
     defects: np.ndarray
@@ -195,6 +206,17 @@ def estimate_error(
     ValueError
         Bad shapes, non-finite values, a non-increasing grid, a state size
         that does not match ``model``, a non-positive tolerance or an unknown ``scale``.
+
+    Examples
+    --------
+    >>> from pendulab.control import estimate_error, swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> problem = load_task("pendubot").problem
+    >>> for N in (20, 40):  # one solve each, without the solver's own estimate
+    ...     est = estimate_error(swing_up(problem, N=N, tolerance=None), tolerance=1e-2)
+    ...     print(N, f"worst {est.worst:.0e} in {est.worst_state}:", "pass" if est.passed else "fail")
+    20 worst 1e-01 in omega2: fail
+    40 worst 4e-03 in omega2: pass
     """
     return estimate_error_arrays(
         result.problem.model if model is None else model,
@@ -252,6 +274,21 @@ def estimate_error_arrays(
     ValueError
         Bad shapes, non-finite values, a non-increasing grid, a state size
         that does not match ``model``, a non-positive tolerance or an unknown ``scale``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import estimate_error_arrays
+    >>> model = pl.rigid()
+    >>> traj = pl.simulate(model, model.state(theta1=1.0), 2.0, dt=0.05, u=[0.5, 0.0])
+    >>> estimate_error_arrays(model, traj.t, traj.x, traj.u[:-1], tolerance=1e-6).passed  # a true solution
+    True
+    >>> x = traj.x.copy()
+    >>> x[10, 2] += 0.01  # a 0.01 rad/s kink in omega1 at t = 0.5 s
+    >>> est = estimate_error_arrays(model, traj.t, x, traj.u[:-1], tolerance=1e-6)
+    >>> est.passed, est.worst_interval, est.worst_state
+    (False, 9, 'omega1')
     """
     if scale not in SCALES:
         raise ValueError(f"scale must be one of {list(SCALES)}, got {scale!r}")

@@ -44,6 +44,22 @@ class Guess:
         States.
     u : ndarray, shape (K, 2) or (K-1, 2)
         Torques (tau1, tau2) held from t[k] to t[k+1] [N.m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import Guess, swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> problem = load_task("pendubot").problem
+    >>> first = swing_up(problem, N=40)
+    >>> guess = Guess(first.t, first.x, first.u)  # grid, states, held torques (= first.as_guess())
+    >>> guess.horizon, guess.x.shape
+    (3.0, (51, 4))
+    >>> np.round(guess.states_at([1.25], horizon=2.5), 3)  # time-stretched: 1.25 s of 2.5 s is 1.5 s of 3 s
+    array([[ 3.195,  2.08 , -0.493,  5.745]])
+    >>> swing_up(problem.replace(horizon=2.5), N=40, guess=guess).success  # warm start of a faster swing-up
+    True
     """
 
     t: np.ndarray
@@ -105,6 +121,17 @@ def linear_guess(problem: SwingUpProblem) -> Guess:
     -------
     Guess
         Two knots, ``(0, start)`` and ``(horizon, target)``, with zero torques.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import SwingUpProblem, linear_guess
+    >>> guess = linear_guess(SwingUpProblem(pl.rigid(), "pendubot", torque_limit=6.0, horizon=4.0))
+    >>> guess.t, guess.u.shape  # two knots: start and goal, zero torque
+    (array([0., 4.]), (2, 2))
+    >>> np.round(guess.states_at([2.0], 4.0), 3)  # halfway from hanging to upright: both links horizontal
+    array([[1.571, 1.571, 0.   , 0.   ]])
     """
     t = np.linspace(0.0, problem.horizon, 2)
     x = np.vstack([problem.start, problem.target])
@@ -131,6 +158,22 @@ def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
     -------
     Guess
         The simulated trajectory with its held torques (tau1, tau2) [N.m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import energy_guess, swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> problem = load_task("pendubot").problem  # 6 N.m on the shoulder, 3 s
+    >>> guess = energy_guess(problem)  # simulated bang-bang energy pumping, 10 ms steps
+    >>> guess.x.shape, guess.u.shape
+    ((301, 4), (301, 2))
+    >>> e_up, e0 = problem.model.energy(problem.target), problem.model.energy(problem.start)
+    >>> print(f"energy gained: {(max(map(problem.model.energy, guess.x)) - e0) / (e_up - e0):.0%} of the swing-up")
+    energy gained: 106% of the swing-up
+    >>> at_limit = np.mean(np.abs(guess.u[:, 0]) == problem.torque_limit)  # bang-bang pumping
+    >>> print(f"shoulder at the limit {at_limit:.0%} of the time, elbow torque {np.abs(guess.u[:, 1]).max()}")
+    shoulder at the limit 93% of the time, elbow torque 0.0
     """
     model = problem.model
     e_goal = float(model.energy(problem.target))

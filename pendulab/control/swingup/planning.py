@@ -198,7 +198,7 @@ def plan(
     planning: str = "auto",
     tolerance: float = 1e-3,
     method: str = "radau",
-    N: int = 100,
+    N: int | None = None,
     degree: int = 3,
     guess: str | Guess | SwingUpResult = "auto",
     refine: bool = True,
@@ -218,7 +218,7 @@ def plan(
     method : str
         Transcription.
     N, degree : int
-        Initial intervals and collocation degree (of the rigid plan; the elastic
+        Initial intervals (default: the problem's ``intervals``) and collocation degree (of the rigid plan; the elastic
         level raises the degree, and if needed N, until the fastest spring mode is
         resolved, module notes).
     guess : str, Guess or SwingUpResult
@@ -249,9 +249,23 @@ def plan(
         ``problem`` is not a SwingUpProblem.
     ValueError
         Unknown ``planning`` name or error scale, a bad tolerance (and bad solver settings).
+
+    Examples
+    --------
+    >>> from pendulab.control import plan
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> problem = load_task("pendubot_elastic").problem  # springs of 25 kN/m
+    >>> p = plan(problem, N=40, tolerance=0.2, error_scale="bob-speed")  # a coarse 20 % plan: cheap levels qualify
+    >>> p.decision.chosen, p.level, p.success
+    ('rigid+quasi-static', 'rigid+quasi-static', True)
+    >>> p.result.x.shape  # the rigid plan lifted to the elastic state, proven on the elastic dynamics
+    (41, 8)
+    >>> print(f"predicted {p.decision.predicted[p.level]:.2f}, measured {p.estimate.worst:.2f}")
+    predicted 0.15, measured 0.15
     """
     if not isinstance(problem, SwingUpProblem):
         raise TypeError(f"problem must be a SwingUpProblem, got {type(problem).__name__}")
+    N = problem.intervals if N is None else N
     if error_scale not in SCALES:
         raise ValueError(f"error_scale must be one of {list(SCALES)}, got {error_scale!r}")
     decision = planning_rule(problem.model, tolerance, planning)
@@ -380,7 +394,7 @@ _TRANSCRIPTION_ONLY = ("integrator", "ipopt_options", "max_refinements", "mesh",
 def swing_up(
     problem: SwingUpProblem,
     method: str = "radau",
-    N: int = 100,
+    N: int | None = None,
     *,
     degree: int = 3,
     tolerance: float | None = 1e-3,
@@ -409,8 +423,8 @@ def swing_up(
         The problem.
     method : {"radau", "legendre", "shooting"}
         Transcription.
-    N : int
-        Intervals of the first mesh.
+    N : int, optional
+        Intervals of the first mesh (default: the problem's ``intervals``, 100 unless its task sets ``N``).
     degree : int
         Collocation degree (of the rigid plan of an elastic problem; the planner raises it where needed).
     tolerance : float or None
@@ -445,9 +459,22 @@ def swing_up(
         planning level) that does not apply to the problem's kind.
     KeyboardInterrupt
         On Ctrl-C during a solve.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("pendubot")  # RealAIGym pendubot: 6 N.m on the shoulder, 3 s
+    >>> res = swing_up(task.problem, N=task.N)  # 40 intervals, refined where the error estimate asks
+    >>> res.success, res.N, res.error.passed
+    (True, 50, True)
+    >>> print(f"cost {res.cost:.3f} N^2.m^2.s, peak shoulder torque {np.abs(res.u[:, 0]).max():.2f} N.m")
+    cost 1.222 N^2.m^2.s, peak shoulder torque 1.65 N.m
     """
     if not isinstance(problem, SwingUpProblem):
         raise TypeError(f"problem must be a SwingUpProblem, got {type(problem).__name__}")
+    N = problem.intervals if N is None else N
     unknown = sorted(set(transcription) - set(_TRANSCRIPTION_ONLY))
     if unknown:
         raise TypeError(f"swing_up() got unexpected keyword argument(s) {unknown}; options: {list(_TRANSCRIPTION_ONLY)}")

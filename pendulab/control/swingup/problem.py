@@ -13,11 +13,18 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import positive_float
+from ..._checks import bounded_int, positive_float
 from ...model.model import ACTUATIONS, Model
 from ..feedback import upright_state
 
-__all__ = ["SwingUpProblem", "OBJECTIVES", "DEFAULT_MARGINS"]
+__all__ = ["SwingUpProblem", "OBJECTIVES", "DEFAULT_MARGINS", "DEFAULT_INTERVALS", "MAX_INTERVALS"]
+
+#: Intervals of the first mesh when neither the caller nor the task says: the one default of the Python
+#: front door and the CLI alike (a task's ``N`` is carried by its problem, ``intervals``).
+DEFAULT_INTERVALS = 100
+#: Largest number of intervals of one NLP (elastic NLPs of 600 degree-3 intervals took minutes and ~6 GB to build).
+MAX_INTERVALS = 1000
+INTERVALS_WHY = "each interval adds a block of the NLP; an elastic NLP of 600 intervals needs ~6 GB to build"
 
 #: Default torque margin per objective (fraction of the torque limit the plan may use).
 DEFAULT_MARGINS: dict[str, float] = {"effort": 1.0, "time": 0.9, "mix": 0.9}
@@ -69,6 +76,9 @@ class SwingUpProblem:
         ``mix`` (their optima ride the bound, bang-bang, and a tracker with no
         authority left cannot correct anything), 1.0 for ``effort`` (its
         optimum stays mostly inside the limit; today's behaviour).
+    intervals : int
+        Intervals of the first mesh a solve uses when not told otherwise (a task's ``N``;
+        the mesh is refined from there to meet the tolerance). Not compared for equality.
     name : str
         Label of the problem (e.g. the task name); not compared for equality.
 
@@ -77,6 +87,20 @@ class SwingUpProblem:
     ValueError
         On a negative or zero limit, unknown actuation or objective, a start
         or goal of the wrong size, spring bounds on a rigid model, etc.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control import SwingUpProblem
+    >>> problem = SwingUpProblem(pl.rigid(), "acrobot", torque_limit=10.0, horizon=4.0)
+    >>> problem.start, np.round(problem.target, 3)  # default: hanging at rest to upright at rest
+    (array([0., 0., 0., 0.]), array([3.142, 3.142, 0.   , 0.   ]))
+    >>> problem.torque_bounds()[1]  # upper bounds on (tau1, tau2) [N.m]: the shoulder is passive
+    array([ 0., 10.])
+    >>> fastest = problem.replace(objective="time", free_horizon=True, horizon_bounds=(1.0, 6.0))
+    >>> fastest.plan_torque_limit  # minimum time plans within 90 % of the limit
+    9.0
     """
 
     model: Model
@@ -92,6 +116,7 @@ class SwingUpProblem:
     objective: str = "effort"
     time_weight: float = 1.0
     torque_margin: float | None = None
+    intervals: int = field(default=DEFAULT_INTERVALS, compare=False)
     name: str = field(default="swingup", compare=False)
 
     def __post_init__(self) -> None:
@@ -103,6 +128,7 @@ class SwingUpProblem:
             raise ValueError(f"objective must be one of {list(OBJECTIVES)}, got {self.objective!r}")
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalisation
         set_("torque_limit", positive_float("torque_limit", self.torque_limit))
+        set_("intervals", bounded_int("intervals", self.intervals, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY))
         if self.velocity_limit is not None:
             set_("velocity_limit", positive_float("velocity_limit", self.velocity_limit))
         set_("horizon", positive_float("horizon", self.horizon))

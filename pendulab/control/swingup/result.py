@@ -69,6 +69,19 @@ class SwingUpResult:
     -----
     ``wall_time`` covers the whole call without NLP building: every mesh's
     solve and every error estimate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.control import swing_up
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> res = swing_up(load_task("acrobot").problem, N=40)  # a SwingUpResult
+    >>> res.t.shape, res.x.shape, res.u.shape  # grid, states on it, torques held on each interval
+    ((51,), (51, 4), (50, 2))
+    >>> np.round(res.x_at(1.5), 2), round(float(res.u_at(1.5)[1]), 2)  # interpolated state, held elbow torque
+    (array([2.86, 1.14, 4.67, 7.66]), 0.35)
+    >>> bool(np.allclose(res.x_at(res.horizon), res.problem.target))  # upright at rest at T = 3 s
+    True
     """
 
     problem: SwingUpProblem

@@ -111,6 +111,21 @@ class PlanningDecision:
         Relative tolerance (dimensionless).
     reason : str
         One line: why this level.
+
+    Examples
+    --------
+    >>> from pendulab.control import planning_rule
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> d = planning_rule(load_task("pendubot_elastic").model)  # a PlanningDecision; springs of 25 kN/m
+    >>> round(d.pendular_frequency, 1), round(d.spring_frequency, 1), round(d.separation, 1)  # [rad/s], ratio
+    (12.6, 126.4, 10.0)
+    >>> {level: round(err, 2) for level, err in d.predicted.items()}  # predicted relative error of each level
+    {'rigid': 0.4, 'rigid+quasi-static': 0.15, 'elastic': 0.0}
+    >>> d.chosen
+    'elastic'
+    >>> print(d.reason)
+    springs 10x faster than the pendulum (w_s = 126.4, w_p = 12.64 rad/s): no cheaper model predicted
+    within tolerance 1.0e-03 (rigid 0.4, rigid+quasi-static 0.15)
     """
 
     requested: str
@@ -192,6 +207,16 @@ def planning_rule(model: Model, tolerance: float = 1e-3, planning: str = "auto")
         ``model`` is not a Model or ``tolerance`` is not a number.
     ValueError
         Unknown ``planning`` name or a non-positive tolerance.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.control import planning_rule
+    >>> d = planning_rule(pl.elastic(k1=1e7, k2=1e7), tolerance=1e-3)
+    >>> d.chosen, f"{d.spring_frequency:.0f} rad/s"
+    ('rigid+quasi-static', '1954 rad/s')
+    >>> planning_rule(pl.elastic(), tolerance=1e-3).chosen  # soft 500 N/m springs: plan on the full model
+    'elastic'
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")

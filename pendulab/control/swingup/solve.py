@@ -56,7 +56,7 @@ _WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-3}
 def solve_transcription(
     problem: SwingUpProblem,
     method: str = "radau",
-    N: int = 100,
+    N: int | None = None,
     *,
     degree: int = 3,
     integrator: str = "rk",
@@ -83,8 +83,9 @@ def solve_transcription(
     problem : SwingUpProblem
     method : {"radau", "legendre", "shooting"}
         Transcription (see :mod:`pendulab.control.swingup.transcription`).
-    N : int
-        Number of control intervals of the first mesh (torques are held on each).
+    N : int, optional
+        Number of control intervals of the first mesh, torques held on each (default: the
+        problem's ``intervals``, 100 unless its task sets ``N``).
     degree : int
         Collocation polynomial degree (the same on every interval: h-refinement only).
     integrator : {"rk", "cvodes"}
@@ -135,12 +136,27 @@ def solve_transcription(
 
     Raises
     ------
+    TypeError
+        ``problem`` is not a SwingUpProblem.
     ValueError
         Unknown method/guess name, bad N, degree, mesh, tolerance, caps or error scale.
     KeyboardInterrupt
         On SIGINT (Ctrl-C), also when it arrives inside an IPOPT iteration;
         no further stage is started.
+
+    Examples
+    --------
+    >>> from pendulab.control import solve_transcription
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> problem = load_task("pendubot").problem
+    >>> res = solve_transcription(problem, "legendre", N=40)  # Gauss-Legendre collocation, refined to tolerance 1e-3
+    >>> res.success, res.method, [h["N"] for h in res.mesh_history]  # 40 intervals, refined once
+    (True, 'legendre', [40, 50])
+    >>> print(f"cost {res.cost:.3f} N^2.m^2.s, worst relative defect {res.error.worst:.0e}")
+    cost 1.223 N^2.m^2.s, worst relative defect 6e-05
     """
+    if not isinstance(problem, SwingUpProblem):
+        raise TypeError(f"problem must be a SwingUpProblem, got {type(problem).__name__}")
     if tolerance is not None and not (isinstance(tolerance, (int, float)) and np.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
     if not (isinstance(max_refinements, (int, np.integer)) and max_refinements >= 0):
@@ -152,7 +168,7 @@ def solve_transcription(
     if max_wall_time is not None:
         max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
     bounded_int("max_intervals", max_intervals, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
-    settings = _Settings(method, N, degree, integrator, ipopt_options)
+    settings = _Settings(method, problem.intervals if N is None else N, degree, integrator, ipopt_options)
     with watch_sigint() as interrupt, wall_time_budget(max_wall_time) as budget:
         res = _solve_transcription(problem, settings, guess, mesh, interrupt, tolerance, refine, max_refinements, max_intervals,
                         (error_method, error_scale))  # fmt: skip

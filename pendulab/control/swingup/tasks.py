@@ -17,7 +17,7 @@ section holds what the scene format itself does not (all optional except
     torque_margin = 0.9          # plan within this fraction of torque_limit (default: 0.9 time/mix, 1.0 effort)
     tolerance = 1e-3             # relative defect the plan must meet on the task's dynamics
     planning = "auto"            # auto | rigid | quasi-static | elastic (planning model of elastic tasks)
-    N = 100
+    N = 100                      # intervals of the first mesh (default 100), carried by the problem as `intervals`
     method = "radau"             # radau | legendre | shooting
     degree = 3
     success_fraction = 0.9
@@ -64,7 +64,7 @@ class Task:
     problem : SwingUpProblem
         The swing-up problem.
     N : int
-        Number of intervals of the transcription.
+        Intervals of the first mesh (``problem.intervals``: the same N for the CLI and ``swing_up(task.problem)``).
     method : str
         Transcription (``radau``, ``legendre``, ``shooting``).
     degree : int
@@ -284,6 +284,8 @@ def load_task(name_or_path: str | Path) -> Task:
     for k in ("stretch_limits", "horizon_bounds"):
         if k in task:
             kw[k] = tuple(task[k])
+    if "N" in task:
+        kw["intervals"] = task["N"]
     problem = SwingUpProblem(model=model, actuation=task["actuation"], x0=scene.x0, goal=goal, name=scene.name, **kw)
     planning = str(task.get("planning", "auto"))
     if planning not in PLANNING:
@@ -294,7 +296,7 @@ def load_task(name_or_path: str | Path) -> Task:
     return Task(
         scene=scene,
         problem=problem,
-        N=int(task.get("N", 100)),
+        N=problem.intervals,
         method=str(task.get("method", "radau")),
         degree=int(task.get("degree", 3)),
         success_fraction=float(task.get("success_fraction", 0.9)),
