@@ -52,6 +52,11 @@ ROOT = Path(__file__).resolve().parents[1]
 #: The seed paper's text (``../shared/seed/`` relative to the project root, locally and in CI).
 SEED_TEXT = ROOT.parent / "shared" / "seed" / "000_304a4cdda14995ea.txt"
 SEED_SHA256 = "b6b70b4fad2a07aeec97aa1031306826bbe2bae8c62bd1da54cbc3d044e3a964"
+#: Lines 57-119 of the seed text, the ones ``PRINTED`` quotes, kept in the repository so the transcription is
+#: checked in every clone (the full text lives outside it); ``check_excerpt`` ties it to the full text where present.
+SEED_EXCERPT = ROOT / "docs" / "errata_seed_lines.txt"
+SEED_EXCERPT_FIRST_LINE = 57
+SEED_EXCERPT_SHA256 = "99e85159ee8923505b467b1c96ba8d04cce006a09306e5a5c676e795f565117d"
 
 # Point masses, no dampers, no torques: the paper's rigid model. Its numeric
 # values are not stated for this case; unit masses and lengths are used.
@@ -315,16 +320,34 @@ def read_seed_text(path: Path = SEED_TEXT) -> list[str]:
     return path.read_text(encoding="utf-8").split("\n")
 
 
-def check_transcription(path: Path = SEED_TEXT) -> list[str]:
-    """Mismatches between ``PRINTED`` and the seed text (empty: every quoted line is the file's line)."""
+def check_transcription(path: Path = SEED_TEXT, first_line: int = 1) -> list[str]:
+    """Mismatches between ``PRINTED`` and the seed text (empty: every quoted line is the file's line).
+
+    ``first_line``: the seed-text line number of the file's first line (``SEED_EXCERPT_FIRST_LINE`` for the excerpt).
+    """
     lines = read_seed_text(path)
+
+    def line(n: int) -> str:
+        i = n - first_line
+        return lines[i] if 0 <= i < len(lines) else "<outside the file>"
+
     problems = []
     for eq in PRINTED:
-        if lines[eq.line - 1] != eq.source:
-            problems.append(f"({eq.number}): line {eq.line} is {lines[eq.line - 1]!r}")
-        if eq.tag_line is not None and lines[eq.tag_line - 1].strip() != f"({eq.number})":
-            problems.append(f"({eq.number}): line {eq.tag_line} is {lines[eq.tag_line - 1]!r}, not the tag")
+        if line(eq.line) != eq.source:
+            problems.append(f"({eq.number}): line {eq.line} is {line(eq.line)!r}")
+        if eq.tag_line is not None and line(eq.tag_line).strip() != f"({eq.number})":
+            problems.append(f"({eq.number}): line {eq.tag_line} is {line(eq.tag_line)!r}, not the tag")
     return problems
+
+
+def check_excerpt(excerpt: Path = SEED_EXCERPT, full: Path = SEED_TEXT) -> list[str]:
+    """Mismatches between the repository's excerpt and the full seed text's lines it copies (empty: identical)."""
+    part = read_seed_text(excerpt)[:-1]  # written with a final newline
+    lines = read_seed_text(full)[SEED_EXCERPT_FIRST_LINE - 1 : SEED_EXCERPT_FIRST_LINE - 1 + len(part)]
+    if len(lines) != len(part):
+        return [f"the full text has {len(lines)} of the excerpt's {len(part)} lines"]
+    pairs = enumerate(zip(part, lines, strict=True))
+    return [f"line {SEED_EXCERPT_FIRST_LINE + i}: {a!r} != {b!r}" for i, (a, b) in pairs if a != b]
 
 
 # -- our derivation --------------------------------------------------------------------------------

@@ -139,13 +139,19 @@ class ValidationReport:
             shown = ", ".join(f"{k}={v:.6g}" for k, v in changed.items()) or "default parameters"
             state = ", ".join(f"{k}={v:.6g}" for k, v in self.start.items())
             lines.append(f"at the FMU's own parameters ({shown}) and start values ({state})")
+            lines.append(
+                "each row: a validation scene's horizon, output step, torque input and bound; NOT its parameters or "
+                "initial state (--scene NAME runs a scene as written)"
+            )
+            first = "input of scene"
         else:
-            lines.append("at the named scenes' parameters and initial states")
+            lines.append("at the named scenes' own parameters and initial states (each scene as written)")
+            first = "scene"
         lines += [f"  problem: {p}" for p in self.problems]
         keys = list(dict.fromkeys((r.scene, r.run) for r in self.rows))
         signals = list(dict.fromkeys(r.signal for r in self.rows))
-        w = max([15, *(len(scene) for scene, _ in keys)])
-        head = f"{'scene':<{w}} {'run':<10} " + " ".join(f"{s:>9}" for s in signals) + f" {'bound':>8}  result"
+        w = max([len(first), *(len(scene) for scene, _ in keys)])
+        head = f"{first:<{w}} {'run':<10} " + " ".join(f"{s:>9}" for s in signals) + f" {'bound':>8}  result"
         lines += [head, "-" * len(head)]
         for scene, run in keys:
             rs = {r.signal: r for r in self.rows if (r.scene, r.run) == (scene, run)}

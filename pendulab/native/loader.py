@@ -10,7 +10,7 @@ from .build import build_cached
 from .codegen import KINDS, native_sources, native_units
 from .library import NativeLibrary
 
-__all__ = ["native_library", "loaded_libraries"]
+__all__ = ["native_library", "loaded_libraries", "library_state"]
 
 
 _LOADED: dict[Path, NativeLibrary] = {}
@@ -91,3 +91,32 @@ def loaded_libraries() -> tuple[NativeLibrary, ...]:
     """
     with _LOCK:
         return tuple(_LOADED.values())
+
+
+def library_state(kind: str) -> str:
+    """How much of the native library of ``kind`` is ready, without building or loading anything.
+
+    Parameters
+    ----------
+    kind : {"rigid", "elastic"}
+        Model kind.
+
+    Returns
+    -------
+    {"loaded", "on disk", "not built"}
+        Loaded in this process, compiled and cached on disk (a load away), or still to be compiled.
+
+    Raises
+    ------
+    ValueError
+        Unknown kind.
+    """
+    from .build import shared_library_suffix, source_digest
+    from .cache import cache_dir
+
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {list(KINDS)}, got {kind!r}")
+    if _BY_KEY.get((kind, *(os.environ.get(v) for v in _CACHE_ENV))) is not None:
+        return "loaded"
+    name = f"pendulab_native_{kind}-{source_digest(native_sources(kind), native_units())[:20]}{shared_library_suffix()}"
+    return "on disk" if (cache_dir() / name).is_file() else "not built"

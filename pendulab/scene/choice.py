@@ -45,6 +45,7 @@ for the reference it is the predictability horizon at the scene's ``rtol``, and
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -56,6 +57,7 @@ from ..integrate import time_grid
 from .choice_result import LevelPrediction, ModelChoice, Verification
 from .choice_verify import _verified, error_curve
 from .core import Scene
+from .cost import level_cost
 from .levels import linear_solution
 from .prediction import (
     DOUBLE_PRECISION_RTOL,
@@ -195,7 +197,10 @@ def choose_model(
     needed = rtol * tol / float(e_ref[-1])
     ref_name = "elastic" if scene.model.kind == "elastic" else "rigid"
     preds.append(LevelPrediction(ref_name, 0.0, scene.t_final, True, "reference (the scene's own model)"))
-    chosen = next(p for p in preds if p.within)
+    # Cheapest by the estimated cost in this process (compilation still owed included), not by the hierarchy's
+    # order: the first level within tolerance wins a tie (stable sort).
+    preds = [dataclasses.replace(p, cost=level_cost(scene, p.name)) if p.within else p for p in preds]
+    chosen = min((p for p in preds if p.within), key=lambda p: p.cost.total)
     trusted = min(chosen.horizon if chosen.name != ref_name else scene.t_final, ref_h)
     if ref_h >= scene.t_final:
         verdict = f"the reference at rtol {rtol:g} holds the whole horizon ({scene.t_final:g} s)"

@@ -11,6 +11,7 @@ from typing import Any
 
 from ..integrate.trajectory import Trajectory
 from .core import Scene
+from .cost import LevelCost
 from .levels import LinearSolution, ModelLevel, level_trajectory, levels_for
 
 __all__ = ["LevelPrediction", "Verification", "ModelChoice"]
@@ -35,6 +36,9 @@ class LevelPrediction:
         ``error <= tolerance``.
     note : str
         Why (one line).
+    cost : LevelCost or None
+        Estimated cost of its run in this process, compilation still owed included
+        (levels within tolerance only: the rule picks the cheapest of those).
     """
 
     name: str
@@ -42,6 +46,7 @@ class LevelPrediction:
     horizon: float
     within: bool
     note: str = ""
+    cost: LevelCost | None = None
 
 
 @dataclass(frozen=True)
@@ -114,9 +119,10 @@ class ModelChoice:
     t_final : float
         Scene horizon [s].
     chosen : str
-        Cheapest level predicted within tolerance (the reference when none is).
+        Level of least estimated cost (:mod:`pendulab.scene.cost`: compilation still owed in
+        this process included) among those predicted within tolerance; the reference qualifies always.
     levels : tuple of LevelPrediction
-        One per level, cheapest first; the reference last.
+        One per level in the hierarchy's order (fewest states first); the reference last.
     lyapunov : float
         Predicted largest Lyapunov exponent [1/s] (0: regular motion).
     energy_fraction : float
@@ -220,6 +226,14 @@ class ModelChoice:
                     "horizon_s": lv.horizon,
                     "within_tolerance": lv.within,
                     "note": lv.note,
+                    "estimated_cost": None
+                    if lv.cost is None
+                    else {
+                        "method": lv.cost.method,
+                        "preparation_s": lv.cost.preparation,
+                        "integration_s": lv.cost.integration,
+                        "note": lv.cost.note,
+                    },
                 }
                 for lv in self.levels
             ],
@@ -241,19 +255,29 @@ class ModelChoice:
         -------
         str
         """
+        v = self.verification
+        ran = (
+            "a priori prediction, then verified: the chosen level and the reference were run"
+            if v is not None
+            else "a priori prediction: no level and no reference were run"
+        )
         lines = [
             f"scene {self.scene}: outputs {', '.join(self.outputs)}; tolerance {self.tolerance:g}; horizon {self.t_final:g} s"
-            f" (a priori, reference not run)",
-            f"{'model':<20} {'predicted error':>15} {'valid until [s]':>16}  within",
+            f" ({ran})",
+            f"{'model':<20} {'predicted error':>15} {'valid until [s]':>16}  within  {'est. cost [s]':>13}",
         ]
         for lv in self.levels:
+            cost = "" if lv.cost is None else f"{lv.cost.total:13.3g}"
+            why = "; ".join(x for x in (lv.note, "" if lv.cost is None else _cost_note(lv.cost)) if x)
             lines.append(
-                f"{lv.name:<20} {lv.error:>15.2e} {lv.horizon:>16.3g}  {'yes' if lv.within else 'no '}"
-                + (f"  ({lv.note})" if lv.note else "")
+                f"{lv.name:<20} {lv.error:>15.2e} {lv.horizon:>16.3g}  {'yes' if lv.within else 'no ':<6}  {cost:>13}"
+                + (f"  ({why})" if why else "")
             )
-        lines.append(f"chosen: {self.chosen} (cheapest predicted within tolerance; rule {self.rule_time * 1e3:.1f} ms)")
+        lines.append(
+            f"chosen: {self.chosen} (least estimated cost within tolerance, compilation still owed included; "
+            f"rule {self.rule_time * 1e3:.1f} ms)"
+        )
         lines.append(self.verdict)
-        v = self.verification
         if v is not None:
             lines.append(
                 f"verify: {v.level} measured error {v.measured_error:.2e} (predicted {v.predicted_error:.2e}), "
@@ -266,7 +290,34 @@ class ModelChoice:
                     f"verify: the reference at its rtol is off a 1000x tighter run by {v.reference_error:.2e}, "
                     f"valid until {v.reference_horizon:.3g} s (predicted {self.reference_horizon:.3g} s)"
                 )
+            lines += _misses(self, v)
         return "\n".join(lines)
+
+
+def _cost_note(cost: LevelCost) -> str:
+    prep = f" + {cost.preparation:.2g} s {cost.note}" if cost.preparation > 0 else ""
+    return f"{cost.method}: {cost.integration:.2g} s{prep}"
+
+
+def _misses(choice: ModelChoice, v: Verification) -> list[str]:
+    """Plain lines for every prediction the verification measured worse than predicted."""
+    out = []
+    if v.measured_error > v.predicted_error:
+        out.append(
+            f"verify: prediction MISSED: {v.level}'s measured error {v.measured_error:.2e} exceeds the predicted "
+            f"{v.predicted_error:.2e} ({v.measured_error / max(v.predicted_error, 1e-300):.3g}x)"
+        )
+    if v.measured_horizon < v.predicted_horizon:
+        out.append(
+            f"verify: prediction MISSED: {v.level} holds the tolerance until {v.measured_horizon:.3g} s, not the predicted "
+            f"{v.predicted_horizon:.3g} s ({v.predicted_horizon - v.measured_horizon:.3g} s short)"
+        )
+    if v.reference_horizon is not None and v.reference_horizon < choice.reference_horizon:
+        out.append(
+            f"verify: prediction MISSED: the reference holds until {v.reference_horizon:.3g} s, not the predicted "
+            f"{choice.reference_horizon:.3g} s ({choice.reference_horizon - v.reference_horizon:.3g} s short)"
+        )
+    return out or ["verify: every prediction held (measured error and horizons at least as good as predicted)"]
 
 
 def _finite(x: float | None) -> float | None:

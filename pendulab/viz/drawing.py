@@ -127,7 +127,7 @@ def link_polylines(model: Model, pos: np.ndarray) -> list[np.ndarray]:
     Parameters
     ----------
     model : Model
-        The pendulum (only its kind is used).
+        The pendulum (its kind, and an elastic model's rest lengths for the coil width).
     pos : array_like, shape (4,)
         Bob positions x1, y1, x2, y2 [m], pivot at the origin.
 
@@ -139,7 +139,9 @@ def link_polylines(model: Model, pos: np.ndarray) -> list[np.ndarray]:
     origin = np.zeros(2)
     b1, b2 = np.asarray(pos[:2], dtype=float), np.asarray(pos[2:4], dtype=float)
     if model.kind == "elastic":
-        return [spring_polyline(origin, b1), spring_polyline(b1, b2)]
+        # Coil width in proportion to each spring's rest length (0.05 m for a 1 m link), so short links stay readable.
+        w1, w2 = 0.05 * model.params.L1, 0.05 * model.params.L2
+        return [spring_polyline(origin, b1, width=w1), spring_polyline(b1, b2, width=w2)]
     return [np.vstack([origin, b1]), np.vstack([b1, b2])]
 
 

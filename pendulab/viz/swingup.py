@@ -14,6 +14,7 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from .._io import atomic_path  # noqa: E402
 from ..control.swingup.episode import Episode  # noqa: E402
+from .drawing import link_polylines  # noqa: E402
 from .save import save_figure  # noqa: E402
 
 __all__ = ["plot_episode", "animate_episode"]
@@ -178,8 +179,8 @@ def animate_episode(
 ) -> Path:
     """Animated GIF of the closed-loop episode (swing-up and hold), real time at ``fps``.
 
-    The links are drawn straight from the pivot through both bobs, with a trace
-    of bob 2 over the last 2 s and, when checked, the success height dotted.
+    Rigid links are drawn as bars, elastic links as springs (their stretch visible), with a
+    trace of bob 2 over the last 2 s and, when checked, the success height dotted.
 
     Parameters
     ----------
@@ -223,19 +224,24 @@ def animate_episode(
     if ep.height is not None:
         ax.axhline(ep.height.threshold, color="r", ls=":", lw=0.8)
     (trace,) = ax.plot([], [], "-", color="tab:orange", lw=0.6, alpha=0.6)
-    (links,) = ax.plot([], [], "o-", color="tab:blue", lw=3, ms=6)
+    # Rigid links are bars; elastic ones are drawn as springs (link_polylines), so their stretch shows.
+    elastic = ep.task.model.kind == "elastic"
+    lines = [ax.plot([], [], "-", color="tab:blue", lw=1.4 if elastic else 3)[0] for _ in range(2)]
+    (bobs,) = ax.plot([], [], "o", color="tab:blue", ms=6)
+    ax.plot([0.0], [0.0], "k^", ms=6)
     # Two-line placeholder so tight_layout reserves room for the per-frame title.
     title = ax.set_title(f"{ep.task.name}\nt = 0.00 s", fontsize=8)
     T = ep.result.horizon
 
     def draw(i: int):
-        x1, y1, x2, y2 = pos[i]
-        links.set_data([0.0, x1, x2], [0.0, y1, y2])
+        for line, poly in zip(lines, link_polylines(ep.task.model, pos[i]), strict=True):
+            line.set_data(poly[:, 0], poly[:, 1])
+        bobs.set_data(pos[i, [0, 2]], pos[i, [1, 3]])
         lo = max(0, i - 2 * fps)
         trace.set_data(pos[lo : i + 1, 2], pos[lo : i + 1, 3])
         phase = "TVLQR swing-up" if frames[i] < T else "LQR hold"
         title.set_text(f"{ep.task.name}\nt = {frames[i]:4.2f} s  {phase}")
-        return links, trace, title
+        return (*lines, bobs, trace, title)
 
     fig.tight_layout()
     anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)

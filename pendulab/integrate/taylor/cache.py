@@ -100,6 +100,21 @@ def compile_count() -> int:
     return _COMPILE_COUNT
 
 
+def is_compiled(key: StructureKey) -> bool:
+    """Whether the Taylor integrator of ``key`` is already compiled in this process (no compilation on its next run).
+
+    Parameters
+    ----------
+    key : StructureKey
+        From :func:`structure_key`.
+
+    Returns
+    -------
+    bool
+    """
+    return key in _CACHE
+
+
 def clear_cache() -> None:
     """Forget every compiled integrator (the next run of each structure compiles again)."""
     with _CACHE_LOCK:
