@@ -1,17 +1,42 @@
-"""pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed."""
+"""pendulab: rigid and elastic double pendulum as an FMI co-simulation component and control testbed.
 
-from . import _aliases
+The public names are imported on first use (PEP 562 ``__getattr__``): ``import pendulab`` and every CLI
+start, ``--help`` and a bad-option error included, no longer pay for SciPy, CasADi and the ensemble engine
+(0.6-3.4 s) before they are needed, and a Ctrl-C during start-up lands in pendulab's own entry point.
+"""
+
+from __future__ import annotations
+
+from . import _aliases, _lazy
 
 _aliases.install()  # deprecated names (one table, above every layer); before any subpackage is imported
 from ._version import __version__  # noqa: E402
-from .analysis.equilibria import Equilibrium, equilibria, equilibrium  # noqa: E402
-from .analysis.linearize import Linearization, linearize  # noqa: E402
-from .analysis.modes import Mode, modes  # noqa: E402
-from .ensemble import ensemble  # noqa: E402
-from .integrate import METHODS, SimulationError, simulate  # noqa: E402
-from .integrate.trajectory import Trajectory  # noqa: E402
-from .model.model import ACTUATIONS, Model, elastic, make_model, rigid  # noqa: E402
-from .model.params import ElasticParams, RigidParams  # noqa: E402
+
+#: Public name -> the module that defines it (imported on first access).
+_LAZY: dict[str, str] = {
+    "ACTUATIONS": ".model.model",
+    "Model": ".model.model",
+    "elastic": ".model.model",
+    "make_model": ".model.model",
+    "rigid": ".model.model",
+    "ElasticParams": ".model.params",
+    "RigidParams": ".model.params",
+    "Equilibrium": ".analysis.equilibria",
+    "equilibria": ".analysis.equilibria",
+    "equilibrium": ".analysis.equilibria",
+    "Linearization": ".analysis.linearize",
+    "linearize": ".analysis.linearize",
+    "Mode": ".analysis.modes",
+    "modes": ".analysis.modes",
+    "ensemble": ".ensemble.engine",
+    "METHODS": ".integrate",
+    "SimulationError": ".integrate",
+    "simulate": ".integrate",
+    "Trajectory": ".integrate.trajectory",
+}
+
+
+_lazy.install(__name__, _LAZY)
 
 __all__ = [
     "__version__",

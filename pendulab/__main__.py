@@ -1,3 +1,5 @@
-from .cli import run
+"""``python -m pendulab``: the same entry point as the ``pendulab`` console script."""
+
+from ._entry import run
 
 run()

@@ -21,6 +21,7 @@ import os
 import signal
 import sys
 import threading
+import warnings
 from collections.abc import Iterator, Sequence
 from typing import NoReturn
 
@@ -43,9 +44,12 @@ def build_parser() -> argparse.ArgumentParser:
     argparse.ArgumentParser
         Parser whose parsed namespace carries ``command`` and ``func``.
     """
+    from .commands._common import DOCS_URL
+
     parser = argparse.ArgumentParser(
         prog="pendulab",
         description="Rigid and elastic double pendulum: simulation, modes, FMU export, co-simulation, control.",
+        epilog=f"Documentation: {DOCS_URL} (every command has --help).",
     )
     from ._version import __version__
 
@@ -117,7 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"pendulab: what the run finished is listed in {marker}", file=sys.stderr)
         return status
 
-    with _sticky_interrupt() as guard:
+    with _sticky_interrupt() as guard, _journal_notices(args.command):
         try:
             try:
                 status = int(args.func(args) or 0)
@@ -138,6 +142,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             if guard.interrupted:
                 return _interrupted()
             raise
+
+
+@contextlib.contextmanager
+def _journal_notices(command: str) -> Iterator[None]:
+    """Show every :class:`~pendulab._journal.JournalWarning` (a journal not trusted on resume) as one stderr line."""
+    from ._journal import JournalWarning
+
+    show = warnings.showwarning
+
+    def one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
+        if issubclass(category, JournalWarning):
+            print(f"pendulab {command}: {message}", file=sys.stderr)
+        else:
+            show(message, category, *args, **kwargs)  # type: ignore[arg-type]
+
+    with warnings.catch_warnings():
+        # Each notice names its file and records: every one is shown, not only the first per source line.
+        warnings.simplefilter("always", JournalWarning)
+        warnings.showwarning = one_line
+        yield
 
 
 #: Seconds between repeated interrupts while a SIGINT has not yet reached :func:`main`.
@@ -207,7 +231,12 @@ def run() -> NoReturn:
     JIT-compiled modules) took 0.5-2.5 s, which a user who pressed Ctrl-C should not wait for.
     """
     sys.unraisablehook = _drop_interrupt_unraisable
-    status = main()
+    try:
+        status = main()
+    except KeyboardInterrupt:
+        # Before main() guards the command: building the parser imports every command module (NumPy,
+        # CasADi), which a Ctrl-C at start-up lands in.
+        status = _interrupted_status()
     if status == 130:
         sys.stdout.flush()
         sys.stderr.flush()

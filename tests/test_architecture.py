@@ -21,7 +21,8 @@ PKG = ROOT / "pendulab"
 
 #: Lowest first. A module may import its own layer and the layers below it, never one above.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_checks", "_version", "_io"),
+    ("_checks", "_version", "_io", "_lazy"),
+    ("_journal",),
     ("model",),
     ("analysis", "native"),
     ("integrate",),
@@ -36,7 +37,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("gym",),
     ("bench",),
     ("commands",),
-    ("cli", "__main__", "_aliases"),
+    ("cli", "_aliases"),
+    ("__main__", "_entry"),
 )
 LAYER_OF = {name: i for i, names in enumerate(LAYERS) for name in names}
 

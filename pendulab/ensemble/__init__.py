@@ -6,9 +6,14 @@ per-run events (:class:`Event`, built-in ``"flip"``), and returns an :class:`Ens
 heyoka is the optional extra ``pendulab[taylor]``; Dask is ``pendulab[dask]``.
 """
 
-from .engine import ensemble
+from __future__ import annotations
+
+from .. import _lazy
 from .events import FLIP, Event
 from .pool import map_runs
 from .result import EnsembleResult
+
+# The engine imports the integrators (SciPy, CasADi): loaded when ensemble() is first asked for.
+_lazy.install(__name__, {"ensemble": ".engine"})
 
 __all__ = ["ensemble", "Event", "EnsembleResult", "FLIP", "map_runs"]
