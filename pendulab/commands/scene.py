@@ -7,6 +7,7 @@ import json
 import sys
 
 from . import CLIError
+from ._common import docs_page
 
 __all__ = ["register"]
 
@@ -16,6 +17,8 @@ def _check(args: argparse.Namespace) -> int:
 
     if args.repeats is not None and not args.measure:
         raise CLIError("--repeats applies to --measure only (the a priori rule runs no level)")
+    if args.fail_on_miss and not args.verify:
+        raise CLIError("--fail-on-miss applies to --verify (only a verification measures what a prediction missed)")
     if args.measure and args.verify:
         raise CLIError("give --verify (run the chosen level and the reference) or --measure (run every level), not both")
     scene = load_scene(args.file)
@@ -38,6 +41,10 @@ def _check(args: argparse.Namespace) -> int:
         path = atomic_write_text(out / "check.json", json.dumps(result.to_dict(), indent=1) + "\n")
         print(f"pendulab scene check: wrote {path} and check.md", file=sys.stderr)
     print(json.dumps(result.to_dict(), indent=1) if args.json else result.table())
+    missed = result.misses() if args.verify else []
+    if missed and args.fail_on_miss:
+        print(f"pendulab scene check: {len(missed)} prediction(s) missed (--fail-on-miss): exit 1", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -51,7 +58,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "reference; name the cheapest within tolerance and the horizon of validity",
         description="Predict, without running the reference, each model level's error on the scene's outputs and "
         "horizon, pick the cheapest within the scene's tolerance, and say up to when each level (and the reference "
-        "at the scene's rtol, on chaotic scenes) keeps the outputs within tolerance. See docs/model_choice.md.",
+        f"at the scene's rtol, on chaotic scenes) keeps the outputs within tolerance. See {docs_page('model_choice')}.",
     )
     c.add_argument("file", help="scene TOML file or shipped scene name")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
@@ -61,6 +68,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--verify",
         action="store_true",
         help="also run the chosen level and the reference; report predicted against measured error and horizon",
+    )
+    c.add_argument(
+        "--fail-on-miss",
+        action="store_true",
+        help="with --verify: exit 1 when a prediction missed (measured error or horizon worse than predicted)",
     )
     c.add_argument(
         "--measure",

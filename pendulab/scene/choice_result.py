@@ -246,7 +246,19 @@ class ModelChoice:
             "verdict": self.verdict,
             "rule_time_s": self.rule_time,
             "verification": None if self.verification is None else self.verification.to_dict(),
+            "missed": self.misses(),
         }
+
+    def misses(self) -> list[str]:
+        """The predictions the verification measured worse than predicted, one plain line each.
+
+        Returns
+        -------
+        list of str
+            Empty when nothing was verified or every prediction held; else what missed and by how much
+            (the chosen level's error or horizon, the reference's horizon).
+        """
+        return [] if self.verification is None else _missed(self, self.verification)
 
     def table(self) -> str:
         """Plain-text table of the predictions (and the verification, if any).
@@ -301,11 +313,15 @@ def _cost_note(cost: LevelCost) -> str:
 
 def _misses(choice: ModelChoice, v: Verification) -> list[str]:
     """Plain lines for every prediction the verification measured worse than predicted."""
+    return choice.misses() or ["verify: every prediction held (measured error and horizons at least as good as predicted)"]
+
+
+def _missed(choice: ModelChoice, v: Verification) -> list[str]:
     out = []
     if v.measured_error > v.predicted_error:
         out.append(
             f"verify: prediction MISSED: {v.level}'s measured error {v.measured_error:.2e} exceeds the predicted "
-            f"{v.predicted_error:.2e} ({v.measured_error / max(v.predicted_error, 1e-300):.3g}x)"
+            f"{v.predicted_error:.2e}" + (f" ({v.measured_error / v.predicted_error:.3g}x)" if v.predicted_error > 0 else "")
         )
     if v.measured_horizon < v.predicted_horizon:
         out.append(
@@ -317,7 +333,7 @@ def _misses(choice: ModelChoice, v: Verification) -> list[str]:
             f"verify: prediction MISSED: the reference holds until {v.reference_horizon:.3g} s, not the predicted "
             f"{choice.reference_horizon:.3g} s ({choice.reference_horizon - v.reference_horizon:.3g} s short)"
         )
-    return out or ["verify: every prediction held (measured error and horizons at least as good as predicted)"]
+    return out
 
 
 def _finite(x: float | None) -> float | None:
