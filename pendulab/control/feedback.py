@@ -45,6 +45,7 @@ __all__ = [
     "closed_loop_spectral_radius",
     "as_feedback",
     "full_input",
+    "ControllerOutputError",
     "actuated_inputs",
     "angular_states",
 ]
@@ -559,8 +560,16 @@ def energy_swingup(
 # -- glue -----------------------------------------------------------------------------
 
 
-def full_input(controller: SampledController, u: np.ndarray) -> np.ndarray:
-    """Scatter a controller output into (tau1, tau2), zeros elsewhere.
+class ControllerOutputError(ValueError):
+    """A controller returned a command that is not a finite torque per driven input (never applied)."""
+
+
+def full_input(controller: SampledController, u: Any, t: float | None = None) -> np.ndarray:
+    """Check a controller output and scatter it into (tau1, tau2), zeros elsewhere.
+
+    Every runner that applies a controller's command (simulate's feedback, co-simulation, the
+    RealAIGym protocols) passes it here, so a non-finite or wrongly sized command is an error
+    naming the controller and the time, never a torque a plant integrates.
 
     Parameters
     ----------
@@ -568,14 +577,32 @@ def full_input(controller: SampledController, u: np.ndarray) -> np.ndarray:
         Gives the names of the driven inputs.
     u : array_like, shape (len(controller.input_names),)
         The controller's torques [N.m].
+    t : float, optional
+        Time of the command [s], for the message.
 
     Returns
     -------
     ndarray, shape (2,)
         (tau1, tau2) [N.m], zero on the undriven input.
+
+    Raises
+    ------
+    ControllerOutputError
+        ``u`` is not numbers, has the wrong size, or holds a NaN or an infinity.
     """
+    names = tuple(controller.input_names)
+    when = "" if t is None else f" at t = {t:.6g} s"
+    try:
+        values = np.asarray(u, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ControllerOutputError(f"{type(controller).__name__} returned {u!r}{when}: not torques ({exc})") from exc
+    if values.shape != (len(names),) or not np.isfinite(values).all():
+        raise ControllerOutputError(
+            f"{type(controller).__name__} returned {values.tolist()!r}{when}; expected {len(names)} finite torque(s) "
+            f"[N.m] for {list(names)}"
+        )
     full = np.zeros(len(INPUT_NAMES))
-    for name, value in zip(controller.input_names, np.atleast_1d(u), strict=True):
+    for name, value in zip(names, values, strict=True):
         full[INPUT_NAMES.index(name)] = value
     return full
 
@@ -617,6 +644,6 @@ def as_feedback(controller: SampledController, model: Model) -> Callable[[float,
     controller.reset()
 
     def feedback(t: float, x: np.ndarray) -> np.ndarray:
-        return full_input(controller, controller(t, x))
+        return full_input(controller, controller(t, x), t)
 
     return feedback

@@ -143,7 +143,7 @@ def test_instance_freed_when_controller_raises(rigid_setup, spy_free):
 def test_instance_freed_when_controller_returns_garbage(rigid_setup, spy_free):
     fmu, _, ctrl, x0 = rigid_setup
     nan_ctrl = LinearStateFeedback(ctrl.model, ctrl.K * np.nan, ctrl.x_eq, ctrl.u_eq, 0.01, ctrl.input_names)
-    with pytest.raises(ValueError, match=r"controller returned \[nan, nan\] at t = 0 s"):
+    with pytest.raises(ValueError, match=r"LinearStateFeedback returned \[nan, nan\] at t = 0 s"):
         cosim(fmu, nan_ctrl, 0.01, 1.0, x0=x0)
     assert len(spy_free) == 1
 

@@ -153,7 +153,7 @@ def run_protocol_episode(
             c0 = time.perf_counter()
             out = controller(t, _to_absolute(q_meas))
             times.append(time.perf_counter() - c0)
-            held = full_input(controller, out)
+            held = full_input(controller, out, t)
         nu = last + k_resp * (held - last)
         nu = nu + u_sigma * Z[k, 4:6]
         nu[0] = np.clip(nu[0], -limit[0], limit[0])

@@ -216,6 +216,8 @@ def plan_runs(
     if levels is None:
         keep = list(range(N_VAR))
     else:
+        if isinstance(levels, (str, bytes)) or not hasattr(levels, "__iter__"):
+            raise TypeError(f"levels must be a sequence of grid indices in [0, {N_VAR - 1}], got {levels!r}")
         keep = sorted({bounded_int("levels[i]", v, low=0, high=N_VAR - 1, why="grid indices") for v in levels})
         if not keep:
             raise ValueError("levels must name at least one grid index in [0, 20], got an empty sequence")

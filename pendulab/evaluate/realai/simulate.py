@@ -70,6 +70,17 @@ class RealAIResult:
         The end effector stays above 0.9 (L1 + L2) before the last sample.
     plant : str
         The simulated plant (:func:`~pendulab.evaluate.realai.plant.plant_label`).
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import realai_score
+    >>> res = realai_score("pendubot", "best")
+    >>> res.task, res.controller, res.plant, res.t.shape, res.x.shape  # 5000 samples of 2 ms
+    ('pendubot', 'best', 'nominal', (5000,), (5000, 4))
+    >>> {name: round(value, 3) for name, value in res.criteria.items()}
+    {'swingup_time': 1.558, 'energy': 7.675, 'torque_cost': 2.917, 'torque_smoothness': 0.005, 'velocity_cost': 40.415}
+    >>> res.write_csv("leaderboard_run.csv").name
+    'leaderboard_run.csv'
     """
 
     task: str
@@ -239,7 +250,7 @@ def run_leaderboard(
     def policy(k: int, t: float, x: np.ndarray) -> np.ndarray:
         nonlocal held
         if k % ratio == 0:
-            held = np.clip(full_input(controller, controller(t, x)), -limit, limit)
+            held = np.clip(full_input(controller, controller(t, x), t), -limit, limit)
         if progress is not None and k % 100 == 0:
             progress(k, N_STEPS)
         return held

@@ -150,7 +150,7 @@ class ProtocolController:
             t0 = time.perf_counter()
             u = self.controller(t, _to_absolute(x))
             self.call_times.append(time.perf_counter() - t0)
-            self._held = np.clip(full_input(self.controller, u), -self.limit, self.limit)
+            self._held = np.clip(full_input(self.controller, u, t), -self.limit, self.limit)
         self._k += 1
         self._last_t = t
         return self._held.copy()
