@@ -12,7 +12,7 @@ import numpy as np
 
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model
-from . import CLIError
+from . import DOCS_URL, CLIError, docs_page  # noqa: F401 - DOCS_URL, docs_page: for the command modules
 
 __all__ = [
     "PLANT_HELP",
@@ -321,8 +321,10 @@ class ProgressBar:
         self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
+        """Finish the bar (its last line in a log); a later update opens a new one."""
         if self.bar is not None:
             self.bar.close()
+            self.bar = None
 
     def iterate(self, n: int = 1, unit: str = "it") -> None:
         """Count ``n`` more steps of work whose total is unknown (IPOPT iterations, controller samples).

@@ -11,7 +11,7 @@ from typing import Any
 
 from .._checks import relative_tolerance, require_extra
 from . import CLIError
-from ._common import ProgressBar
+from ._common import VOCABULARY, ProgressBar
 from .outputs import output_directory
 
 __all__ = ["register", "run_flipmap", "DEFAULT_K"]
@@ -40,7 +40,7 @@ def register(subparsers: Any) -> None:
             "DIR/flipmap_<kind>.partial.npz as they complete; --resume continues an interrupted run from there."
         ),
     )
-    fm.add_argument("--model", default="rigid", metavar="KIND", help="rigid (default) | elastic")
+    fm.add_argument(*VOCABULARY["model kind"], dest="model", default="rigid", metavar="KIND", help="rigid (default) | elastic")
     fm.add_argument("--grid", default="400", metavar="N", help="grid points per angle (default 400)")
     fm.add_argument("--t-max", default="10", metavar="T", help="horizon [s] (default 10)")
     fm.add_argument("--out", default=_OUT, metavar="DIR", help=f"output directory (default ./{_OUT})")
@@ -103,7 +103,9 @@ def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: fl
             block_size=_BLOCK,
         )
     except ValueError as exc:
-        if "checkpoint" in str(exc):
+        from .._journal import JournalError
+
+        if isinstance(exc, JournalError) or "checkpoint" in str(exc):
             raise CLIError(f"--resume: {exc}") from None
         raise
     finally:

@@ -9,7 +9,7 @@ import zipfile
 from pathlib import Path
 
 from . import CLIError
-from ._common import add_plant_option, add_vocabulary_option, parse_settings, plant_settings, typed_flag
+from ._common import add_plant_option, add_vocabulary_option, docs_page, parse_settings, plant_settings, typed_flag
 
 
 def _binary_folders(path: Path) -> list[str]:
@@ -119,7 +119,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sub.required = True
 
     e = sub.add_parser("export", help="compile and write an FMU")
-    e.add_argument("--model", choices=("rigid", "elastic"), required=True)
+    add_vocabulary_option(e, "model kind", "model", "rigid | elastic", required=True)
     add_vocabulary_option(e, "parameters", "set", "parameter start values")
     add_vocabulary_option(e, "initial state", "initial", "state start values, e.g. theta1=1.0")
     add_plant_option(e, "--model rigid; --set overrides its values")
@@ -146,7 +146,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="write a controller (lqr, tvlqr, swingup) as a Co-Simulation FMU (generated C, no Python inside)",
         description="Design a pendulab controller and write it as an FMI 2/3 Co-Simulation FMU: the measured state as "
         "inputs, the torques as outputs, the sample time as a parameter (sample-and-hold as pendulab's sampled "
-        "controllers). The NMPC is not exportable (its solver is not generated as self-contained C; docs/fmu.md).",
+        f"controllers). The NMPC is not exportable (its solver is not generated as self-contained C; {docs_page('fmu')}).",
     )
     c.add_argument("--controller", choices=("lqr", "tvlqr", "swingup", "nmpc"), required=True, help="nmpc: explains why not")
     c.add_argument("--task", help="swing-up task (model, actuation, torque limit, sample time; tvlqr tracks its optimized plan)")

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ._common import CLIError, add_plant_option, parse_settings, plant_settings
+from ._common import VOCABULARY, CLIError, add_plant_option, add_vocabulary_option, parse_settings, plant_settings
 
 __all__ = ["register", "run"]
 
@@ -26,10 +26,9 @@ def register(subparsers: Any) -> None:
             "each mode: natural frequency [rad/s, Hz], damping ratio, time constant [s] and normalized shape."
         ),
     )
-    p.add_argument("--model", required=True, metavar="KIND", help="rigid | elastic")
-    p.add_argument(
-        "--set", metavar="NAME=VALUE", action="append", default=None, help="parameter in SI units, e.g. k1=800; repeatable"
-    )
+    # Validated by the command (a one-line error naming the option), not by argparse's choices.
+    p.add_argument(*VOCABULARY["model kind"], dest="model", required=True, metavar="KIND", help="rigid | elastic")
+    add_vocabulary_option(p, "parameters", "set", "parameter in SI units, e.g. k1=800; repeatable")
     add_plant_option(p, "--model rigid; --set overrides its values")
     p.add_argument("--equilibrium", default="all", metavar="NAME", help="down-down | down-up | up-down | up-up | all (default)")
     p.add_argument("--torque", metavar="TAU1,TAU2", help="constant torques [N.m] holding the arm, e.g. 2,0.5")

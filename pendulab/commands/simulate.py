@@ -12,8 +12,11 @@ from typing import Any
 import numpy as np
 
 from ._common import (
+    VOCABULARY,
     CLIError,
     add_plant_option,
+    add_vocabulary_option,
+    docs_page,
     format_summary,
     parse_number,
     parse_settings,
@@ -34,7 +37,7 @@ def register(subparsers: Any) -> None:
         "simulate",
         help="simulate a scene or a model; write CSV/NPZ, figures, a summary",
         description=(
-            "Simulate a scene (TOML file or shipped name, see docs/scenes.md) or a model with default "
+            f"Simulate a scene (TOML file or shipped name, see {docs_page('scenes')}) or a model with default "
             "parameters. --set overrides parameters and initial-state values by name; the other options "
             "override the scene's simulation settings."
         ),
@@ -42,7 +45,8 @@ def register(subparsers: Any) -> None:
     src = p.add_argument_group("what to simulate (exactly one)")
     src.add_argument("--scene", metavar="FILE|NAME", help="scene file or shipped scene name (e.g. seed_paper)")
     src.add_argument(
-        "--model",
+        *VOCABULARY["model kind"],
+        dest="model",
         metavar="KIND",
         help="model with default parameters, at rest: rigid | elastic; or 'auto' with --scene: the cheapest model of "
         "the hierarchy (linearized, rigid, rigid+quasi-static, elastic) predicted within the scene's [outputs] "
@@ -53,13 +57,10 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="with --model auto: also run the reference and report the chosen level's predicted against measured error",
     )
-    p.add_argument(
-        "--set",
-        metavar="NAME=VALUE",
-        action="append",
-        default=None,
-        help="parameter (m1, k1, ...) or initial state (theta1, omega2, r1, ...) in SI units; repeatable",
+    add_vocabulary_option(
+        p, "parameters", "set", "parameter (m1, k1, ...) or initial state (theta1, omega2, r1, ...) in SI units; repeatable"
     )
+    add_vocabulary_option(p, "initial state", "set", "initial state entry (theta1, omega2, r1, ...) in SI units; repeatable")
     p.add_argument("--t-final", metavar="S", help="horizon [s]")
     p.add_argument("--dt", metavar="S", help="output step [s]")
     p.add_argument(

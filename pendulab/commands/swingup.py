@@ -111,6 +111,11 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     print(f"[swingup] solving {task.name} ({args.method or task.method}, N={N or task.N}) ...", file=sys.stderr)
     bar = ProgressBar(f"[swingup] planning {task.name} (IPOPT)", not args.no_progress)
+
+    def stage(what: str) -> None:
+        bar.close()  # the planning is over: its bar's last line comes before the next stage's
+        print(f"[swingup] {what} ...", file=sys.stderr)
+
     try:
         with observe(lambda: bar.iterate(1, "iter"), lambda d: bar.note(f"building the NLP ({d}) ...")):
             ep = run_episode(
@@ -122,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
                 refine=not args.no_refine,
                 planning=args.planning,
                 max_wall_time=budget,
-                stage=lambda what: print(f"[swingup] {what} ...", file=sys.stderr),
+                stage=stage,
             )
     finally:
         bar.close()
