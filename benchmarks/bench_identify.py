@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from pendulab._journal import Journal
 from pendulab.identify.datasets import C1_BLIND, C1_EXCITATION, c1_record
 from pendulab.identify.pipeline import identify
 from pendulab.identify.preprocess import prepare
@@ -65,6 +66,22 @@ def from_json(d: dict) -> RecordScore:
     return RecordScore(d["record"], d["model"], np.array(d["torque_rms"]), d["torque_n"], np.array(d["prediction"]))
 
 
+def fold_journal(path: Path, kind: str, settings: dict, resume: bool) -> tuple[Journal, dict[str, list[RecordScore]]]:
+    """The journal of the leave-one-record-out folds and, with ``resume``, the folds in it that validate.
+
+    A :mod:`pendulab._journal` journal: pendulab version, ``settings``, each fold with its SHA-256; an edited or
+    incomplete fold (or a journal of another pendulab version) is run again with a notice.
+    """
+
+    def check(record: str, scores: list) -> None:
+        for s in scores:
+            if from_json(s).record != record:
+                raise ValueError(f"a score of record {s['record']!r} filed under {record!r}")
+
+    journal = Journal(path, kind, settings, resume=resume, check=check)
+    return journal, {k: [from_json(s) for s in v] for k, v in journal.records.items()}
+
+
 def table(by_model: dict[str, list[RecordScore]]) -> list[str]:
     head = "| model | torque RMS q1 / q2 [N.m] | " + " | ".join(f"angle RMS at {h} s, q1 / q2 [rad]" for h in HORIZONS) + " |"
     lines = [head, "|" + "---|" * (2 + len(HORIZONS))]
@@ -78,26 +95,17 @@ def table(by_model: dict[str, list[RecordScore]]) -> list[str]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3, help="timed identifications (median)")
-    ap.add_argument("--journal", default="pendulab-out/bench_identify/folds.jsonl")
+    ap.add_argument("--journal", default="pendulab-out/bench_identify/folds.json")
     ap.add_argument("--resume", action="store_true", help="skip folds already in the journal")
     ap.add_argument("--out", default=str(RESULTS))
     args = ap.parse_args()
     out = Path(args.out)
-    journal = Path(args.journal)
-    journal.parent.mkdir(parents=True, exist_ok=True)
-    done: dict[str, list[RecordScore]] = {}
-    if args.resume and journal.exists():
-        for line in journal.read_text().splitlines():
-            d = json.loads(line)
-            done[d["record"]] = [from_json(s) for s in d["scores"]]
-    elif journal.exists():
-        journal.unlink()
+    journal, done = fold_journal(Path(args.journal), "identify-c1-folds", {"records": list(C1_EXCITATION)}, args.resume)
     records = [c1_record(s) for s in C1_EXCITATION]
     bar = tqdm(total=len(records), initial=len(done), desc="leave-one-record-out folds", unit="fold")
 
     def on_fold(record: str, scores: list[RecordScore]) -> None:
-        with journal.open("a") as fh:
-            fh.write(json.dumps({"record": record, "scores": [to_json(s) for s in scores]}) + "\n")
+        journal.record(record, [to_json(s) for s in scores])
         bar.update(1)
 
     folds = leave_one_out(records, C1_GEOMETRY, PRIOR, OTHERS, done=done, on_fold=on_fold)

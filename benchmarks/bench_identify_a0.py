@@ -35,9 +35,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_identify import from_json, pooled, summary, table, to_json
+from bench_identify import fold_journal, pooled, summary, table, to_json
 from tqdm import tqdm
 
+from pendulab._journal import Journal
 from pendulab.identify.datasets import A0_SWINGUP, A0_SYSID, a0_record
 from pendulab.identify.pipeline import identify
 from pendulab.identify.preprocess import Prepared, prepare
@@ -59,19 +60,12 @@ COLORS = {"pendulab": "tab:blue", "DFKI 1.0": "tab:orange", "DFKI 2.0": "tab:gre
 
 def run_folds(kind: str, journal: Path, resume: bool) -> dict[str, list[RecordScore]]:
     """Leave-one-record-out over the sys-id records with one torque column as the input, journaled per fold."""
-    done: dict[str, list[RecordScore]] = {}
-    if resume and journal.exists():
-        for line in journal.read_text().splitlines():
-            d = json.loads(line)
-            done[d["record"]] = [from_json(s) for s in d["scores"]]
-    elif journal.exists():
-        journal.unlink()
+    log, done = fold_journal(journal, "identify-a0-folds", {"records": list(A0_SYSID), "input": kind}, resume)
     records = [a0_record(s, INPUTS[kind]) for s in A0_SYSID]
     bar = tqdm(total=len(records), initial=len(done), desc=f"leave-one-record-out, {kind} torque", unit="fold")
 
     def on_fold(record: str, scores: list[RecordScore]) -> None:
-        with journal.open("a") as fh:
-            fh.write(json.dumps({"record": record, "scores": [to_json(s) for s in scores]}) + "\n")
+        log.record(record, [to_json(s) for s in scores])
         bar.update(1)
 
     folds = leave_one_out(records, A0_GEOMETRY, PRIOR, OTHERS, done=done, on_fold=on_fold)
@@ -89,9 +83,12 @@ def by_model(folds: dict[str, list[RecordScore]]) -> dict[str, list[RecordScore]
 
 
 def final_fit(kind: str, path: Path, resume: bool) -> dict:
-    """The pipeline on all nine sys-id records with one input, cached as JSON for ``--resume``."""
-    if resume and path.exists():
-        return json.loads(path.read_text())
+    """The pipeline on all nine sys-id records with one input, journaled (one record, validated) for ``--resume``."""
+    need = ("seconds", "chosen", "vector", "structures", "base", "params", "stderr", "offset", "fit_angle_rms", "grid_s")
+    log = Journal(path, "identify-a0-final", {"records": list(A0_SYSID), "input": kind}, resume=resume,
+                  check=lambda key, doc: [doc[k] for k in need])  # fmt: skip
+    if "fit" in log:
+        return log.get("fit")
     records = [a0_record(s, INPUTS[kind]) for s in A0_SYSID]
     bar = tqdm(desc=f"fit on all nine, {kind} torque (output-error iterations)", unit="it")
     t0 = time.perf_counter()
@@ -109,7 +106,7 @@ def final_fit(kind: str, path: Path, resume: bool) -> dict:
         "params": ident.plant.params, "stderr": ident.plant.stderr, "offset": list(ident.plant.torque_offset),
         "fit_angle_rms": ident.output_error.angle_rms.tolist(), "grid_s": ident.prepared[0].dt,
     }  # fmt: skip
-    path.write_text(json.dumps(doc, indent=2) + "\n")
+    log.record("fit", doc)
     return doc
 
 
@@ -183,7 +180,7 @@ def main() -> None:
     out, work = Path(args.out), Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
 
-    loo = {kind: by_model(run_folds(kind, work / f"folds_{kind}.jsonl", args.resume)) for kind in INPUTS}
+    loo = {kind: by_model(run_folds(kind, work / f"folds_{kind}.json", args.resume)) for kind in INPUTS}
     # The input: the one with the lower held-out angle RMS at more (horizon, joint) pairs.
     loo_p = {kind: pooled(v["pendulab"])[1] for kind, v in loo.items()}
     wins = int((loo_p["commanded"] < loo_p["measured"]).sum())

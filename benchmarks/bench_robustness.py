@@ -130,9 +130,11 @@ def report(controllers: list[str], tasks: list[str], out_dir: Path, results: Pat
                 )
                 lines.append(_row(f"{_label(c)} (seed {d['seed']})", d["rates"], d["score"], extra))
             elif (out / "runs.json").is_file():
-                from pendulab.evaluate.realai.robustness import category_rates, level_successes
+                from pendulab._journal import trusted_records
+                from pendulab.evaluate.realai.robustness import JOURNAL_KIND, category_rates, level_successes
 
-                recs = json.loads((out / "runs.json").read_text())["records"]
+                # Only runs that validate (version, settings, each run's SHA-256) are counted in the table.
+                recs = list(trusted_records(out / "runs.json", JOURNAL_KIND).values())
                 rates = category_rates(level_successes(recs))
                 lines.append(_row(f"{_label(c)} (unfinished)", rates, "–", f"{len(recs)} of 722 runs finished"))
             else:

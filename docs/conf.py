@@ -1,9 +1,9 @@
 """Sphinx configuration of pendulab's documentation site: guides (Markdown), API reference, example gallery.
 
-Build (extra ``pendulab[docs]``)::
+Build (extra ``pendulab[docs]``; tests/test_docs_site.py runs exactly this in a fresh venv)::
 
-    python -m sphinx -W -b html docs pendulab-out/docs              # runs the fast examples for the gallery
-    python -m sphinx -W -b html -D plot_gallery=0 docs OUT          # code-only gallery (what the suite builds)
+    python -m sphinx -W -b html docs pendulab-out/docs              # runs every example for the gallery
+    python -m sphinx -W -b html -D plot_gallery=0 docs OUT          # code-only gallery (quick local preview)
 
 The API pages are generated at build time from each public package's ``__all__`` (one source of truth:
 what a package exports is what is documented); numpydoc renders the docstrings, which the suite already
@@ -110,14 +110,16 @@ def _write_api_pages() -> None:
 _write_api_pages()
 
 # -- Gallery (examples/) -----------------------------------------------------------------------------------
-#: Examples fast enough to run at every full docs build (seconds each); the others are shown as code.
-GALLERY_RUN = ("inspect_modes", "balance_lqr", "compare_stiffness", "simulate_seed_paper", "check_scene")
+#: Every example runs at every full docs build (seconds each: their defaults are sized for it) and its page
+#: shows the figures it wrote (gallery_hooks.scrape_written_pngs); while they run, their progress lines are
+#: echoed to the console (gallery_hooks.echo_example_output, connected in setup() below).
 sphinx_gallery_conf = {
     "examples_dirs": str(HERE.parent / "examples"),
     "gallery_dirs": "auto_examples",
-    "filename_pattern": r"/(" + "|".join(GALLERY_RUN) + r")\.py$",
+    "filename_pattern": r"/[^/_][^/]*\.py$",
     "image_scrapers": ("gallery_hooks.scrape_written_pngs",),
     "reset_modules": ("gallery_hooks.clean_example_outputs",),
+    "reset_modules_order": "both",  # also after the last example: nothing it wrote stays in examples/
     "download_all_examples": False,
     "remove_config_comments": True,
     "within_subsection_order": "FileNameSortKey",
@@ -135,3 +137,10 @@ html_theme_options = {
 }
 html_static_path: list[str] = []
 myst_heading_anchors = 3
+
+
+def setup(app) -> None:  # Sphinx calls a configuration's setup() like an extension's
+    """Echo the examples' output (their progress) to the console while the gallery runs them."""
+    from gallery_hooks import echo_example_output
+
+    echo_example_output(app)

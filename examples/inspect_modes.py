@@ -22,9 +22,6 @@ import pendulab as pl
 from pendulab.analysis.modes import mode_table
 from pendulab.viz.modes import save_mode_figures
 
-#: Brief run for tests/test_examples.py.
-TEST_KWARGS = {"names": ("down-down",)}
-
 
 def run(
     *,

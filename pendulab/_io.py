@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["atomic_path", "atomic_open", "atomic_write_text"]
+__all__ = ["atomic_path", "atomic_open", "atomic_write_text", "check_writable"]
 
 
 @contextlib.contextmanager
@@ -92,3 +92,34 @@ def atomic_write_text(path: str | os.PathLike[str], text: str, encoding: str = "
     with atomic_open(path, "w", encoding=encoding) as fh:
         fh.write(text)
     return Path(path)
+
+
+def check_writable(out: str | os.PathLike[str]) -> None:
+    """Raise unless a directory ``out`` can be created or written into (checked before work that writes there).
+
+    The directory, or the nearest existing folder above it, must take a new entry; nothing is left behind.
+
+    Parameters
+    ----------
+    out : path-like
+        The directory.
+
+    Raises
+    ------
+    NotADirectoryError
+        ``out`` (or a folder above it) is a file.
+    PermissionError
+        Nothing can be written there (read-only mount, permissions).
+    """
+    out = Path(out)
+    probe = out
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise NotADirectoryError(f"output directory {out}: {probe} is a file, not a directory")
+    try:
+        Path(tempfile.mkdtemp(prefix=".pendulab-write-check-", dir=probe)).rmdir()
+    except OSError as exc:
+        raise PermissionError(f"output directory {out}: cannot write under {probe} ({exc.strerror or exc})") from None

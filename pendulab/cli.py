@@ -44,7 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     argparse.ArgumentParser
         Parser whose parsed namespace carries ``command`` and ``func``.
     """
-    from .commands._common import DOCS_URL
+    from .commands import DOCS_URL
 
     parser = argparse.ArgumentParser(
         prog="pendulab",

@@ -78,3 +78,48 @@ def test_every_command_has_out_and_json():
 
     missing = {name: sorted({"--out", "--json"} - flags) for name, flags in leaves(build_parser()) if name != "pendulab"}
     assert {name: m for name, m in missing.items() if m} == {}
+
+
+def _help_texts():
+    import argparse
+
+    from pendulab.cli import build_parser
+
+    def walk(parser):
+        yield parser.description or ""
+        yield parser.epilog or ""
+        for action in parser._actions:
+            yield action.help or ""
+            if isinstance(action, argparse._SubParsersAction):
+                yield from (c.help or "" for c in action._choices_actions)
+                for child in action.choices.values():
+                    yield from walk(child)
+
+    return list(walk(build_parser()))
+
+
+def test_help_links_the_documentation_site_not_repository_files():
+    """A ``pip install`` user has no docs/*.md: ``--help`` names pages of the documentation site, and each exists."""
+    import re
+    from pathlib import Path
+
+    from pendulab.commands import DOCS_URL
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    texts = _help_texts()
+    assert len(texts) > 200  # the whole tree was walked
+    assert not [t for t in texts if re.search(r"docs/[\w.-]+\.md", t)]
+    urls = [u.rstrip(".,;)") for t in texts for u in re.findall(r"https?://\S+", t)]
+    assert len(urls) >= 10 and f"{DOCS_URL}scorecard.html" in urls
+    pages = [u[len(DOCS_URL) :] for u in urls if u != DOCS_URL]
+    assert all(u.startswith(DOCS_URL) for u in urls), [u for u in urls if not u.startswith(DOCS_URL)]
+    missing = sorted({p for p in pages if not p.endswith(".html") or not (docs / f"{p[: -len('.html')]}.md").is_file()})
+    assert missing == []
+
+
+def test_docs_page_refuses_a_page_the_source_tree_lacks():
+    from pendulab.commands import DOCS_URL, docs_page
+
+    assert docs_page("fmu") == f"{DOCS_URL}fmu.html"
+    with pytest.raises(ValueError, match="no_such_page"):
+        docs_page("no_such_page")

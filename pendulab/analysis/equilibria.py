@@ -49,6 +49,18 @@ class Equilibrium:
     kind : str
         Model kind.
     state_names : tuple of str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> eq = pl.equilibrium(pl.rigid(), "up-up")
+    >>> eq
+    Equilibrium('up-up', rigid, theta1=3.14159, theta2=3.14159, u=[0.0, 0.0], unstable (2 modes))
+    >>> eq.n_unstable, eq.stable
+    (2, False)
+    >>> np.round(eq.eigenvalues.real, 3)  # two growth and two decay rates [1/s]
+    array([ 5.787,  2.397, -2.397, -5.787])
     """
 
     name: str
@@ -191,6 +203,18 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
         Newton did not converge (a ``ValueError`` and a ``RuntimeError``).
     TypeError
         ``model`` is not a pendulab Model.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> eq = pl.equilibrium(pl.rigid(), "down-down", u=[1.0, 0.0])  # 1 N.m at the shoulder
+    >>> np.round(eq.x, 5)  # link 1 deflected, link 2 hanging straight down, at rest
+    array([0.05099, 0.     , 0.     , 0.     ])
+    >>> print(f"{np.arcsin(1.0 / (2 * 9.81)):.5f}")  # tau1 = (m1 + m2) g L1 sin(theta1)
+    0.05099
+    >>> eq.stable
+    True
     """
     check_model(model)
     name = _check_name(name)
@@ -255,6 +279,21 @@ def equilibria(model: Model, u: Any = None) -> list[Equilibrium]:
         As :func:`equilibrium` (except for the too-soft-spring case).
     TypeError
         ``model`` is not a pendulab Model.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> for eq in pl.equilibria(pl.rigid()):
+    ...     print(eq.name, eq.stability)
+    down-down stable
+    down-up unstable (1 mode)
+    up-down unstable (1 mode)
+    up-up unstable (2 modes)
+
+    Springs of 15 N/m cannot hold the 2 kg above them upright (that needs k1 > (m1 + m2) g / L1):
+
+    >>> [eq.name for eq in pl.equilibria(pl.elastic(k1=15.0, k2=15.0))]
+    ['down-down', 'down-up']
     """
     check_model(model)
     out = []

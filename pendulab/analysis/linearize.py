@@ -79,6 +79,19 @@ class Linearization:
         (along a trajectory) is legitimate, but its deviation model lacks the
         drift ``f(x0, u0)``: ``modes``, ``to_statespace`` and ``lqr_balance``
         refuse such a point.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid()
+    >>> lin = pl.linearize(model, pl.equilibrium(model, "up-up"), inputs="pendubot", outputs="positions")
+    >>> lin.A.shape, lin.B.shape, lin.C.shape, lin.D.shape
+    ((4, 4), (4, 1), (4, 4), (4, 1))
+    >>> lin.input_names, lin.output_names
+    (('tau1',), ('x1', 'y1', 'x2', 'y2'))
+    >>> lin.is_equilibrium, np.round(np.sort(lin.eigenvalues.real), 3)
+    (True, array([-5.787, -2.397,  2.397,  5.787]))
     """
 
     A: np.ndarray
@@ -313,6 +326,19 @@ def linearize(
     ValueError
         Unknown actuation or output name, operating point of the wrong size or
         non-finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid()  # 1 kg, 1 m links
+    >>> lin = pl.linearize(model, model.rest_state())  # hanging at rest
+    >>> w = np.sort(lin.eigenvalues.imag[lin.eigenvalues.imag > 0])  # pendular frequencies [rad/s]
+    >>> np.round(w, 4), np.round(np.sqrt(9.81 * (2 + np.array([-1, 1]) * np.sqrt(2))), 4)  # (g / L)(2 -+ sqrt 2)
+    (array([2.3972, 5.7874]), array([2.3972, 5.7874]))
+    >>> swing = pl.linearize(model, [0.5, 0.0, 0.0, 0.0])  # along a trajectory: not an equilibrium
+    >>> swing.is_equilibrium, round(swing.residual, 3)
+    (False, 7.648)
     """
     check_model(model)
     idx = check_actuation(inputs)

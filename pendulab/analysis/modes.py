@@ -54,6 +54,18 @@ class Mode:
         Fraction of the mode's kinetic energy in the spring coordinates (0 for rigid).
     label : str
         What moves, e.g. "pendular in-phase", "spring stretch anti-phase".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> fast = pl.modes(pl.elastic(k1=1e4, k2=1e4))[-1]  # the highest of the four modes at rest
+    >>> fast.label, fast.kind, round(fast.spring_share, 3)
+    ('spring stretch anti-phase', 'oscillatory', 1.0)
+    >>> print(f"{fast.omega_n:.2f} rad/s, analytic {(1 + np.sqrt(5)) / 2 * np.sqrt(1e4):.2f}")  # golden ratio x sqrt(k / m)
+    161.80 rad/s, analytic 161.80
+    >>> fast.shape_names, np.round(fast.shape, 3)  # the springs stretch in opposite senses
+    (('theta1', 'theta2', 'r1', 'r2'), array([ 0.   ,  0.   , -0.618,  1.   ]))
     """
 
     eigenvalue: complex
@@ -158,6 +170,20 @@ def modes(
         Unknown equilibrium name, a state of the wrong size, or a state that is
         not an equilibrium (the message names ``|f(x, u)|`` and suggests
         :func:`pendulab.equilibrium`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid()  # 1 kg, 1 m links
+    >>> for mode in pl.modes(model):  # hanging at rest
+    ...     print(mode.label, mode.kind, round(mode.omega_n, 4))
+    pendular in-phase oscillatory 2.3972
+    pendular anti-phase oscillatory 5.7874
+    >>> np.round(np.sqrt(9.81 * (2 + np.array([-1, 1]) * np.sqrt(2))), 4)  # analytic: (g / L)(2 -+ sqrt 2)
+    array([2.3972, 5.7874])
+    >>> [(mode.kind, round(mode.time_constant, 3)) for mode in pl.modes(model, "up-up")]  # e-folding times [s]
+    [('unstable', 0.417), ('decaying', 0.417), ('unstable', 0.173), ('decaying', 0.173)]
     """
     check_model(model)
     if isinstance(at, str):

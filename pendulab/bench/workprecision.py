@@ -32,7 +32,7 @@ import statistics
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
@@ -174,7 +174,8 @@ def run_work_precision(
         raise ValueError(f"unknown method(s) {unknown}; expected some of {list(BENCH_METHODS)}")
     case_list = get_cases(cases)
     refs = {c.name: load_reference(c) for c in case_list}
-    log = Journal(journal, "work-precision", {"quick": quick, "repeats": repeats, "slow_run_s": slow_run_s}, resume=resume)
+    config = {"quick": quick, "repeats": repeats, "slow_run_s": slow_run_s}
+    log = Journal(journal, "work-precision", config, resume=resume, check=_check_row)
     plan = [(c, BENCH_METHODS[m]) for c in case_list for m in selected]
     total = sum(len(bm.quick if quick else bm.settings) for _, bm in plan)
     rows: list[Row] = []
@@ -202,6 +203,14 @@ def run_work_precision(
                 if progress is not None:
                     progress(done, total, f"{case.name} {bm.name} {bm.sweep}={s:g}")
     return rows
+
+
+def _check_row(key: str, value: Any) -> None:
+    """Raise for a journaled point that is not a whole :class:`Row` (it is measured again instead of breaking the report)."""
+    for f in fields(Row):
+        if f.name not in value:
+            raise KeyError(f.name)
+    Row(**value)
 
 
 def _measure_or_fail(bm: BenchMethod, case: Scene, ref: Reference, setting: float, repeats: int) -> Row:

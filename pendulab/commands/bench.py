@@ -14,14 +14,14 @@ from typing import Any
 
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
-from ._common import ProgressBar
+from ._common import ProgressBar, docs_page
 
 __all__ = ["register"]
 
 _OUT_WP = "pendulab-out/bench-work-precision"
 _OUT_STABILITY = "pendulab-out/bench-stability"
 _OUT_HIERARCHY = "pendulab-out/bench-hierarchy"
-_DOCS_NOTE = "; --out docs/benchmarks regenerates the shipped docs (see docs/benchmarks.md)"
+_DOCS_NOTE = f"; in a source checkout --out docs/benchmarks regenerates the shipped results; see {docs_page('benchmarks')}"
 
 
 class _Bar:
@@ -68,17 +68,16 @@ def _json(obj: Any) -> str:
     return json.dumps(clean(obj), indent=1, allow_nan=False)
 
 
-def _resumable(journal: Path, args: argparse.Namespace) -> int:
+def _resumable(journal: Path, study: str, args: argparse.Namespace) -> int:
     """Entries a ``--resume`` run will reuse (a note on stderr when there is nothing to resume)."""
+    from .._journal import trusted_records
+
     if not args.resume:
         return 0
     if not journal.exists():
         print(f"pendulab bench: nothing to resume in {journal.parent} (no {journal.name}); starting", file=sys.stderr)
         return 0
-    try:
-        return len(json.loads(journal.read_text(encoding="utf-8")).get("entries", {}))
-    except (OSError, ValueError, AttributeError):
-        return 0  # the study itself reports an unreadable journal
+    return len(trusted_records(journal, study))  # only entries that validate; the study reports the others
 
 
 def _resume_hint(journal: Path) -> None:
@@ -93,7 +92,7 @@ def _work_precision(args: argparse.Namespace) -> int:
         raise CLIError("--merge and --resume: use one (--resume continues this run's journal, --merge combines CSVs)")
     out = Path(args.out)
     journal = out / "work_precision_journal.json"
-    resumed = _resumable(journal, args)
+    resumed = _resumable(journal, "work-precision", args)
     start = time.perf_counter()
     bar, progress = _progress("bench work-precision", args)
     try:
@@ -184,7 +183,7 @@ def _stability(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     journal = out / "stability_journal.json"
-    resumed = _resumable(journal, args)
+    resumed = _resumable(journal, "stability", args)
     start = time.perf_counter()
     bar, progress = _progress("bench stability", args)
     try:

@@ -14,7 +14,7 @@ import numpy as np
 from .._checks import bounded_int, relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
-from ._common import add_plant_option, add_vocabulary_option, plant_settings, typed_flag
+from ._common import add_plant_option, add_vocabulary_option, docs_page, plant_settings, typed_flag
 from .outputs import output_directory
 
 _DEFAULT_T_FINAL = {"lqr": 5.0, "swingup": 10.0, "tvlqr": 8.0, "nmpc": 10.0}
@@ -68,7 +68,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--estimator",
         choices=("ekf", "mmae"),
         default=None,
-        help="feed the controller a state estimate of the measurement (docs/estimation.md)",
+        help=f"feed the controller a state estimate of the measurement ({docs_page('estimation')})",
     )
     p.add_argument(
         "--measurement-noise",

@@ -168,7 +168,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "validation scenes, by default at the FMU's own parameters and start values (its modelDescription start values; "
         "the scenes lend horizon, step, input, tolerance and bound); --scene runs named scenes as they are. "
         "Exit status: 0 PASS, 1 FAIL, 2 bad input (not a readable FMU - not a zip, a truncated "
-        "archive, a schema-invalid modelDescription.xml -, not a pendulab FMU, unknown scene), one line on stderr.",
+        "archive, a schema-invalid modelDescription.xml -, not a pendulab FMU, unknown scene, a binary pendulab did not "
+        "export that crashes or fails in a probe process), one line on stderr.",
     )
     v.add_argument("fmu", type=Path)
     v.add_argument(

@@ -9,16 +9,13 @@ scorecards in ``scorecard/TASK-CONTROLLER/records.json``); ``--resume`` continue
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from .._io import atomic_write_text
+from .._io import atomic_write_text, check_writable
 from .._version import __version__
 
 __all__ = ["write_leaderboard", "LEADERBOARD_TASKS", "LEADERBOARD_CONTROLLERS", "DEFAULT_PATH"]
@@ -33,6 +30,10 @@ LEADERBOARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc")
 SKIPPED: dict[tuple[str, str], str] = {
     ("nmpc", "acrobot_elastic_soft"): "not scored (its nominal swing-up fails: a spring nears collapse at 4.2 s; docs/nmpc.md)"
 }
+#: Controllers whose nominal run of the scorecard table is also run with every integrator and tolerance
+#: (:mod:`pendulab.cosim.integrators`): the energy swing-up's chaotic pumping made its "nominal ok" depend on the
+#: integrator, so its bracket says with which integrators it holds (a table below the scorecards).
+INTEGRATOR_CHECKED: tuple[str, ...] = ("swingup",)
 #: Where the leaderboard is written by default (relative to the current directory; never into docs/:
 #: regenerate the shipped page explicitly with ``--out docs/leaderboard.md`` from the repository root).
 DEFAULT_PATH = Path("pendulab-out") / "leaderboard" / "leaderboard.md"
@@ -118,7 +119,12 @@ def write_leaderboard(
     Raises
     ------
     ValueError
-        Unknown controller or task names, or a journal of other settings with ``resume``.
+        Unknown controller or task names, or a journal of other settings with ``resume``
+        (:class:`~pendulab._journal.JournalError`; journals that were edited, lack fields or were written by
+        another pendulab are not an error: their cases or runs are run again, with a
+        :class:`~pendulab._journal.JournalWarning`).
+    PermissionError, NotADirectoryError
+        The page's folder or the journal directory cannot be written (checked before any case runs).
     KeyboardInterrupt
         Ctrl-C; the finished cases stay journaled (continue with ``resume``).
     """
@@ -128,6 +134,8 @@ def write_leaderboard(
     check_controllers(controllers)  # bad names fail before anything runs
     out = DEFAULT_PATH if path is None else Path(path)
     jroot = DEFAULT_ROOT if root is None else Path(root)
+    for where in (out.parent, jroot):  # before hours of cases, not at their first save
+        check_writable(where)
     w0 = time.perf_counter()
     bars = _Bars(progress)
     try:
@@ -137,6 +145,7 @@ def write_leaderboard(
         )  # fmt: skip
         remaining = None if max_wall_time is None else max(0.0, max_wall_time - (time.perf_counter() - w0))
         cards = _scorecards(runs, workers, progress, resume, jroot / "scorecard", remaining) if scorecards and not quick else None
+        checks = None if cards is None else _integrator_checks(resume, jroot / "integrators")
     finally:
         bars.close()
     figs = _figures(board, out.parent / "figures")
@@ -175,7 +184,7 @@ def write_leaderboard(
             "the dashed line the best published score.*",
             "",
         ]
-    lines += _scorecard_section(cards, runs, quick)
+    lines += _scorecard_section(cards, runs, quick, checks)
     not_run = [c for c in board.cases if c.status != "done"]
     if not_run:
         again = (
@@ -206,36 +215,15 @@ def _figures(board: Any, fig_dir: Path) -> list[Path]:
     return figs
 
 
-def _read_card(path: Path, settings: Mapping[str, Any]) -> tuple:
-    from ..evaluate.card import record_from_dict
-
-    if not path.is_file():
-        return ()
-    try:
-        data = json.loads(path.read_text())
-        records = tuple(record_from_dict(r) for r in data["records"])
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise ValueError(f"journal {path} is not a scorecard records file ({exc}); delete it or drop --resume") from None
-    differ = {k: (data.get(k), v) for k, v in settings.items() if data.get(k) != v}
-    if differ:
-        raise ValueError(f"journal {path} was written with other settings ({differ}); delete it or drop --resume")
-    return records
-
-
-def _journal_wall(journal: Path) -> float | None:
-    """The wall time [s] journaled with a scorecard's records (None: not journaled)."""
-    try:
-        wall = json.loads(journal.read_text()).get("wall_time")
-    except (OSError, ValueError, AttributeError):
-        return None
+def _journal_wall(journal: Any) -> float | None:
+    """The wall time [s] journaled (and validated) with a scorecard's records (None: not journaled)."""
+    wall = journal.meta.get("wall_time")
     return float(wall) if isinstance(wall, (int, float)) else None
 
 
-def _complete(journal: Path, resume: bool) -> bool:
-    try:
-        return resume and bool(json.loads(journal.read_text()).get("complete"))
-    except (OSError, ValueError, AttributeError):
-        return False
+def _complete(journal: Any, resume: bool) -> bool:
+    """Whether a resumed scorecard journal holds the whole card (complete, and no record of it was dropped)."""
+    return resume and bool(journal.meta.get("complete")) and not journal.notices
 
 
 def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, root: Path, budget: float | None) -> dict[str, Any]:
@@ -243,6 +231,7 @@ def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, ro
     from ..control.swingup.iterations import observe
     from ..control.swingup.tasks import load_task
     from ..evaluate import score
+    from ..evaluate.scorecard_journal import open_journal, save_records
     from ._common import ProgressBar
 
     w0 = time.perf_counter()
@@ -254,9 +243,10 @@ def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, ro
             if (ctrl, task_name) in SKIPPED:
                 cards[(ctrl, task_name)] = SKIPPED[(ctrl, task_name)]
                 continue
-            journal = root / f"{task.name}-{ctrl}" / "records.json"
+            path = root / f"{task.name}-{ctrl}" / "records.json"
             settings = {"controller": ctrl, "task": task.name, "runs": runs, "seed": 0, "categories": None}
-            completed = _read_card(journal, settings) if resume else ()
+            # Validated before anything is built: edited, incomplete or older records are run again (notices).
+            journal, completed = open_journal(path, settings, resume=resume)
             if budget is not None and time.perf_counter() - w0 > budget and not _complete(journal, resume):
                 # Past the budget only complete journals are read back (their card is rebuilt, nothing runs).
                 done = f", {len(completed)} runs journaled" if completed else ""
@@ -268,15 +258,11 @@ def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, ro
             t_card = time.perf_counter()
 
             def save(
-                records: tuple, complete: bool = False, journal: Path = journal, settings: dict = settings,
-                before: float | None = before, t_card: float = t_card, frozen: bool = complete_before,
+                records: tuple, complete: bool = False, journal: Any = journal, before: float | None = before,
+                t_card: float = t_card, frozen: bool = complete_before,
             ) -> None:  # fmt: skip
                 wall = before if (frozen or before is None) else before + time.perf_counter() - t_card
-                data = {**settings, "pendulab": __version__, "complete": complete, "wall_time": wall,
-                        "records": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                                     for k, v in asdict(r).items()} for r in records]}  # fmt: skip
-                journal.parent.mkdir(parents=True, exist_ok=True)
-                atomic_write_text(journal, json.dumps(data) + "\n")
+                save_records(journal, records, complete=complete, wall_time=wall)
 
             planning = ProgressBar(f"planning {ctrl} on {task_name} (IPOPT)", progress)
             bar = ProgressBar(f"scorecard {ctrl} on {task_name} (runs)", progress)
@@ -302,8 +288,49 @@ def _scorecards(runs: int, workers: int | None, progress: bool, resume: bool, ro
     return {"cards": cards, "walls": walls}
 
 
-def _scorecard_section(result: dict[str, Any] | None, runs: int, quick: bool) -> list[str]:
+def _integrator_checks(resume: bool, root: Path) -> dict[tuple[str, str], Any]:
+    """The nominal run of each :data:`INTEGRATOR_CHECKED` controller on each task with every integrator and tolerance.
+
+    Journaled in ``root/TASK-CONTROLLER.json`` (:class:`~pendulab._journal.Journal`, kind ``integrator-check``; one
+    record per run, reused with ``resume`` when every run of the grid validates). Values: tuples of
+    :class:`~pendulab.cosim.integrators.IntegratorRun`, or a one-line reason.
+    """
+    from .._journal import Journal
+    from ..control.controllers import controller_for_task
+    from ..control.swingup.tasks import load_task
+    from ..cosim.integrators import FMU_SOLVERS, NATIVE_METHODS, TOLERANCES, IntegratorRun, integrator_runs
+
+    n_runs = (len(NATIVE_METHODS) + len(FMU_SOLVERS)) * len(TOLERANCES) + 1
+    out: dict[tuple[str, str], Any] = {}
+    for ctrl in INTEGRATOR_CHECKED:
+        for task_name in LEADERBOARD_TASKS:
+            task = load_task(task_name)
+            settings = {"controller": ctrl, "task": task.name, "methods": list(NATIVE_METHODS), "solvers": list(FMU_SOLVERS),
+                        "tolerances": list(TOLERANCES)}  # fmt: skip
+            journal = Journal(root / f"{task.name}-{ctrl}.json", "integrator-check", settings, resume=resume,
+                              check=lambda _key, data: IntegratorRun.from_dict(data))  # fmt: skip
+            if len(journal) == n_runs:
+                out[(ctrl, task_name)] = tuple(IntegratorRun.from_dict(journal.get(f"{i:03d}")) for i in range(n_runs))
+                continue
+            try:
+                found = integrator_runs(lambda c=ctrl, t=task: controller_for_task(c, t), task)
+            except (ValueError, RuntimeError) as exc:
+                out[(ctrl, task_name)] = f"not available ({_one_line(exc)})"
+                continue
+            for i, run in enumerate(found):
+                journal.add(f"{i:03d}", run.to_dict())
+            journal.save(complete=True)
+            out[(ctrl, task_name)] = found
+    return out
+
+
+def _scorecard_section(
+    result: dict[str, Any] | None, runs: int, quick: bool, checks: dict[tuple[str, str], Any] | None = None
+) -> list[str]:
+    from ..cosim.integrators import integrator_summary, integrator_table
     from ..evaluate import CATEGORIES
+
+    checks = checks or {}
 
     cards = None if result is None else result["cards"]
     walls = {} if result is None else result["walls"]
@@ -316,7 +343,9 @@ def _scorecard_section(result: dict[str, Any] | None, runs: int, quick: bool) ->
         "pendulab's own protocol (not RealAIGym's: its own categories, levels and success rule; docs/scorecard.md). "
         "Overall score = mean over the categories of the mean success rate over the levels; "
         f"{runs} runs per level of the stochastic categories. In brackets: does the nominal run (no perturbation) "
-        "succeed, and the card's wall time.",
+        "succeed on the scorecard's plant (fixed-step RK4), for "
+        + ", ".join(f"`{c}`" for c in INTEGRATOR_CHECKED)
+        + " also with which integrators (table below), and the card's wall time.",
         "",
         "| controller | " + " | ".join(LEADERBOARD_TASKS) + " |",
         "|---|" + "---|" * len(LEADERBOARD_TASKS),
@@ -329,10 +358,28 @@ def _scorecard_section(result: dict[str, Any] | None, runs: int, quick: bool) ->
                 cells.append(card)
                 continue
             wall = walls.get((ctrl, task_name))
-            cells.append(
-                f"**{card.overall:.2f}** ({_nominal(card)}, " + ("wall time not journaled)" if wall is None else f"{wall:.0f} s)")
-            )
+            check = checks.get((ctrl, task_name))
+            nominal = _nominal(card)
+            if check is not None:
+                nominal += f"; {check if isinstance(check, str) else integrator_summary(check)}"
+            timing = "wall time not journaled)" if wall is None else f"{wall:.0f} s)"
+            cells.append(f"**{card.overall:.2f}** ({nominal}, {timing}")
         lines.append(f"| {ctrl} | " + " | ".join(cells) + " |")
+    for ctrl in INTEGRATOR_CHECKED:
+        found = {t: checks[(ctrl, t)] for t in LEADERBOARD_TASKS if not isinstance(checks.get((ctrl, t)), (str, type(None)))}
+        if not found:
+            continue
+        lines += [
+            "",
+            f"### `{ctrl}`: the nominal run with every integrator",
+            "",
+            "The task's nominal episode (start hanging, 10 s, success: y2 > 0.9 (L1 + L2) until the end) through "
+            "`pendulab.simulate` (method, rtol = atol), through the exported FMU with `pendulab.cosim` (embedded solver, "
+            "tolerance; the path of `pendulab cosim`) and on the scorecard's fixed-step RK4 plant "
+            "(`pendulab.cosim.integrators`; in brackets: t_up, the start of the final stretch above the line).",
+            "",
+            *integrator_table(found),
+        ]
     lines += ["", "### Category scores", ""]
     for task_name in LEADERBOARD_TASKS:
         scored = [(c, cards[(c, task_name)]) for c in LEADERBOARD_CONTROLLERS if not isinstance(cards[(c, task_name)], str)]

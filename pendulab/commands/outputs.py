@@ -6,11 +6,10 @@ Kept apart from the heavier helpers so the entry point can import it without Num
 from __future__ import annotations
 
 import json
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from .._io import atomic_write_text
+from .._io import atomic_write_text, check_writable
 
 __all__ = ["output_directory", "check_writable", "check_journal", "mark_interrupted", "forget_output_directories"]
 
@@ -39,21 +38,6 @@ def output_directory(path: str | Path) -> Path:
     if out not in _OUTPUT_DIRECTORIES:
         _OUTPUT_DIRECTORIES.append(out)
     return out
-
-
-def check_writable(out: Path) -> None:
-    """Raise unless a directory ``out`` can be created or written into (see :func:`output_directory`)."""
-    probe = out
-    while not probe.exists():
-        if probe.parent == probe:
-            break
-        probe = probe.parent
-    if probe.exists() and not probe.is_dir():
-        raise NotADirectoryError(f"output directory {out}: {probe} is a file, not a directory")
-    try:
-        Path(tempfile.mkdtemp(prefix=".pendulab-write-check-", dir=probe)).rmdir()
-    except OSError as exc:
-        raise PermissionError(f"output directory {out}: cannot write under {probe} ({exc.strerror or exc})") from None
 
 
 def check_journal(path: Path) -> None:

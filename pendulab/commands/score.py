@@ -4,16 +4,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 from .._checks import bounded_int
 from .._io import atomic_write_text
-from .._version import __version__
 from . import CLIError
-from ._common import ProgressBar, add_plant_option, parse_number, read_plant
+from ._common import ProgressBar, add_plant_option, docs_page, parse_number, read_plant
 from .outputs import check_journal, output_directory
 
 __all__ = ["register", "run_score"]
@@ -32,13 +30,13 @@ def register(subparsers: Any) -> None:
         help="robustness scorecard of a controller on a swing-up task (or --realai, --leaderboard)",
         description=(
             "Robustness scorecard: the controller runs the task under swept perturbations (model parameters, "
-            "measurement and torque noise, torque response, delay, pushes; docs/scorecard.md) and succeeds when "
+            f"measurement and torque noise, torque response, delay, pushes; {docs_page('scorecard')}) and succeeds when "
             "the end effector stays above 0.9 (L1 + L2) over the last second within the torque limit. Writes "
             "DIR/records.json after every batch of runs (--resume continues from it), then DIR/scorecard.md, "
             "DIR/scorecard.png and DIR/scorecard.json. --realai scores the controller on RealAIGym's simulation "
             "leaderboard instead; --leaderboard writes the leaderboard of every controller on every task "
-            "(--out docs/leaderboard.md regenerates the shipped page). --protocol robustness-v2 | v3 runs RealAIGym's "
-            "robustness-v2 or v3 protocol (docs/realai.md)."
+            f"(published at {docs_page('leaderboard')}). --protocol robustness-v2 | v3 runs RealAIGym's "
+            f"robustness-v2 or v3 protocol ({docs_page('realai')}, {docs_page('realai_v3')})."
         ),
     )
     p.add_argument(
@@ -55,7 +53,7 @@ def register(subparsers: Any) -> None:
         "--estimator",
         default=None,
         metavar="NAME",
-        help="scorecard: feed the controller a state estimate of the measurement: ekf | mmae (docs/estimation.md)",
+        help=f"scorecard: feed the controller a state estimate of the measurement: ekf | mmae ({docs_page('estimation')})",
     )
     p.add_argument("--categories", default=None, metavar="A,B", help="comma-separated categories (default: all that apply)")
     p.add_argument("--seed", default=None, metavar="S", help="base seed (default 0)")
@@ -67,7 +65,7 @@ def register(subparsers: Any) -> None:
         help="output directory (default ./pendulab-out/score/CONTROLLER-TASK, "
         "--realai: ./pendulab-out/score/realai-CONTROLLER-TASK); "
         "--leaderboard: the markdown file (default ./pendulab-out/leaderboard/leaderboard.md; "
-        "--out docs/leaderboard.md regenerates the shipped page)",
+        f"in a source checkout, --out over the Markdown source of {docs_page('leaderboard')} regenerates that page)",
     )
     p.add_argument(
         "--resume", action="store_true", help="continue an interrupted scorecard from DIR/records.json (same settings)"
@@ -218,14 +216,14 @@ def run_score(args: argparse.Namespace) -> int:
     settings = {"controller": args.controller, "task": task.name, "runs": runs, "seed": seed, "categories": cats,
                 "estimator": args.estimator, "plant": plant_label(plant)}  # fmt: skip
     check_journal(out / _RECORDS)
-    completed = _resume(out / _RECORDS, settings) if args.resume else ()
+    # Validated before the controller is built: only runs that pass their hashes are reused.
+    journal, completed = _resume(out / _RECORDS, settings, args.resume)
 
     def save(records: tuple, complete: bool = False) -> None:
-        from dataclasses import asdict
+        from ..evaluate.scorecard_journal import save_records
 
-        data = {**settings, "pendulab": __version__, "complete": complete, "records": [_finite(asdict(r)) for r in records]}
         out.mkdir(parents=True, exist_ok=True)  # only once there is something to keep (bad input writes nothing)
-        atomic_write_text(out / _RECORDS, json.dumps(data) + "\n")
+        save_records(journal, records, complete=complete)
 
     planning = ProgressBar(f"planning {args.controller} on {task.name} (IPOPT)", not args.no_progress)
     bar = ProgressBar(f"score {args.controller} on {task.name}", not args.no_progress)
@@ -302,29 +300,20 @@ def _run_leaderboard(args: argparse.Namespace, runs: int | None, workers: int | 
 _RECORDS = "records.json"
 
 
-def _finite(d: dict[str, Any]) -> dict[str, Any]:
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+def _resume(path: Path, settings: dict[str, Any], resume: bool) -> tuple[Any, tuple]:
+    """The scorecard's journal and, with ``resume``, its validated runs (pendulab.evaluate.scorecard_journal)."""
+    from .._journal import JournalError
+    from ..evaluate.scorecard_journal import open_journal
 
-
-def _resume(path: Path, settings: dict[str, Any]) -> tuple:
-    """Records of an earlier run with the same settings (none when there is no file yet)."""
-    from ..evaluate.card import record_from_dict
-
-    if not path.is_file():
+    if resume and not path.is_file():
         print(f"--resume: no {path}; starting a new scorecard", file=sys.stderr)
-        return ()
     try:
-        data = json.loads(path.read_text())
-        records = tuple(record_from_dict(r) for r in data["records"])
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise CLIError(f"--resume: {path} is not a scorecard records file ({exc})") from None
-    data = {"plant": "nominal", **data}  # records files written before --plant ran the nominal plant
-    differ = {k: (data.get(k), v) for k, v in settings.items() if data.get(k) != v}
-    if differ:
-        what = ", ".join(f"{k} {old!r} there, {new!r} now" for k, (old, new) in differ.items())
-        raise CLIError(f"--resume: {path} was written with other settings ({what}); use another --out or drop --resume")
-    print(f"--resume: {len(records)} runs already recorded in {path}", file=sys.stderr)
-    return records
+        journal, records = open_journal(path, settings, resume=resume)
+    except JournalError as exc:
+        raise CLIError(f"--resume: {exc}") from None
+    if resume and path.is_file():
+        print(f"--resume: {len(records)} runs already recorded in {path} (validated)", file=sys.stderr)
+    return journal, records
 
 
 def _plant_suffix(plant: Any) -> str:

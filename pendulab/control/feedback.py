@@ -383,6 +383,10 @@ class EnergySwingUp:
     * ``"acrobot"``: ``tau2 = sat(k_energy (E_up - E) (omega2 - omega1))`` (power
       ``tau2 (omega2 - omega1)``), ``tau1 = 0``.
 
+    ``k_energy`` stands for :meth:`pump_gain` at the pumping rate, ``k_energy / (1 + k_energy rate² h)``:
+    it keeps the sampled energy loop stable at high rates (without it the held torque chattered between
+    the limits and the swing-up depended on the integrator's tolerance).
+
     When the LQR cost-to-go falls below ``catch_cost`` the controller switches
     to ``balance`` (designed for the same actuation); it stays there until
     :meth:`reset`, or, with ``release_factor``, until the cost-to-go exceeds
@@ -460,6 +464,29 @@ class EnergySwingUp:
         """Back to the pumping mode."""
         self.caught_at = None
 
+    def pump_gain(self, rate: float) -> float:
+        """Pumping gain at the pumping joint's ``rate``: ``k_energy / (1 + k_energy rate² sample_time)``.
+
+        Over one held sample the pumping torque itself changes the energy by ``tau rate h``, so the
+        deficit's sample-to-sample loop gain is ``k rate² h``. With the plain gain ``k_energy`` that exceeds 1
+        above ``|rate| = 1 / sqrt(k h)`` (10 rad/s for k = 1, h = 10 ms): the held torque then flips sign and
+        grows every sample until it saturates (bang-bang chatter), which amplified integrator-level
+        differences 1e5-fold within 0.1 s and made the swing-up depend on the integrator and its tolerance.
+        This gain keeps the loop gain ``g / (1 + g)`` below 1 (``g = k rate² h``): ``k_energy`` at low rates, at
+        most the deadbeat gain ``1 / (rate² h)`` at high ones.
+
+        Parameters
+        ----------
+        rate : float
+            Rate of the pumping joint [rad/s] (``omega1``; acrobot ``omega2 - omega1``).
+
+        Returns
+        -------
+        float
+            [N.m / (J rad/s)].
+        """
+        return self.k_energy / (1.0 + self.k_energy * rate * rate * self.sample_time)
+
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         cost = self.balance.cost(x)
         if self.caught_at is None and cost < self.catch_cost:
@@ -475,7 +502,7 @@ class EnergySwingUp:
         # The pumping joint's rate: the power of the pumping torque is torque * rate.
         rate = w2 - w1 if actuation == "acrobot" else w1
         # Start from rest: no velocity to pump with, so kick (in the direction that adds energy next).
-        pump = self.k_energy * deficit * rate if abs(rate) > 1e-3 else self.u_max * np.sign(deficit)
+        pump = self.pump_gain(rate) * deficit * rate if abs(rate) > 1e-3 else self.u_max * np.sign(deficit)
         if actuation != "full":
             return np.clip(np.array([pump]), -self.u_max, self.u_max)
         rel = (th2 - th1 + np.pi) % (2 * np.pi) - np.pi

@@ -23,13 +23,16 @@ time at rest upright), kept only where its TVLQR closed loop on the design model
 and stays there.
 
 The library is cached on disk (:class:`PlanCache`): one ``.npz`` per plan, named by a hash of the task, the
-design model's parameters, the planner options and the start state, written atomically as each plan finishes,
-so a build resumes where it stopped (Ctrl-C keeps finished plans) and a damaged entry is solved again.
+design model's parameters, the planner options and the start state, published atomically as each plan finishes
+with a seal beside it (its SHA-256 and that key; the one cache mechanism of :mod:`pendulab.native.cache`), so a
+build resumes where it stopped (Ctrl-C keeps finished plans), concurrent builds solve each plan once, and an
+entry that is damaged, edited or swapped for another's is never used: it is solved again, with a warning.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import zipfile
 from collections.abc import Callable, Sequence
@@ -39,8 +42,8 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import positive_float
-from .._io import atomic_path
 from ..model.model import INPUT_NAMES
+from ..native.cache import cache_lock, cached_artifact, digest_path, publish, read_sealed, warn_rebuild
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
 from .plan_starts import DEFAULT_BRANCHES, library_starts, reset_handover
@@ -58,11 +61,42 @@ __all__ = [
 ]
 
 #: Bumped when the stored format or the planner changes (part of every entry's key).
-LIBRARY_VERSION: int = 1
+#: 2: every entry sealed (SHA-256 and key beside it); the unsealed entries of 1 are never read.
+LIBRARY_VERSION: int = 2
+
+
+def _read_entry(data: bytes) -> tuple[dict[str, np.ndarray] | None, str | None]:
+    """A plan entry from the bytes of its ``.npz``, or why they are not one (fields, shapes, non-finite values)."""
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as z:
+            entry = {k: np.array(z[k]) for k in z.files}
+        if entry["ok"].shape != ():
+            return None, "holds no plan (field ok is not a scalar)"
+        if bool(entry["ok"]):
+            n = len(entry["x_ref"])
+            if entry["x_ref"].shape != (n, 4) or entry["K"].shape != (n - 1, 4) or entry["u_ref"].shape != (n - 1,):
+                return None, "holds a plan of inconsistent shapes"
+            if n < 2 or not all(np.all(np.isfinite(entry[k])) for k in ("x_ref", "u_ref", "K")):
+                return None, "holds a plan with fewer than 2 knots or non-finite values"
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        return None, f"is not a plan entry ({type(exc).__name__}: {exc})"
+    return entry, None
+
+
+def _entry_check(tmp: Path) -> str | None:
+    """Why a freshly written entry file is not a plan entry (verified before it is published), or None."""
+    return _read_entry(tmp.read_bytes())[1]
 
 
 class PlanCache:
-    """One ``.npz`` file per plan under ``directory``, keyed by the design and the start; atomic, self-healing.
+    """One ``.npz`` file per plan under ``directory``, keyed by the design and the start; sealed, atomic, self-healing.
+
+    Each entry goes through the one cache mechanism (:mod:`pendulab.native.cache`): published
+    atomically with its seal beside it (``<entry>.sha256``: the SHA-256 of the file and the entry's
+    key, the design and the start it was solved for), and checked against the seal, on the very
+    bytes read, before it is used. A damaged or edited entry (digest mismatch) or one swapped for
+    another's (sealed for another key) is never used: it is solved again with a
+    :class:`~pendulab.native.cache.CacheRebuildWarning` (:meth:`get`), or discarded with one (:meth:`load`).
 
     Parameters
     ----------
@@ -70,12 +104,31 @@ class PlanCache:
         Cache directory (created on the first write).
     design : dict
         Everything a plan depends on besides its start (task, model parameters, planner options); JSON-serialisable.
+
+    Attributes
+    ----------
+    rebuilt : int
+        Entries found damaged, edited or swapped (discarded or solved again) by this object.
     """
 
     def __init__(self, directory: str | Path, design: dict) -> None:
         self.directory = Path(directory)
         self.design = dict(design, version=LIBRARY_VERSION)
         self.rebuilt = 0
+
+    def key(self, start: np.ndarray) -> str:
+        """What the entry of ``start`` is solved for (sealed with it): the design and the start, as JSON.
+
+        Parameters
+        ----------
+        start : ndarray, shape (4,)
+            Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+
+        Returns
+        -------
+        str
+        """
+        return json.dumps({"design": self.design, "start": [round(float(v), 12) for v in start]}, sort_keys=True)
 
     def path(self, start: np.ndarray) -> Path:
         """The entry of the plan from ``start``.
@@ -90,13 +143,22 @@ class PlanCache:
         Path
             ``plan-<hash>.npz`` in the cache directory (the hash covers the design and the start).
         """
-        key = json.dumps({"design": self.design, "start": [round(float(v), 12) for v in start]}, sort_keys=True)
-        return self.directory / f"plan-{hashlib.sha256(key.encode()).hexdigest()[:20]}.npz"
+        return self.directory / f"plan-{hashlib.sha256(self.key(start).encode()).hexdigest()[:20]}.npz"
+
+    def _what(self, start: np.ndarray) -> str:
+        return f"the plan library in {self.directory} needs the plan from start {np.round(start, 6).tolist()}; it"
+
+    def _read(self, start: np.ndarray) -> tuple[dict[str, np.ndarray] | None, str | None]:
+        """The entry of ``start`` checked against its seal (on the bytes parsed), or why it cannot be used."""
+        data, reason = read_sealed(self.path(start), self.key(start))
+        return _read_entry(data) if reason is None else (None, reason)
 
     def load(self, start: np.ndarray) -> dict[str, np.ndarray] | None:
-        """The stored entry, or None if missing or damaged.
+        """The stored entry, or None if missing or unusable (never an entry that fails its seal).
 
-        A damaged entry (unreadable, wrong fields, shapes or non-finite values) is deleted so it is solved again.
+        An entry that fails its seal (damaged, edited, swapped for another's) or holds no valid plan
+        (wrong fields, shapes or non-finite values) is deleted with a
+        :class:`~pendulab.native.cache.CacheRebuildWarning`, so it is solved again.
 
         Parameters
         ----------
@@ -107,33 +169,81 @@ class PlanCache:
         -------
         dict or None
             ``ok``, and for a solved plan ``x_ref`` (n, 4), ``u_ref`` (n - 1,) [N.m] and ``K`` (n - 1, 4).
+        """
+        entry, reason = self._read(start)
+        if reason is None or reason == "is missing":
+            return entry
+        path = self.path(start)
+        try:
+            with cache_lock(path):
+                # Again under the lock: a writer between its two renames shows a mismatch that is not damage.
+                entry, reason = self._read(start)
+                if reason is None or reason == "is missing":
+                    return entry
+                self._discard(path, reason, removed=True)
+        except OSError:  # a read-only folder: the entry is still never used
+            self._discard(path, reason, removed=False)
+        return None
+
+    def _discard(self, path: Path, reason: str, *, removed: bool) -> None:
+        self.rebuilt += 1
+        if removed:
+            path.unlink(missing_ok=True)
+            digest_path(path).unlink(missing_ok=True)
+        action = "deleted it; it is solved again when the library is built" if removed else "not using it"
+        warn_rebuild(f"pendulab: the plan-library entry {path} {reason}; {action}")
+
+    def get(self, start: np.ndarray, solve: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+        """The stored entry of ``start``, solved by ``solve()`` and published when missing or unusable.
+
+        Concurrent processes solve an entry once (the others wait on its lock and read it); an entry that
+        fails its seal or holds no valid plan is solved again with a
+        :class:`~pendulab.native.cache.CacheRebuildWarning`.
+
+        Parameters
+        ----------
+        start : ndarray, shape (4,)
+            Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
+        solve : callable
+            ``solve()`` returns the entry: ``ok``, and for a solved plan ``x_ref``, ``u_ref``, ``K``.
+
+        Returns
+        -------
+        dict
+            The entry (see :meth:`load`).
 
         Raises
         ------
-        ValueError
-            Never to the caller: raised inside to discard an entry of wrong shapes or values.
+        RuntimeError
+            The folder cannot be written, ``solve`` failed, or its entry is not a valid plan.
         """
-        path = self.path(start)
-        if not path.exists():
-            return None
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                entry = {k: np.array(z[k]) for k in z.files}
-            ok = bool(entry["ok"])
-            if ok:
-                n = len(entry["x_ref"])
-                if entry["x_ref"].shape != (n, 4) or entry["K"].shape != (n - 1, 4) or entry["u_ref"].shape != (n - 1,):
-                    raise ValueError("shapes")
-                if n < 2 or not all(np.all(np.isfinite(entry[k])) for k in ("x_ref", "u_ref", "K")):
-                    raise ValueError("values")
+        path, key, what = self.path(start), self.key(start), self._what(start)
+        hint = f"choose a writable directory for the plan library (now {self.directory})"
+        entry, reason = self._read(start)
+        if reason is None:
             return entry
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
-            path.unlink(missing_ok=True)
+        rebuild = None
+        if reason != "is missing":
             self.rebuilt += 1
-            return None
+            _, seal_reason = read_sealed(path, key)
+            # Intact by its seal but not a valid plan (e.g. written by a faulty build): rebuild it anyway.
+            rebuild = reason if seal_reason is None else None
+
+        def make(tmp: Path) -> None:
+            np.savez(tmp, **solve())
+
+        opts = {"what": what, "key": key, "check": _entry_check, "hint": hint}
+        cached_artifact(path, make, rebuild=rebuild, **opts)
+        entry, reason = self._read(start)
+        if reason is not None:  # another process's entry in between, or damage after the rename: solve once more
+            cached_artifact(path, make, rebuild=reason, **opts)
+            entry, reason = self._read(start)
+            if reason is not None:
+                raise RuntimeError(f"{what}: the cache file {path} {reason} right after it was built; delete it and retry")
+        return entry
 
     def save(self, start: np.ndarray, entry: dict[str, np.ndarray]) -> None:
-        """Write an entry atomically (a crash leaves the old file or none, never a truncated one).
+        """Publish an entry atomically with its seal (a crash leaves the old file or none, never a truncated one).
 
         Parameters
         ----------
@@ -141,9 +251,14 @@ class PlanCache:
             Start state (theta1, theta2 [rad], omega1, omega2 [rad/s]).
         entry : dict of str to ndarray
             ``ok`` and, for a solved plan, ``x_ref``, ``u_ref``, ``K``.
+
+        Raises
+        ------
+        RuntimeError
+            The folder cannot be written.
         """
-        with atomic_path(self.path(start)) as tmp:
-            np.savez(tmp, **entry)
+        hint = f"choose a writable directory for the plan library (now {self.directory})"
+        publish(self.path(start), lambda tmp: np.savez(tmp, **entry), what=self._what(start), key=self.key(start), hint=hint)
 
 
 @dataclass
@@ -278,8 +393,15 @@ def build_library(
     ------
     ValueError
         ``starts`` not of shape (S, 4) with finite values, or no plan solved.
+    RuntimeError
+        The cache folder cannot be written, or a solve failed (the message names the entry's file).
     KeyboardInterrupt
         Propagated; plans finished before it stay cached.
+
+    Warns
+    -----
+    CacheRebuildWarning
+        A cached entry was damaged, edited or swapped for another's: solved again (or, with ``solve=False``, discarded).
     """
     from .band_plan import band_entry_refine
     from .replanning import plan_swingup
@@ -290,26 +412,29 @@ def build_library(
     if starts.ndim != 2 or starts.shape[1] != 4 or len(starts) == 0 or not np.all(np.isfinite(starts)):
         raise ValueError(f"starts must be a finite array of shape (S, 4) with S >= 1, got shape {starts.shape}")
     j = INPUT_NAMES.index(fallback.input_names[0])
+
+    def solve_plan(s: np.ndarray) -> dict[str, np.ndarray]:
+        tr = plan_swingup(fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter)
+        if tr is None:
+            return {"ok": np.array(False)}
+        m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
+        return {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, j], "K": tr.K[:m, j, :]}
+
+    def refine_plan(s: np.ndarray) -> dict[str, np.ndarray]:
+        entry = cache.get(s, lambda: solve_plan(s))  # the band entry's lock is held: lock order band -> plan
+        refined = None
+        if bool(entry["ok"]):
+            refined = band_entry_refine(fallback.model, actuation, entry, band=band, u_max=fallback.u_max)
+        return dict(entry, refined=np.array(False)) if refined is None else dict(refined, refined=np.array(True))
+
     kept, xs, us, ks, failed, n_refined = [], [], [], [], 0, 0
     for n, s in enumerate(starts):
-        entry = None if band_cache is None else band_cache.load(s)
-        if entry is None:
-            entry = cache.load(s)
-            if entry is None and solve:
-                tr = plan_swingup(
-                    fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter
-                )
-                entry = {"ok": np.array(False)}
-                if tr is not None:
-                    m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
-                    entry = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, j], "K": tr.K[:m, j, :]}
-                cache.save(s, entry)
-            if entry is not None and band_cache is not None and solve:
-                refined = None
-                if bool(entry["ok"]):
-                    refined = band_entry_refine(fallback.model, actuation, entry, band=band, u_max=fallback.u_max)
-                entry = dict(entry, refined=np.array(False)) if refined is None else dict(refined, refined=np.array(True))
-                band_cache.save(s, entry)
+        if band_cache is not None:
+            entry = band_cache.get(s, lambda s=s: refine_plan(s)) if solve else band_cache.load(s)
+            if entry is None:
+                entry = cache.load(s)
+        else:
+            entry = cache.get(s, lambda s=s: solve_plan(s)) if solve else cache.load(s)
         if entry is not None and bool(entry["ok"]):
             kept.append(s)
             xs.append(entry["x_ref"])

@@ -35,7 +35,27 @@ StepCheck = Callable[[float, np.ndarray, np.ndarray], bool]
 
 
 class StepRejectedError(RuntimeError):
-    """A communication step was rejected and could not be completed by retrying with smaller steps."""
+    """A communication step was rejected and could not be completed by retrying with smaller steps.
+
+    Examples
+    --------
+    A step check keeps link 1 within 0.5 rad of upright; a controller limited to 1 N.m cannot:
+
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.control.feedback import balance_controller, upright_state
+    >>> from pendulab.cosim import StepRejectedError, cosim
+    >>> from pendulab.fmu import export
+    >>> model = pl.rigid()
+    >>> weak = balance_controller(model, sample_time=0.01, u_max=1.0)
+    >>> near_upright = lambda t, x_before, x_after: abs(x_after[0] - np.pi) < 0.5
+    >>> try:
+    ...     cosim(export(model, "rigid.fmu"), weak, 0.01, 5.0, x0=upright_state(model) + [0.1, 0, 0, 0],
+    ...           check=near_upright, max_halvings=3)
+    ... except StepRejectedError as err:  # a RuntimeError
+    ...     print(err)
+    step at t = 0.90125 s rejected at the smallest step h = 0.00125 s: the step result was refused
+    """
 
 
 @dataclass(frozen=True)
@@ -53,6 +73,19 @@ class FmuInfo:
     variables : dict
         Model variable by name.
     model_description : fmpy.model_description.ModelDescription
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.cosim import inspect_fmu
+    >>> from pendulab.fmu import export
+    >>> info = inspect_fmu(export(pl.elastic(), "elastic.fmu", fmi_version=3))
+    >>> info.fmi_version, info.kind
+    ('3.0', 'elastic')
+    >>> info.state_names
+    ('theta1', 'theta2', 'r1', 'r2', 'omega1', 'omega2', 'v1', 'v2')
+    >>> info.input_names, info.output_names
+    (('tau1', 'tau2'), ('x1', 'y1', 'x2', 'y2', 'energy', 'stretch1', 'stretch2'))
     """
 
     path: Path
@@ -113,6 +146,21 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInfo:
         No such file.
     ValueError
         Not an FMU, not a pendulab FMU (states tau1/tau2 missing) or no Co-Simulation interface.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import pendulab as pl
+    >>> from pendulab.cosim import inspect_fmu
+    >>> from pendulab.fmu import export
+    >>> info = inspect_fmu(export(pl.rigid(), "rigid.fmu"))
+    >>> info.fmi_version, info.kind, info.state_names, info.input_names
+    ('2.0', 'rigid', ('theta1', 'theta2', 'omega1', 'omega2'), ('tau1', 'tau2'))
+    >>> _ = Path("notes.fmu").write_text("not an archive")
+    >>> inspect_fmu("notes.fmu")
+    Traceback (most recent call last):
+        ...
+    ValueError: ...
     """
     from fmpy import read_model_description
 
@@ -168,6 +216,12 @@ class FmuPlant:
     instance_name : str, optional
     start_time : float
         [s].
+
+    Raises
+    ------
+    FMUBinaryError (ValueError)
+        The FMU's binary is not the one pendulab exported, and it crashed (the signal is named), failed or
+        hung in a probe process (:func:`pendulab.fmu.binaries.check_fmu_binary`); it is never loaded here.
     """
 
     def __init__(
@@ -232,9 +286,12 @@ class FmuPlant:
         from fmpy.fmi2 import FMU2Slave
         from fmpy.fmi3 import FMU3Slave
 
+        from ..fmu.binaries import check_fmu_binary
+
         info = self.info
         md = info.model_description
         self._unzipdir = fmpy.extract(str(info.path))
+        check_fmu_binary(self._unzipdir, md, fmu=info.path)  # a binary pendulab did not export runs in a child first
         cls = FMU3Slave if self._fmi3 else FMU2Slave
         token = md.instantiationToken if cls is FMU3Slave else md.guid
         self._fmu = cls(

@@ -135,6 +135,21 @@ def ensemble(
         is not installed; the message names the extra.
     RuntimeError
         A chunk failed (the message names the chunk indices); never a partial result.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid()
+    >>> theta = np.linspace(0.5, 3.0, 6)  # six releases from rest, both links at the same angle
+    >>> x0 = np.column_stack([theta, theta, np.zeros(6), np.zeros(6)])
+    >>> res = pl.ensemble(model, x0, 10.0, events=["flip"])  # "flip": stop when a link passes upright
+    >>> res.status.tolist(), res.terminal_event.tolist()
+    (['ok', 'ok', 'ok', 'event', 'event', 'event'], ['', '', '', 'flip', 'flip', 'flip'])
+    >>> np.round(res.event_times["flip"], 2)  # flip time [s]; NaN: not within 10 s
+    array([ nan,  nan,  nan, 4.82, 1.92, 0.56])
+    >>> bool(np.all(np.abs(model.energy(res.x_final) - model.energy(res.x0)) < 1e-9))  # each run conserves energy
+    True
     """
     check_model(model)
     tf = positive_float("t_final", t_final, "[s]")

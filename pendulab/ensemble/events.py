@@ -55,8 +55,26 @@ class Event:
 
     Examples
     --------
-    >>> Event("theta1_zero", "theta1", value=0.0, terminal=False)  # doctest: +SKIP
-    >>> Event("high", lambda x, p: x[0] ** 2 + x[1] ** 2, value=4.0)  # doctest: +SKIP
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.ensemble import Event
+
+    A recorded event by state name: link 1 swinging up through the vertical, after a small release in
+    the in-phase mode (shape theta1 : theta2 = 1 : sqrt 2); it first comes a quarter period later.
+
+    >>> up = Event("theta1_up", "theta1", terminal=False, direction=1)
+    >>> res = pl.ensemble(pl.rigid(), [[-0.01 / np.sqrt(2), -0.01, 0.0, 0.0]], 2.0, events=[up])  # one run
+    >>> w = np.sqrt(9.81 * (2 - np.sqrt(2)))  # in-phase frequency of the 1 kg, 1 m pendulum [rad/s]
+    >>> print(f"{res.event_times['theta1_up'][0]:.4f} s, quarter period {np.pi / 2 / w:.4f} s")
+    0.6553 s, quarter period 0.6553 s
+
+    A terminal event from an expression of the state symbols: stop when the angles leave a 1 rad circle.
+
+    >>> wide = Event("wide", lambda x, p: x[0] ** 2 + x[1] ** 2, value=1.0)
+    >>> kicks = np.array([2.0, 4.0, 6.0])  # omega1 [rad/s] from hanging at rest
+    >>> res = pl.ensemble(pl.rigid(), np.column_stack([0 * kicks, 0 * kicks, kicks, 0 * kicks]), 3.0, events=[wide])
+    >>> res.status.tolist(), np.round(res.t_final, 3)
+    (['ok', 'event', 'event'], array([3.   , 0.326, 0.195]))
     """
 
     name: str

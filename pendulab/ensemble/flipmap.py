@@ -45,9 +45,10 @@ from typing import Any
 import numpy as np
 
 from .._checks import bounded_int, check_model, relative_tolerance
+from .._io import check_writable
 from .flipmap_plot import plot_flip_map, plot_flip_map_compare
 from .flipmap_release import MAX_GRID, flip_energy_threshold, flip_initial_states, flip_map_grid
-from .flipmap_result import FlipMap, _load_checkpoint, _save_checkpoint
+from .flipmap_result import FlipMap, _block_digest, _load_checkpoint, _save_checkpoint
 
 __all__ = [
     "FlipMap",
@@ -132,9 +133,11 @@ def flip_map(
         Partial-results file (``.npz``): the runs go in blocks of ``block_size``, and after each
         block the finished flip times are written there atomically. Removed when the map is done.
     resume : bool
-        Continue from ``checkpoint`` (blocks already recorded are not run again; the file must
-        have been written with the same model, grid and settings). Without it an existing
-        checkpoint is overwritten.
+        Continue from ``checkpoint``: blocks already recorded are not run again if they validate (a
+        :mod:`pendulab._journal` header: pendulab version, model, grid and settings, and each block's
+        SHA-256); a block that was edited or damaged, or a checkpoint of another pendulab version, is
+        run again with a :class:`~pendulab._journal.JournalWarning`. A checkpoint of this version with
+        other settings is an error. Without ``resume`` an existing checkpoint is overwritten.
     block_size : int
         Runs per recorded block (with ``checkpoint``). The blocks are the same with or without a
         resume, so a resumed map equals an uninterrupted one bit for bit.
@@ -149,7 +152,10 @@ def flip_map(
     TypeError
         ``model`` is not a pendulab Model.
     ValueError
-        Bad grid, horizon, range, ``start``, ``rtol`` or budget; a checkpoint of other settings.
+        Bad grid, horizon, range, ``start``, ``rtol`` or budget; a checkpoint of other settings
+        (:class:`~pendulab._journal.JournalError`).
+    PermissionError
+        Nothing can be written where ``checkpoint`` goes (checked before any run).
     RuntimeError
         An integration failed or a budget was spent (the engine's message says which).
     KeyboardInterrupt
@@ -209,8 +215,14 @@ def flip_map(
     done = np.zeros(idx.size, bool)
     blocks = [(a, min(a + block, idx.size)) for a in range(0, idx.size, block)] if checkpoint is not None else [(0, idx.size)]
     n_resumed = 0
+    digests: dict[str, str] = {}
+    if checkpoint is not None:
+        if Path(checkpoint).exists() and not Path(checkpoint).is_file():
+            raise IsADirectoryError(f"checkpoint {checkpoint} exists and is not a file; remove it or choose another")
+        check_writable(Path(checkpoint).parent)  # before the first block, not at its first save
     if checkpoint is not None and resume and Path(checkpoint).exists():
-        values, done = _load_checkpoint(Path(checkpoint), identity, idx.size)
+        # Only blocks that validate (pendulab version, settings, each block's SHA-256) are taken; the rest are run.
+        values, done, digests = _load_checkpoint(Path(checkpoint), identity, idx.size, blocks)
         n_resumed = int(done.sum())
     report = _overall_progress(progress, idx.size, n_resumed)
     deadline = None if max_wall_time is None else time.perf_counter() + float(max_wall_time)
@@ -240,7 +252,8 @@ def flip_map(
             values[a:b] = np.asarray(res.event_times["flip"], dtype=float)
             done[a:b] = True
             if checkpoint is not None:
-                _save_checkpoint(Path(checkpoint), identity, values, done)
+                digests[f"{a}-{b}"] = _block_digest(identity, a, b, values)
+                _save_checkpoint(Path(checkpoint), identity, values, done, digests)
     finally:
         report(None)
     t_flip = np.full((n1, n2), np.nan)

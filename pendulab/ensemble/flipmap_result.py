@@ -8,6 +8,7 @@ the finished map (:meth:`FlipMap.save_npz` / :meth:`FlipMap.load_npz`) and, whil
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_path
+from .._journal import Journal, header, header_problem, notify
 from .._version import __version__
 
 __all__ = ["FlipMap"]
@@ -137,25 +139,66 @@ class FlipMap:
 
 
 # -- partial-results checkpoint -------------------------------------------------
-def _save_checkpoint(path: Path, identity: dict[str, Any], values: np.ndarray, done: np.ndarray) -> None:
-    """Write the finished flip times atomically (an interrupted write keeps the previous checkpoint)."""
+#: Kind of the checkpoint's journal (:mod:`pendulab._journal`): each finished block of runs is a record.
+CHECKPOINT_KIND = "flipmap-checkpoint"
+
+
+def _block_digest(identity: dict[str, Any], a: int, b: int, values: np.ndarray) -> str:
+    """SHA-256 of block ``[a, b)``: over the checkpoint's header (version, identity), the block and its flip times."""
+    return Journal(None, CHECKPOINT_KIND, identity).record_digest(f"{a}-{b}", values[a:b].tolist())
+
+
+def _save_checkpoint(path: Path, identity: dict[str, Any], values: np.ndarray, done: np.ndarray, digests: dict[str, str]) -> None:
+    """Write the finished flip times atomically (an interrupted write keeps the previous checkpoint).
+
+    ``digests`` holds the SHA-256 of each finished block (``"a-b"``, :func:`_block_digest`), kept by the caller so that
+    a block is hashed once.
+    """
+    doc = {**header(CHECKPOINT_KIND, identity), "records": dict(digests)}
     with atomic_path(path) as tmp:
-        np.savez(tmp, identity=np.str_(json.dumps(identity, sort_keys=True)), values=values, done=done)
+        np.savez(tmp, journal=np.str_(json.dumps(doc)), values=values, done=done)
 
 
-def _load_checkpoint(path: Path, identity: dict[str, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Flip times and done mask of a checkpoint written with the same ``identity``; ValueError otherwise."""
+def _load_checkpoint(
+    path: Path, identity: dict[str, Any], n: int, blocks: list[tuple[int, int]]
+) -> tuple[np.ndarray, np.ndarray, dict[str, str]]:
+    """Flip times, done mask and block digests of the blocks of a checkpoint that validate.
+
+    A file that cannot be read, was written by another pendulab (or before checkpoints carried a version), or whose
+    header was edited is stale: nothing is taken from it. A block whose flip times do not match its SHA-256 is run
+    again. Each problem is a :class:`~pendulab._journal.JournalWarning` naming the file.
+
+    Raises
+    ------
+    pendulab._journal.JournalError
+        A checkpoint of this pendulab version written with other settings (a ``ValueError``).
+    """
+    values, done, digests = np.full(n, np.nan), np.zeros(n, bool), {}
     try:
         with np.load(path, allow_pickle=False) as z:
-            stored = json.loads(str(z["identity"]))
-            values, done = np.array(z["values"], dtype=float), np.array(z["done"], dtype=bool)
-    except (OSError, KeyError, ValueError) as exc:
-        raise ValueError(f"checkpoint {str(path)!r} cannot be read as a flip-map checkpoint ({exc}); delete it") from exc
-    expected = json.loads(json.dumps(identity, sort_keys=True))
-    if stored != expected or values.shape != (n,) or done.shape != (n,):
-        diff = sorted(k for k in set(stored) | set(expected) if stored.get(k) != expected.get(k))
-        raise ValueError(
-            f"checkpoint {str(path)!r} was written with other settings ({', '.join(diff) or 'sizes'} differ); "
-            "run without resume to start over"
-        )
-    return values, done
+            doc = json.loads(str(z["journal"])) if "journal" in z.files else None
+            stored_values, stored_done = np.array(z["values"], dtype=float), np.array(z["done"], dtype=bool)
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        notify([f"journal {path} cannot be read as a flip-map checkpoint (truncated or damaged: {exc}); "
+                "nothing in it is reused, its work is run again"])  # fmt: skip
+        return values, done, digests
+    why = header_problem(doc, CHECKPOINT_KIND, identity, path)
+    if why is None and (stored_values.shape != (n,) or stored_done.shape != (n,) or not isinstance(doc.get("records"), dict)):
+        why = "has arrays of other sizes than its settings (damaged)"
+    if why is not None:
+        notify([f"journal {path} {why}; nothing in it is reused, its work is run again"])
+        return values, done, digests
+    bad = []
+    for a, b in blocks:
+        if not stored_done[a:b].any():
+            continue
+        key = f"{a}-{b}"
+        if stored_done[a:b].all() and doc["records"].get(key) == _block_digest(identity, a, b, stored_values):
+            values[a:b], done[a:b], digests[key] = stored_values[a:b], True, doc["records"][key]
+        else:
+            bad.append(key)
+    if bad:
+        shown = ", ".join(bad[:5]) + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")
+        notify([f"journal {path}: block{'s' if len(bad) > 1 else ''} {shown} edited by hand or damaged "
+                "(does not match its SHA-256); not trusted, run again"])  # fmt: skip
+    return values, done, digests

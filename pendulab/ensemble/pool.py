@@ -203,6 +203,17 @@ def map_runs(
         ``workers`` outside [1, 256] or ``chunks_per_worker`` outside [1, 10000].
     Exception
         Whatever ``fn`` raises (the first failure ends the map).
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.ensemble import map_runs
+    >>> def max_stretch(k):  # one run per stiffness [N/m], in a forked worker
+    ...     model = pl.elastic(k1=k, k2=k)
+    ...     traj = pl.simulate(model, model.state(theta1=1.0, theta2=1.0), 2.0, method="cvodes")
+    ...     return round(float(traj["r1"].max()) - 1.0, 4)  # largest stretch of spring 1 [m]
+    >>> map_runs(max_stretch, [1000.0, 2000.0, 4000.0], workers=2)  # in the order of the items
+    [0.0428, 0.0222, 0.0113]
     """
     todo = list(items)
     total = len(todo)

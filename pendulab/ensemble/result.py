@@ -47,6 +47,23 @@ class EnsembleResult:
         Names of the columns of ``x_final``/``x0`` and ``params``.
     stats : dict
         ``method``, ``n_runs``, ``n_chunks``, ``threads``, ``batch_size``, ``n_steps``, ``wall_time`` [s], ...
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.ensemble import EnsembleResult
+    >>> t_eval = np.linspace(0.0, 2.0, 5)
+    >>> res = pl.ensemble(pl.rigid(), [0.5, 0.0, 0.0, 0.0], 2.0, params={"m2": [0.5, 1.0, 2.0]}, t_eval=t_eval)
+    >>> res.n, res.x.shape, res.params.shape  # 3 runs, 5 output times, 4 states; 15 parameters per run
+    (3, (3, 5, 4), (3, 15))
+    >>> res.params[:, res.param_names.index("m2")], res.success
+    (array([0.5, 1. , 2. ]), array([ True,  True,  True]))
+    >>> np.round(res.x_final[:, 0], 3)  # theta1 at t = 2 s [rad]: the heavier link 2, the different swing
+    array([-0.167, -0.1  ,  0.228])
+    >>> back = EnsembleResult.from_npz(res.to_npz("runs.npz"))
+    >>> bool(np.array_equal(back.x, res.x))
+    True
     """
 
     x_final: np.ndarray

@@ -41,6 +41,17 @@ class RunRecord:
         Why it failed ("" on success).
     t_up : float
         Swing-up time [s] (nan on failure).
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import score
+    >>> card = score("swingup", "pendubot", categories=["damping"], levels={"damping": [0.0, 0.1]}, workers=1)
+    >>> for record in card.records:
+    ...     print(record.category, record.level, record.seed, record.success, record.t_up)
+    damping 0.0 (0, 3, 0, 0) True 5.13
+    damping 0.1 (0, 3, 1, 0) False nan
+    >>> card.records[1].reason
+    'end effector below 0.45 m in the last second (min -0.463 m)'
     """
 
     category: str
@@ -51,6 +62,15 @@ class RunRecord:
     success: bool
     reason: str
     t_up: float
+
+    def __eq__(self, other: object) -> bool:
+        # Field by field, with a nan swing-up time (every failed run) equal to nan: rerun() of a failed run equals it.
+        if not isinstance(other, RunRecord):
+            return NotImplemented
+        same_t_up = self.t_up == other.t_up or (math.isnan(self.t_up) and math.isnan(other.t_up))
+        return same_t_up and (self.category, self.level_index, self.level, self.run, self.seed, self.success, self.reason) == (
+            other.category, other.level_index, other.level, other.run, other.seed, other.success, other.reason,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -71,6 +91,16 @@ class CategoryScore:
         Fraction of successful runs per level, in [0, 1].
     score : float
         Mean of ``success_rates``.
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import score
+    >>> card = score("swingup", "pendubot", categories=["damping"], levels={"damping": [0.0, 0.1]}, workers=1)
+    >>> damping = card.categories[0]
+    >>> damping.name, damping.unit, damping.levels, damping.runs
+    ('damping', 'N.m.s/rad', (0.0, 0.1), (1, 1))
+    >>> damping.success_rates, damping.score  # swings up without joint damping, not with 0.1 N.m.s/rad more
+    ((1.0, 0.0), 0.5)
     """
 
     name: str
@@ -108,6 +138,18 @@ class Scorecard:
     estimator : str or None
         The state estimator every run's controller was fed by (``"ekf"``, ``"mmae"`` or the class name of an
         estimator object); None: the controller saw the measurement.
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import score
+    >>> card = score("swingup", "pendubot", categories=["damping"], levels={"damping": [0.0, 0.1]}, workers=1)
+    >>> card.controller, card.task, card.overall, len(card.records)
+    ('swingup', 'pendubot', 0.5, 2)
+    >>> [f.reason for f in card.failures]
+    ['end effector below 0.45 m in the last second (min -0.463 m)']
+    >>> import json
+    >>> json.loads(card.to_json())["overall"]
+    0.5
     """
 
     controller: str

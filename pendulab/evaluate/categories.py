@@ -37,6 +37,15 @@ class Category:
         True: ``runs`` seeded episodes per level; False: one episode per level.
     kinds : tuple of str
         Model kinds the category applies to.
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import CATEGORIES
+    >>> delay = CATEGORIES["delay"]
+    >>> delay.description, delay.unit, delay.levels, delay.stochastic
+    ('measurement delay', 's', (0.0, 0.01, 0.02, 0.03, 0.04), False)
+    >>> [c.name for c in CATEGORIES.values() if c.stochastic]  # these run several seeded episodes per level
+    ['measurement_noise', 'torque_noise', 'pushes']
     """
 
     name: str
@@ -119,5 +128,14 @@ def categories_for(kind: str) -> tuple[str, ...]:
     tuple of str
         In :data:`CATEGORIES` order (no ``inertia`` for the point-mass elastic
         model, no ``stiffness`` for the rigid one).
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import categories_for
+    >>> categories_for("elastic")
+    ('mass', 'length', 'damping', 'friction', 'stiffness',
+     'measurement_noise', 'torque_noise', 'torque_response', 'delay', 'pushes')
+    >>> sorted(set(categories_for("rigid")) ^ set(categories_for("elastic")))  # link inertia (rigid), stiffness (elastic)
+    ['inertia', 'stiffness']
     """
     return tuple(name for name, c in CATEGORIES.items() if kind in c.kinds)

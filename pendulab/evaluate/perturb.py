@@ -85,6 +85,21 @@ class Perturbation:
         Number of pushes per joint (at random times at least 1 s apart).
     seed : int or tuple of int
         Seed of the episode's random generator (noise and pushes).
+
+    Examples
+    --------
+    >>> from pendulab.control import controller_for_task
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("pendubot")  # RealAIGym's C.1 robot, shoulder driven, 6 N.m, 10 s
+    >>> controller, x0 = controller_for_task("swingup", task)  # energy pumping, then LQR balance
+    >>> from pendulab.evaluate import Perturbation, run_perturbed_episode
+    >>> sticky = Perturbation(friction=(0.1, 0.1))  # Coulomb friction the design model lacks [N.m]
+    >>> run_perturbed_episode(controller, task, x0, sticky).success
+    True
+    >>> heavier = Perturbation(params={"m2": 1.25 * task.model.params.m2})  # plant link 2 heavier than designed
+    >>> result = run_perturbed_episode(controller, task, x0, heavier)
+    >>> result.success, result.reason
+    (False, 'end effector below 0.45 m in the last second (min -0.425 m)')
     """
 
     params: Mapping[str, float] = field(default_factory=dict)
@@ -131,6 +146,21 @@ class EpisodeResult:
         Applied torques (tau1, tau2) per sample, pushes excluded [N.m].
     height : ndarray, shape (K + 1,)
         End-effector height y2 [m].
+
+    Examples
+    --------
+    >>> from pendulab.control import controller_for_task
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("pendubot")  # RealAIGym's C.1 robot, shoulder driven, 6 N.m, 10 s
+    >>> controller, x0 = controller_for_task("swingup", task)  # energy pumping, then LQR balance
+    >>> from pendulab.evaluate import run_perturbed_episode
+    >>> episode = run_perturbed_episode(controller, task, x0)
+    >>> episode.success, episode.t_up, episode.threshold  # up from 5.13 s on; the line is 0.9 (L1 + L2) [m]
+    (True, 5.13, 0.45)
+    >>> episode.t.shape, episode.x.shape, episode.u.shape  # 1000 samples of 10 ms
+    ((1001,), (1001, 4), (1000, 2))
+    >>> bool(episode.height[-100:].min() >= episode.threshold)  # above the line over the last second
+    True
     """
 
     success: bool
@@ -313,6 +343,20 @@ def run_perturbed_episode(
     ValueError
         Bad ``x0``, unknown parameter names in the perturbation, or a
         non-positive ``t_final`` or ``n_sub``.
+
+    Examples
+    --------
+    >>> from pendulab.control import controller_for_task
+    >>> from pendulab.control.swingup.tasks import load_task
+    >>> task = load_task("pendubot")  # RealAIGym's C.1 robot, shoulder driven, 6 N.m, 10 s
+    >>> controller, x0 = controller_for_task("swingup", task)  # energy pumping, then LQR balance
+    >>> from pendulab.evaluate import Perturbation, run_perturbed_episode
+    >>> nominal = run_perturbed_episode(controller, task, x0)
+    >>> nominal.success, nominal.t_up  # above 0.9 (L1 + L2) from t_up [s] to the end
+    (True, 5.13)
+    >>> noisy = run_perturbed_episode(controller, task, x0, Perturbation(meas_noise=0.5, seed=1))
+    >>> noisy.success, noisy.reason  # noise of 0.5 rad/s on the measured rates
+    (False, 'end effector below 0.45 m in the last second (min -0.338 m)')
     """
     pert = Perturbation() if perturbation is None else perturbation
     plant = task.model.with_params(**dict(pert.params)) if pert.params else task.model

@@ -199,6 +199,20 @@ def score(
         The wall-time budget ran out.
     KeyboardInterrupt
         Ctrl-C; the batches finished before it were passed to ``on_records``.
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import score
+    >>> levels = {"damping": [0.0, 0.1], "friction": [0.0, 0.2]}  # added joint damping [N.m.s/rad], Coulomb friction [N.m]
+    >>> card = score("swingup", "pendubot", categories=list(levels), levels=levels, workers=1)
+    >>> print(card.table())
+    Robustness of `swingup` on `pendubot` (success rate per level; 20 runs per level of the stochastic categories)
+    <BLANKLINE>
+    | category | unit | levels: success rate | score |
+    |---|---|---|---|
+    | damping | N.m.s/rad | 0: 100%, 0.1: 0% | 0.50 |
+    | friction | N.m | 0: 100%, 0.2: 0% | 0.50 |
+    | **overall** | | | **0.50** |
     """
     runs = bounded_int("runs", runs, low=1, high=MAX_RUNS, why="runs per level of each stochastic category")
     seed = bounded_int("seed", seed, low=0, high=2**63 - 1, why="a seed of numpy's SeedSequence")
@@ -341,6 +355,17 @@ def rerun(
     -------
     RunRecord
         The run's outcome now (equal to ``record`` for a deterministic controller).
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import score
+    >>> card = score("swingup", "pendubot", categories=["damping"], levels={"damping": [0.0, 0.1]}, workers=1)
+    >>> from pendulab.evaluate import rerun
+    >>> failed = card.failures[0]  # look at one failed run again, alone
+    >>> failed.category, failed.level, failed.reason
+    ('damping', 0.1, 'end effector below 0.45 m in the last second (min -0.463 m)')
+    >>> rerun("swingup", "pendubot", failed) == failed  # the same seed: the same outcome
+    True
     """
     _check_estimator(estimator)
     tk, _, ctrl, x0 = _resolve(controller, task, estimator)

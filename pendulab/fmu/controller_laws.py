@@ -167,7 +167,9 @@ def controller_law(controller: Any) -> ControllerLaw:
         deficit = sw.e_up - energy
         w1, w2 = x[model.nq], x[model.nq + 1]
         rate = w2 - w1 if sw.actuation == "acrobot" else w1
-        pump = ca.if_else(ca.fabs(rate) > 1e-3, sw.k_energy * deficit * rate, sw.u_max * ca.sign(deficit))
+        # EnergySwingUp.pump_gain: k / (1 + k rate^2 h) at the design sample time (the sampled-data loop gain below 1)
+        gain = sw.k_energy / (1.0 + sw.k_energy * rate * rate * float(sw.sample_time))
+        pump = ca.if_else(ca.fabs(rate) > 1e-3, gain * deficit * rate, sw.u_max * ca.sign(deficit))
         if sw.actuation == "full":
             rel = _pymod(x[1] - x[0] + math.pi, 2 * math.pi) - math.pi
             u = ca.vertcat(pump, -sw.kp * rel - sw.kd * (w2 - w1))

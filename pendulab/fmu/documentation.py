@@ -16,7 +16,7 @@ from ..model.model import Model
 from .codegen import SOLVER_NAMES, SPRING_LIMIT, ModelLayout
 from .model_description import variables
 
-__all__ = ["LICENSE_PATH", "documentation_html", "license_text"]
+__all__ = ["LICENSE_PATH", "binaries_html", "documentation_html", "license_text"]
 
 #: Archive path of the license entry point (FMI 3.0 section 2.5; FMI 2 archives use the same place).
 LICENSE_PATH = "documentation/licenses/license.txt"
@@ -93,7 +93,42 @@ def _cell(value: object) -> str:
     return "" if value is None else html.escape(str(value))
 
 
-def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop_time: float, step_size: float) -> bytes:
+def binaries_html(binaries: dict[str, str] | None) -> str:
+    """The ``Binaries`` section of a documentation page: each binary and what it needs from the C runtime.
+
+    Parameters
+    ----------
+    binaries : dict of str to str, optional
+        Archive path (``binaries/<platform>/<file>``) -> requirement read from the built file
+        (:func:`pendulab.fmu.platforms.runtime_requirement`, e.g. ``glibc >= 2.14``).
+
+    Returns
+    -------
+    str
+        HTML (``<h2 id="binaries">`` and a list); a sentence when the archive carries no binary.
+    """
+    items = "".join(
+        f"<li><code>{html.escape(path)}</code>: needs {html.escape(need)}</li>" for path, need in sorted((binaries or {}).items())
+    )
+    return f"""<h2 id="binaries">Binaries</h2>
+<ul>{items or "<li>none (sources only)</li>"}</ul>
+<p>Read from each built file (ELF symbol versions, as <code>objdump -T</code> shows them; PE imports, as
+<code>objdump -p</code>). Linux binaries built with Zig's C compiler (pendulab[cross]) target glibc 2.17
+(manylinux2014); built with the system compiler they need the build machine's symbol versions. Windows DLLs built
+by Zig import the Universal C Runtime (<code>api-ms-win-crt-*.dll</code>): part of Windows 10 and later, on
+Windows 7 / 8.1 installed by update KB2999226 or any Visual C++ 2015+ redistributable (a DLL built by a mingw-w64
+gcc imports the C runtime that toolchain defaults to, listed above).</p>"""
+
+
+def documentation_html(
+    model: Model,
+    lay: ModelLayout,
+    fmi_version: int,
+    *,
+    stop_time: float,
+    step_size: float,
+    binaries: dict[str, str] | None = None,
+) -> bytes:
     """The FMU's ``documentation/index.html``.
 
     Parameters
@@ -106,6 +141,8 @@ def documentation_html(model: Model, lay: ModelLayout, fmi_version: int, *, stop
         FMI standard of the archive.
     stop_time, step_size : float
         Default experiment [s].
+    binaries : dict of str to str, optional
+        What each binary of the archive needs from the C runtime (see :func:`binaries_html`).
 
     Returns
     -------
@@ -214,6 +251,7 @@ step {step_size:g} s.</p>
 <li>FMU state: get/set/serialize; a restored state resumes the life-cycle state it was taken in.</li>
 <li>Directional derivatives of derivatives and outputs with respect to states and inputs.</li>
 </ul>
+{binaries_html(binaries)}
 <p>License: <a href="licenses/license.txt">licenses/license.txt</a>.</p>
 </body>
 </html>

@@ -21,14 +21,24 @@ from ..native.build import (
     find_compiler,
     shared_library_suffix,
 )
+from .binaries import MANIFEST_PATH, binary_manifest
 from .codegen import compiled_sources, generate_sources, layout, token
 from .documentation import LICENSE_PATH, documentation_html, license_text
 from .model_description import build_description, model_description
-from .platforms import Platform, cross_compiler, exported_symbols, fmi_functions, host_platform, resolve_platforms
+from .platforms import (
+    Platform,
+    cross_compiler,
+    exported_symbols,
+    fmi_functions,
+    host_platform,
+    portable_host_compiler,
+    resolve_platforms,
+    runtime_requirement,
+)
 
 # CFLAGS, CompilerNotFoundError and find_compiler live in pendulab.native.build (shared with the
 # native fast path) and are re-exported here, where they have always been importable.
-__all__ = ["export", "find_compiler", "compile_sources", "CFLAGS", "CompilerNotFoundError", "binary_platform"]
+__all__ = ["export", "find_compiler", "compile_sources", "compile_host", "CFLAGS", "CompilerNotFoundError", "binary_platform"]
 
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed zip timestamps: same input -> same archive bytes
 
@@ -94,6 +104,42 @@ def compile_sources(
     return compile_shared(src_dir, compiled_sources(fmi_version), out, cc=cc, extra_flags=extra_flags)
 
 
+def compile_host(src_dir: Path, units: tuple[str, ...] | list[str], out: Path, *, cc: str | None = None) -> Path:
+    """Build the host binary: with Zig for an old glibc when installed and no compiler is chosen, else the host compiler.
+
+    See :func:`~pendulab.fmu.platforms.portable_host_compiler`: on Linux with ``pendulab[cross]`` the binary
+    targets glibc 2.17 (``zig cc -target x86_64-linux-gnu.2.17``; no debug information, as the host compiler's
+    ``-O2`` build); otherwise ``cc``, ``$CC``, ``cc``, ``gcc``, ``clang`` as before.
+
+    Parameters
+    ----------
+    src_dir : Path
+        Folder with the sources and headers.
+    units : sequence of str
+        Translation units.
+    out : Path
+        Library to write (platform suffix).
+    cc : str, optional
+        Compiler; a given one is always used.
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Raises
+    ------
+    CompilerNotFoundError (RuntimeError)
+        No compiler found.
+    RuntimeError
+        Compilation failed.
+    """
+    zig = portable_host_compiler(cc)
+    if zig is None:
+        return compile_shared(src_dir, units, out, cc=cc)
+    return compile_shared_with(zig, src_dir, units, out, flags=(*CFLAGS, "-g0"))
+
+
 def _cross_compile(target: Platform, src: Path, out_dir: Path, identifier: str, fmi_version: int) -> Path:
     """Build the binary of ``target`` (not the host) with a cross compiler; stripped, warning flags as usual."""
     out_dir.mkdir()
@@ -143,7 +189,11 @@ def export(
     stop_time, step_size : float
         ``DefaultExperiment`` stop time and communication step [s].
     cc : str, optional
-        C compiler of the host platform; default ``$CC``, then ``cc``, ``gcc``, ``clang``.
+        C compiler of the host platform. Default on Linux with Zig's C compiler installed
+        (``pendulab[cross]``) and ``$CC`` unset: Zig targeting glibc 2.17 (the binary loads on every
+        distribution since 2014); else ``$CC``, then ``cc``, ``gcc``, ``clang`` (the binary then needs the
+        build machine's glibc symbol versions, e.g. ``pow@GLIBC_2.29``). The documentation page of the
+        FMU states what each binary needs, read from the built file.
     platforms : str or list of str, optional
         Binaries to build, e.g. ``["x86_64-linux", "x86_64-windows", "aarch64-linux"]`` (FMI 3
         tuples; ``linux64``, ``win64`` accepted; a comma-separated string too). Default: the host
@@ -173,6 +223,20 @@ def export(
         A platform other than the host, and no cross compiler (``pip install "pendulab[cross]"``).
     RuntimeError
         Compilation failed, or a binary does not export the FMI functions.
+
+    Examples
+    --------
+    The FMU run by another importer (fmpy) agrees with pendulab's own integrator:
+
+    >>> import pendulab as pl
+    >>> from fmpy import simulate_fmu
+    >>> from pendulab.fmu import export
+    >>> model = pl.rigid()
+    >>> path = export(model, "rigid.fmu", fmi_version=2, timestamp=False)  # byte-for-byte reproducible
+    >>> fmu = simulate_fmu(str(path), stop_time=2.0, output_interval=0.01, start_values={"theta1": 1.0}, output=["theta1"])
+    >>> native = pl.simulate(model, model.state(theta1=1.0), 2.0, method="cvodes", rtol=1e-10, atol=1e-10)
+    >>> path.name, bool(abs(fmu["theta1"][-1] - native["theta1"][-1]) < 1e-6)
+    ('rigid.fmu', True)
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model (pendulab.rigid() or pendulab.elastic()), got {type(model).__name__}")
@@ -197,7 +261,6 @@ def export(
         files[f"sources/{name}"] = data
     if fmi_version == 3:
         files["sources/buildDescription.xml"] = build_description(lay)
-    files["documentation/index.html"] = documentation_html(model, lay, fmi_version, stop_time=stop_time, step_size=step_size)
     files[LICENSE_PATH] = license_text()
     required = fmi_functions(sources[f"fmi{fmi_version}Functions.h"].decode(), fmi_version)
     with tempfile.TemporaryDirectory() as tmp:
@@ -207,12 +270,19 @@ def export(
             (src / name).write_bytes(data)
         if targets is None or any(t.name == host_platform() for t in targets):
             ext = shared_library_suffix()
-            lib = compile_sources(src, Path(tmp) / f"{lay.identifier}{ext}", fmi_version, cc=cc)
+            lib = compile_host(src, compiled_sources(fmi_version), Path(tmp) / f"{lay.identifier}{ext}", cc=cc)
             files[f"binaries/{binary_platform(fmi_version)}/{lib.name}"] = _checked(lib.read_bytes(), required, "host")
         for target in targets or ():
             if target.name != host_platform():
                 lib = _cross_compile(target, src, Path(tmp) / target.name, lay.identifier, fmi_version)
                 files[f"binaries/{target.folder(fmi_version)}/{lib.name}"] = _checked(lib.read_bytes(), required, target.name)
+    # what each binary needs from the C runtime, read from the built file (e.g. glibc >= 2.14; UCRT on Windows)
+    binaries = {name: runtime_requirement(data) for name, data in files.items() if name.startswith("binaries/")}
+    files["documentation/index.html"] = documentation_html(
+        model, lay, fmi_version, stop_time=stop_time, step_size=step_size, binaries=binaries
+    )
+    # The binaries' SHA-256: pendulab then loads them without a probe in a child process (pendulab.fmu.binaries).
+    files[MANIFEST_PATH] = binary_manifest(files)
     # Atomic: an interrupted or failing export never leaves a truncated FMU where a good one was.
     with atomic_open(path, "wb") as fh, zipfile.ZipFile(fh, "w", zipfile.ZIP_DEFLATED) as zf:
         for name in sorted(files):

@@ -5,11 +5,15 @@ cross-compiled with Debian's cross gcc when it is on PATH (``x86_64-w64-mingw32-
 ``aarch64-linux-gnu-gcc``, ...) or else with Zig's C compiler from the ``ziglang`` wheel
 (``pip install "pendulab[cross]"``). Every binary is checked after the build: its exported
 function names are read from the file itself (ELF ``.dynsym``, PE export table) and must be
-exactly the FMI functions of the standard header.
+exactly the FMI functions of the standard header. What a binary needs from the system's C runtime (the
+highest ``GLIBC_x.y`` symbol version of an ELF file, the C runtime DLLs a PE file imports) is read the same
+way (:func:`runtime_requirement`) and written into the FMU's documentation. On Linux with Zig installed the
+host binary too is built by Zig for glibc 2.17 (:func:`portable_host_compiler`).
 """
 
 from __future__ import annotations
 
+import os
 import platform as _platform
 import re
 import shutil
@@ -20,7 +24,20 @@ from pathlib import Path
 
 from .._checks import MissingExtraError
 
-__all__ = ["Platform", "PLATFORMS", "host_platform", "resolve_platforms", "cross_compiler", "exported_symbols", "fmi_functions"]
+__all__ = [
+    "Platform",
+    "PLATFORMS",
+    "GLIBC_BASELINE",
+    "host_platform",
+    "resolve_platforms",
+    "cross_compiler",
+    "portable_host_compiler",
+    "zig_available",
+    "exported_symbols",
+    "fmi_functions",
+    "glibc_versions",
+    "runtime_requirement",
+]
 
 
 @dataclass(frozen=True)
@@ -172,6 +189,145 @@ def cross_compiler(plat: Platform) -> list[str]:
     return [sys.executable, "-m", "ziglang", "cc", "-target", plat.zig_target]
 
 
+#: glibc the Linux binaries are built for when Zig's C compiler is installed (``-target <arch>-linux-gnu.2.17``,
+#: the manylinux2014 baseline); the system compiler links against the build machine's glibc instead.
+GLIBC_BASELINE = (2, 17)
+
+
+def zig_available() -> bool:
+    """Is Zig's C compiler (the ``ziglang`` wheel, ``pendulab[cross]``) installed?
+
+    Returns
+    -------
+    bool
+        True when ``import ziglang`` succeeds.
+    """
+    try:
+        import ziglang  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def portable_host_compiler(cc: str | None = None) -> list[str] | None:
+    """Compiler command for the host binary that targets an old glibc, or None for the system compiler.
+
+    On a Linux host of :data:`PLATFORMS` with no compiler chosen (neither ``cc`` nor ``$CC``) and the
+    ``ziglang`` wheel installed: ``python -m ziglang cc -target <arch>-linux-gnu.2.17``, so the binary loads
+    on every glibc >= 2.17 (the system compiler would bind e.g. ``pow`` to the build machine's
+    ``GLIBC_2.29``). Otherwise None: the host compiler as before (``$CC``, ``cc``, ``gcc``, ``clang``).
+
+    Parameters
+    ----------
+    cc : str, optional
+        Compiler the caller asked for; a given compiler is always used.
+
+    Returns
+    -------
+    list of str or None
+        Command and leading arguments, or None.
+    """
+    plat = PLATFORMS.get(host_platform())
+    if cc or os.environ.get("CC") or plat is None or not plat.name.endswith("-linux") or not zig_available():
+        return None
+    return [sys.executable, "-m", "ziglang", "cc", "-target", plat.zig_target]
+
+
+def runtime_requirement(data: bytes) -> str:
+    """What a built binary needs from the system's C runtime, read from the file.
+
+    ELF: the highest ``GLIBC_x.y`` symbol version it requires (``.gnu.version_r``; the versions
+    ``objdump -T`` shows). PE (DLL): the C runtime DLLs it imports (UCRT's ``api-ms-win-crt-*.dll``,
+    or ``msvcrt.dll``).
+
+    Parameters
+    ----------
+    data : bytes
+        Contents of a ``.so`` or ``.dll``.
+
+    Returns
+    -------
+    str
+        e.g. ``"glibc >= 2.14"``, ``"the Universal C Runtime (UCRT: api-ms-win-crt-*.dll)"``,
+        ``"msvcrt.dll"``; ``"no glibc symbol versions"`` for an ELF file without any.
+
+    Raises
+    ------
+    ValueError
+        Not a 64-bit little-endian ELF or PE32+ file, or a damaged one.
+    """
+    try:
+        if data[:4] == b"\x7fELF":
+            versions = glibc_versions(data)
+            return f"glibc >= {'.'.join(map(str, max(versions)))}" if versions else "no glibc symbol versions"
+        if data[:2] == b"MZ":
+            dlls = [d.lower() for d in _pe_imports(data)]
+            crt = sorted({"api-ms-win-crt-*.dll" if d.startswith("api-ms-win-crt-") else d for d in dlls} - {"kernel32.dll"})
+            if crt == ["api-ms-win-crt-*.dll"]:
+                return "the Universal C Runtime (UCRT: api-ms-win-crt-*.dll)"
+            return ", ".join(crt) if crt else "no C runtime DLL"
+    except (struct.error, IndexError, UnicodeDecodeError) as exc:
+        raise ValueError(f"damaged shared library: {exc}") from exc
+    raise ValueError(f"not an ELF or PE file (starts with {data[:4]!r})")
+
+
+def glibc_versions(data: bytes) -> tuple[tuple[int, ...], ...]:
+    """The ``GLIBC_x.y[.z]`` versions an ELF shared library requires (its ``.gnu.version_r`` section).
+
+    Parameters
+    ----------
+    data : bytes
+        Contents of a 64-bit little-endian ELF file.
+
+    Returns
+    -------
+    tuple of tuple of int
+        Sorted, e.g. ``((2, 2, 5), (2, 14))``; empty when it needs none.
+
+    Raises
+    ------
+    ValueError
+        Not a 64-bit little-endian ELF file.
+    """
+    if data[4] != 2 or data[5] != 1:
+        raise ValueError("only 64-bit little-endian ELF files are supported")
+    (shoff,) = struct.unpack_from("<Q", data, 0x28)
+    shentsize, shnum = struct.unpack_from("<HH", data, 0x3A)
+    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize) for i in range(shnum)]
+    found = set()
+    for sec in sections:
+        if sec[1] != 0x6FFFFFFE:  # SHT_GNU_verneed
+            continue
+        strtab, off = sections[sec[6]][4], sec[4]
+        for _ in range(sec[7]):  # sh_info: number of Verneed entries
+            _, cnt, _, aux, nxt = struct.unpack_from("<HHIII", data, off)
+            a = off + aux
+            for _ in range(cnt):
+                _, _, _, name, anext = struct.unpack_from("<IHHII", data, a)
+                m = re.fullmatch(r"GLIBC_(\d+(?:\.\d+)+)", _cstr(data, strtab + name))
+                if m:
+                    found.add(tuple(int(p) for p in m.group(1).split(".")))
+                a += anext
+            off += nxt
+    return tuple(sorted(found))
+
+
+def _pe_imports(data: bytes) -> tuple[str, ...]:
+    """Names of the DLLs a PE32+ file imports (its import directory)."""
+    sections, opt = _pe_sections(data)
+    import_rva, import_size = struct.unpack_from("<II", data, opt + 120)  # data directory 1
+    if import_size == 0:
+        return ()
+    at = _rva_to_offset(sections)
+    names, desc = [], at(import_rva)
+    while True:
+        entry = struct.unpack_from("<IIIII", data, desc)
+        if entry == (0, 0, 0, 0, 0):
+            return tuple(names)
+        names.append(_cstr(data, at(entry[3])))
+        desc += 20
+
+
 def fmi_functions(header: str, fmi_version: int) -> tuple[str, ...]:
     """Every function an FMU must export, from the standard ``fmi{2,3}Functions.h`` text.
 
@@ -245,7 +401,8 @@ def _elf_exports(data: bytes) -> tuple[str, ...]:
     return tuple(sorted(names))
 
 
-def _pe_exports(data: bytes) -> tuple[str, ...]:
+def _pe_sections(data: bytes) -> tuple[list[tuple], int]:
+    """(section table entries, offset of the optional header) of a PE32+ file."""
     (pe,) = struct.unpack_from("<I", data, 0x3C)
     if data[pe : pe + 4] != b"PE\0\0":
         raise ValueError("no PE signature")
@@ -255,18 +412,26 @@ def _pe_exports(data: bytes) -> tuple[str, ...]:
     (magic,) = struct.unpack_from("<H", data, opt)
     if magic != 0x20B:
         raise ValueError("only PE32+ (64-bit) files are supported")
-    export_rva, export_size = struct.unpack_from("<II", data, opt + 112)  # data directory 0
-    if export_size == 0:
-        return ()
     sec_table = opt + opt_size
-    sections = [struct.unpack_from("<8sIIII", data, sec_table + 40 * i) for i in range(n_sections)]
+    return [struct.unpack_from("<8sIIII", data, sec_table + 40 * i) for i in range(n_sections)], opt
 
+
+def _rva_to_offset(sections: list[tuple]):
     def at(rva: int) -> int:
         for _, vsize, vaddr, rawsize, rawptr in sections:
             if vaddr <= rva < vaddr + max(vsize, rawsize):
                 return rawptr + rva - vaddr
         raise ValueError(f"RVA {rva:#x} outside every section")
 
+    return at
+
+
+def _pe_exports(data: bytes) -> tuple[str, ...]:
+    sections, opt = _pe_sections(data)
+    export_rva, export_size = struct.unpack_from("<II", data, opt + 112)  # data directory 0
+    if export_size == 0:
+        return ()
+    at = _rva_to_offset(sections)
     exp = at(export_rva)
     (n_names,) = struct.unpack_from("<I", data, exp + 24)
     (names_rva,) = struct.unpack_from("<I", data, exp + 32)

@@ -38,6 +38,7 @@ import numpy as np
 from ..integrate import simulate
 from ..model.model import make_model
 from ..scene import Scene, list_scenes, load_scene
+from .binaries import check_fmu_binary
 from .codegen import SOLVER_NAMES
 from .fmu_file import UnreadableFMUError, _first_line, _read, fmu_kind, fmu_start_values
 from .validation_report import ValidationReport, ValidationRow, _plot
@@ -206,9 +207,25 @@ def validate(
     UnreadableFMUError (ValueError)
         Not a zip archive, a truncated or corrupt archive, no
         ``modelDescription.xml`` or one that fails the FMI schema.
+    FMUBinaryError (UnreadableFMUError)
+        A binary that pendulab did not export (:func:`~pendulab.fmu.binaries.check_fmu_binary`)
+        crashed (the signal is named), failed or hung in a probe process; it is never loaded here.
     ValueError
         Not a pendulab FMU, an unknown scene name, or a scene for the other
         model kind.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.fmu import export, validate
+    >>> path = export(pl.rigid(), "rigid.fmu", timestamp=False)
+    >>> report = validate(path, scenes=["rigid_forced"])  # the FMU's three runs against the native integrator
+    >>> report.passed, report.problems  # fmpy's validate_fmu found nothing either
+    (True, [])
+    >>> sorted({row.run for row in report.rows})
+    ['CS-dopri5', 'CS-rodas4', 'ME-CVode']
+    >>> bool(max(row.max_error / row.bound for row in report.rows) < 1.0)  # every signal within its bound
+    True
     """
     import time
 
@@ -246,6 +263,7 @@ def validate(
             unzipdir = extract(str(fmu), tmp)
         except Exception as exc:  # noqa: BLE001 - zipfile/OS errors of a corrupt archive, reported in one line
             raise UnreadableFMUError(f"FMU {str(fmu)!r}: cannot extract the archive: {_first_line(exc)}") from None
+        check_fmu_binary(unzipdir, md, fmu=fmu)  # a binary pendulab did not export runs in a child process first
         for scene in chosen:
             if progress:
                 progress(f"{scene.name}: reference ({REFERENCE_METHOD}, tol {REFERENCE_TOL:g})")

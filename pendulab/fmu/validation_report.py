@@ -68,6 +68,22 @@ class ValidationReport:
         ``"scenes"``: run at the named scenes' parameters and initial states.
     params, start : dict of str to float
         The parameters and initial state the runs used when ``settings == "fmu"`` (else empty).
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.fmu import export, validate
+    >>> report = validate(export(pl.rigid(), "rigid.fmu"), out_dir="validation")
+    >>> report.kind, report.settings, report.passed  # run at the FMU's own parameters and start values
+    ('rigid', 'fmu', True)
+    >>> sorted({row.scene for row in report.rows})  # every validation scene of the rigid model
+    ['rigid_chaotic_forced', 'rigid_forced']
+    >>> print(report.table())
+    FMU rigid.fmu (rigid): fmpy validate_fmu: no problem
+    ...
+    overall: PASS
+    >>> report.plot.as_posix()  # the overlay of FMU and native runs
+    'validation/rigid_validation.png'
     """
 
     fmu: Path

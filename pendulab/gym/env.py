@@ -196,6 +196,21 @@ class DoublePendulumEnv(gymnasium.Env):
         An unknown name or an invalid value of any argument (the message names it).
     TypeError
         ``model`` or ``reward`` of the wrong type.
+
+    Examples
+    --------
+    >>> import gymnasium as gym
+    >>> import numpy as np
+    >>> import pendulab.gym  # registers "pendulab/DoublePendulum-v0"
+    >>> env = gym.make("pendulab/DoublePendulum-v0", model="rigid", actuation="pendubot", dt=0.01)
+    >>> obs, info = env.reset(seed=0)
+    >>> env.observation_space.shape, env.action_space.shape  # cos/sin of both angles, scaled rates; tau1
+    ((6,), (1,))
+    >>> obs, reward, terminated, truncated, info = env.step(np.array([0.5], dtype=np.float32))
+    >>> info["t"], info["tau"]  # half the 10 N.m torque limit, held on the shoulder for 10 ms
+    (0.01, array([5., 0.]))
+    >>> env.unwrapped.max_episode_steps, terminated, truncated  # 10 s episodes
+    (1000, False, False)
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}

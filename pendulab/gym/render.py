@@ -51,6 +51,19 @@ class FrameRenderer:
     ------
     ValueError
         ``size`` smaller than 32.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.gym import FrameRenderer
+    >>> renderer = FrameRenderer(pl.rigid(), size=200)  # 200 x 200 pixels, pivot at the centre
+    >>> frame = renderer.render(np.array([np.pi, np.pi, 0.0, 0.0]))  # balanced upright
+    >>> frame.shape, frame.dtype
+    ((200, 200, 3), dtype('uint8'))
+    >>> column, row = renderer.to_pixel(np.array([0.0, 2.0]))  # where the tip is drawn, 2 m above the pivot
+    >>> (column, row), bool((frame[row, column] != frame[0, 0]).any())  # not the background colour
+    ((100, 16), True)
     """
 
     model: Model

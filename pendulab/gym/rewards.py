@@ -103,6 +103,19 @@ class QuadraticReward:
         ``h(x) -> y2`` [m] (:func:`tip_height_function`); needed when ``bonus != 0``.
     reach : float
         ``L1 + L2`` [m] (rest lengths for the elastic model).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.gym import make_reward
+    >>> model = pl.rigid()
+    >>> cost = make_reward("quadratic", model, q=[1.0, 1.0, 0.0, 0.0], r=[0.1, 0.1])  # a QuadraticReward
+    >>> cost.q, cost.r, np.round(cost.goal, 4)
+    ((1.0, 1.0, 0.0, 0.0), (0.1, 0.1), array([3.1416, 3.1416, 0.    , 0.    ]))
+    >>> x = model.state(theta1=np.pi + 0.1, theta2=np.pi - 0.2)  # near upright
+    >>> round(cost(x, np.array([1.0, 0.0])), 6)  # -(0.1^2 + 0.2^2 + 0.1 * 1^2)
+    -0.15
     """
 
     q: tuple[float, ...]
@@ -160,6 +173,20 @@ class HeightReward:
         ``h(x) -> y2`` [m] (:func:`tip_height_function`).
     reach : float
         ``L1 + L2`` [m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.gym import make_reward
+    >>> model = pl.rigid()
+    >>> height = make_reward("height", model)  # a HeightReward: y2 / (L1 + L2)
+    >>> for theta in (0.0, np.pi / 3, 2 * np.pi / 3, np.pi):  # hanging to upright, links aligned
+    ...     print(f"{height(model.state(theta1=theta, theta2=theta), np.zeros(2)):.3f}")
+    -1.000
+    -0.500
+    0.500
+    1.000
     """
 
     tip_height: Callable[[np.ndarray], float] = field(repr=False, compare=False)
@@ -228,6 +255,22 @@ def make_reward(
         Unknown name, or weights of the wrong length or not finite and non-negative.
     TypeError
         ``reward`` is neither a string nor callable.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.gym import make_reward
+    >>> model = pl.rigid()
+    >>> reward = make_reward("realai", model)  # the environment's default
+    >>> up, down = model.state(theta1=np.pi, theta2=np.pi), model.rest_state()
+    >>> reward(up, np.zeros(2)), reward(up + 2 * np.pi * np.array([1, 0, 0, 0]), np.zeros(2))  # goal: bonus only, angles wrapped
+    (100.0, 100.0)
+    >>> round(reward(down, np.zeros(2)), 3)  # hanging: -(10 pi^2 + 10 pi^2), no bonus
+    -197.392
+    >>> effort = lambda x, tau: -float(abs(tau[0]))
+    >>> make_reward(effort, model) is effort  # a callable passes through
+    True
     """
     if callable(reward):
         return reward

@@ -61,6 +61,20 @@ class DoublePendulumVectorEnv(VectorEnv):
     ------
     ValueError
         ``num_envs`` < 1, an FMU backend or a C integrator, or any bad keyword of the single environment.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.gym import DoublePendulumVectorEnv
+    >>> venv = DoublePendulumVectorEnv(num_envs=4, actuation="full", reset_noise=0.0)  # one heyoka batch, 4 lanes
+    >>> obs, infos = venv.reset(seed=0)
+    >>> actions = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.0], [0.3, 0.0]], dtype=np.float32)
+    >>> for _ in range(50):  # 0.5 s of constant shoulder torques 0, 1, 2, 3 N.m
+    ...     obs, rewards, terminated, truncated, infos = venv.step(actions)
+    >>> obs.shape, venv.states.shape
+    ((4, 6), (4, 4))
+    >>> np.round(venv.states[:, 0], 3)  # theta1 [rad]: the lane at rest stays at rest
+    array([0.   , 0.066, 0.133, 0.198])
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}

@@ -339,4 +339,8 @@ def realize(base: BaseParameters, beta: np.ndarray, prior: Mapping[str, float], 
     pi = dict.fromkeys(STANDARD_NAMES, 0.0)
     # IPOPT honours bounds to its tolerance (a friction of -1e-57): snap onto them.
     pi.update(zip(free, np.maximum(scale * np.asarray(sol["x"]).ravel(), lbx).tolist(), strict=True))
+    # Likewise onto m I >= h^2: a link fitted as a point mass came out 1e-7 below it, which the plant file refuses.
+    for i in ("1", "2"):
+        if f"I{i}" in free:
+            pi[f"I{i}"] = max(pi[f"I{i}"], pi[f"h{i}"] ** 2 / pi[f"m{i}"])
     return pi

@@ -36,7 +36,21 @@ MIN_SAMPLES = 50
 
 
 class RecordError(ValueError):
-    """A measured record that cannot be used (missing column, non-finite value, bad time stamps, ...)."""
+    """A measured record that cannot be used (missing column, non-finite value, bad time stamps, ...).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.identify import ColumnMap, RecordError, read_record
+    >>> t = np.arange(60) * 0.002
+    >>> np.savetxt("log.csv", np.column_stack([t, 0.1 + 0 * t, 0 * t, 0 * t]), delimiter=",", header="t,q1,q2,tau1", comments="")
+    >>> columns = ColumnMap(time="t", angles=("q1", "q2"), torques=("tau1", "tau2"))
+    >>> try:
+    ...     read_record("log.csv", columns)  # the file has no column tau2
+    ... except RecordError as err:  # a ValueError
+    ...     print(err)
+    record 'log' (log.csv): missing columns ['tau2']; the file has ['t', 'q1', 'q2', 'tau1']
+    """
 
 
 @dataclass(frozen=True)
@@ -55,6 +69,21 @@ class ColumnMap:
     rates : tuple of str or None, default None
         Measured joint rates [rad/s], if the table has them (kept for reference; the identification
         differentiates the angles itself).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from pendulab.identify import REALAIGYM_COLUMNS, ColumnMap, read_record
+    >>> REALAIGYM_COLUMNS.angles, REALAIGYM_COLUMNS.torques  # RealAIGym's CSV: measured torque as the input
+    (('pos_meas1', 'pos_meas2'), ('tau_meas1', 'tau_meas2'))
+    >>> ours = ColumnMap(time="time_s", angles=("shoulder", "elbow"), torques=("u_shoulder", "u_elbow"))
+    >>> t = np.arange(100) * 0.005
+    >>> rows = np.column_stack([t, 0.1 * np.cos(3 * t), 0.2 * np.sin(3 * t), 0.5 + 0 * t, 0 * t])
+    >>> np.savetxt("lab.csv", rows, delimiter=",", header="time_s,shoulder,elbow,u_shoulder,u_elbow", comments="")
+    >>> record = read_record("lab.csv", ours)
+    >>> record.q.shape, record.tau[0].tolist(), record.qd is None  # no rate columns mapped
+    ((100, 2), [0.5, 0.0], True)
     """
 
     time: str
@@ -105,6 +134,18 @@ class Record:
         Input joint torques [N.m].
     qd : numpy.ndarray or None, shape (n, 2)
         Measured joint rates [rad/s], if the record has them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.identify.datasets import C1_EXCITATION, c1_record
+    >>> record = c1_record(C1_EXCITATION[0])  # a shipped measured record of RealAIGym's C.1 robot
+    >>> record.name, record.q.shape, record.tau.shape, round(record.duration, 2)
+    ('20230629-143339', (4998, 2), (4998, 2), 10.0)
+    >>> print(f"median sample interval {np.median(np.diff(record.t)) * 1e3:.1f} ms")
+    median sample interval 2.0 ms
+    >>> np.round(np.abs(record.tau).max(axis=0), 2)  # largest measured torques [N.m]
+    array([0.41, 0.82])
     """
 
     name: str
@@ -205,6 +246,23 @@ def read_record(path: str | os.PathLike[str], columns: ColumnMap = REALAIGYM_COL
     RecordError
         An empty file, a missing column (all missing ones named, with the columns the file has), a
         value that is not a number, and every check of :func:`make_record`.
+
+    Examples
+    --------
+    A record written as CSV, here from a simulated swing of the identified robot:
+
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.identify import ColumnMap, read_record
+    >>> traj = pl.simulate(pl.rigid(plant="c1"), [0.5, 0.5, 0.0, 0.0], 1.0, dt=0.002, method="cvodes")
+    >>> q1, q2 = traj["theta1"], traj["theta2"] - traj["theta1"]  # joint angles: q2 relative to link 1
+    >>> table = np.column_stack([traj.t, q1, q2, traj["tau1"], traj["tau2"]])
+    >>> np.savetxt("swing.csv", table, delimiter=",", header="t,q1,q2,tau1,tau2", comments="")
+    >>> record = read_record("swing.csv", ColumnMap(time="t", angles=("q1", "q2"), torques=("tau1", "tau2")))
+    >>> record.name, record.q.shape, round(record.duration, 3)
+    ('swing', (501, 2), 1.0)
+    >>> bool(np.allclose(record.q, np.column_stack([q1, q2])))
+    True
     """
     p = Path(path)
     if not p.is_file():

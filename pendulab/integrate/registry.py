@@ -90,6 +90,17 @@ class SimulationError(RuntimeError):
     ----------
     method, t_reached, t_final, n_steps
         As given.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> try:
+    ...     pl.simulate(pl.rigid(), [2.0, 2.0, 0.0, 0.0], 10.0, method="RK45", options={"max_steps": 50})
+    ... except pl.SimulationError as err:
+    ...     print(err.method, err.n_steps, round(err.t_reached, 2), err.t_final)
+    ...     print(err)
+    RK45 50 0.89 10.0
+    method 'RK45' failed at t = 0.885997 s of 10 s: step budget exhausted: 50 steps taken, options max_steps = 50 (hint: ...)
     """
 
     def __init__(
@@ -177,6 +188,23 @@ class RunRequest:
         Method-specific options given by the user (without the budget options).
     budget : Budget
         Step and wall-time budget of the run.
+
+    Examples
+    --------
+    What a runner receives, built by hand here to call the registered ``rk4`` runner directly
+    (:func:`pendulab.simulate` builds it from its arguments):
+
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.integrate import RunRequest, time_grid
+    >>> model, spec, t = pl.rigid(), pl.METHODS["rk4"], time_grid(1.0, 0.1)
+    >>> request = RunRequest(model, spec, model.state(theta1=0.5), t, np.zeros((10, 2)), None, 1e-8, 1e-8, 1e-3)
+    >>> request.t_final, request.n_intervals, request.constant_input
+    (1.0, 10, True)
+    >>> result = spec.runner(request)
+    >>> direct = pl.simulate(model, model.state(theta1=0.5), 1.0, dt=0.1, method="rk4")
+    >>> bool(np.allclose(result.x, direct.x, rtol=0, atol=1e-12))
+    True
     """
 
     model: Model
@@ -322,6 +350,20 @@ class RunResult:
         Torques held on each interval [N.m].
     stats : dict
         Solver statistics (``n_steps``, ``n_rhs``, ... where the solver reports them).
+
+    Examples
+    --------
+    What a runner returns: the states on the output grid, the held torques, statistics.
+
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.integrate import RunRequest, time_grid
+    >>> model, spec, t = pl.rigid(), pl.METHODS["rk4"], time_grid(1.0, 0.1)
+    >>> result = spec.runner(RunRequest(model, spec, model.state(theta1=0.5), t, np.zeros((10, 2)), None, 1e-8, 1e-8, 1e-3))
+    >>> result.x.shape, result.u.shape  # (N, nx) states, (N - 1, nu) torques
+    ((11, 4), (10, 2))
+    >>> result.stats["n_steps"]  # 1 ms RK4 steps over 1 s
+    1000
     """
 
     x: np.ndarray
@@ -374,6 +416,19 @@ class MethodSpec:
         True when ``rtol``/``atol`` do not apply (the step is ``max_step``).
     settings : mapping
         Family-specific settings (e.g. the CasADi plugin and its options).
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> spec = pl.METHODS["rk4"]
+    >>> spec.name, spec.family, spec.fixed_step
+    ('rk4', 'fixed', True)
+    >>> sorted({s.family for s in pl.METHODS.values()})
+    ['casadi', 'compiled', 'fixed', 'scipy', 'taylor']
+    >>> [name for name, s in pl.METHODS.items() if s.family == "compiled"]
+    ['compiled-dopri5', 'compiled-rodas4']
+    >>> pl.simulate(pl.rigid(), [0.5, 0.0, 0.0, 0.0], 1.0, method=spec.name).method
+    'rk4'
     """
 
     name: str

@@ -171,6 +171,18 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
     BudgetError
         ``N`` beyond :data:`MAX_OUTPUT_POINTS` (environment variable ``PENDULAB_MAX_OUTPUT_POINTS``
         overrides it), checked before anything is allocated.
+
+    Examples
+    --------
+    >>> from pendulab.integrate import time_grid
+    >>> time_grid(1.0, 0.3)  # the step shrinks to 0.25 s so the grid ends exactly at t_final
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    >>> time_grid(10.0, 0.01).shape
+    (1001,)
+    >>> time_grid(1e12, 0.01)  # 1e14 points: refused before anything is allocated
+    Traceback (most recent call last):
+        ...
+    pendulab._checks.BudgetError: ...
     """
     points = t_final / dt + 1.0
     within_budget("output points (t_final / dt + 1)", points, "PENDULAB_MAX_OUTPUT_POINTS", MAX_OUTPUT_POINTS)
@@ -201,6 +213,26 @@ def input_schedule(model: Model, u: InputSpec, t: np.ndarray) -> np.ndarray | No
     ------
     ValueError
         Wrong shape, non-finite values or a scalar.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.integrate import input_schedule, time_grid
+    >>> model, t = pl.rigid(), time_grid(1.0, 0.25)  # 5 output times, 4 intervals
+    >>> input_schedule(model, [0.5, 0.0], t)  # a constant torque, held on every interval [N.m]
+    array([[0.5, 0. ],
+           [0.5, 0. ],
+           [0.5, 0. ],
+           [0.5, 0. ]])
+    >>> ramp = np.column_stack([np.arange(5.0), np.zeros(5)])  # sampled at the 5 output times
+    >>> input_schedule(model, ramp, t)  # each held from its output time: the last row is not used
+    array([[0., 0.],
+           [1., 0.],
+           [2., 0.],
+           [3., 0.]])
+    >>> input_schedule(model, lambda t, x: [-x[2], 0.0], t) is None  # feedback: evaluated during the run
+    True
     """
     if isinstance(u, TimeInput):
         return u.sample(model, 0.5 * (t[1:] + t[:-1]))
@@ -313,6 +345,26 @@ def simulate(
         reached and a hint.
     KeyboardInterrupt
         Ctrl-C during the run (never reported as a solver failure).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid()
+    >>> x0 = model.state(theta1=2.0, theta2=2.0)  # released from rest above horizontal: chaotic motion
+    >>> traj = pl.simulate(model, x0, 10.0, rtol=1e-12, atol=1e-12)
+    >>> traj.method, traj.x.shape  # method="auto" picks Taylor series for this non-stiff motion
+    ('taylor', (1001, 4))
+    >>> bool(abs(model.energy(traj.x[-1]) - model.energy(x0)) < 1e-9)  # no damping: energy conserved [J]
+    True
+
+    A constant torque on a damped pendulum: it settles where :func:`pendulab.equilibrium` says.
+
+    >>> damped = pl.rigid(b1=5.0, b2=5.0)
+    >>> traj = pl.simulate(damped, damped.rest_state(), 30.0, method="cvodes", u=[1.0, 0.0])
+    >>> held = pl.equilibrium(damped, "down-down", u=[1.0, 0.0])
+    >>> print(f"theta1 {traj['theta1'][-1]:.4f} rad, equilibrium {held.x[0]:.4f} rad")
+    theta1 0.0510 rad, equilibrium 0.0510 rad
     """
     check_model(model)
     auto = isinstance(method, str) and method.lower() == "auto"

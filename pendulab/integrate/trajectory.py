@@ -39,6 +39,20 @@ class Trajectory:
     stats : dict
         Solver statistics: ``wall_time`` [s], ``n_rhs`` (right-hand-side
         evaluations, where the solver reports them), ``n_steps``, ...
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> traj = pl.simulate(pl.rigid(), [1.0, 0.0, 0.0, 0.0], 2.0, dt=0.01)
+    >>> traj.t.shape, traj.x.shape, traj.u.shape, traj.y.shape  # 201 output times
+    ((201,), (201, 4), (201, 2), (201, 5))
+    >>> traj.output_names
+    ('x1', 'y1', 'x2', 'y2', 'energy')
+    >>> bool(np.ptp(traj["energy"]) < 1e-6)  # any state, input or output by name; energy conserved [J]
+    True
+    >>> traj.to_csv("swing.csv").name
+    'swing.csv'
     """
 
     t: np.ndarray

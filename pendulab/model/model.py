@@ -46,6 +46,23 @@ class Model:
         ``kinetic``/``potential``/``spring_energy``/``energy(x, p)`` [J],
         ``positions(x, p)`` [m], ``stretch(x, p)`` [m],
         ``dissipation(x, p)`` [W], ``power_in(x, u, p)`` [W].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.rigid(m2=0.5)
+    >>> model.kind, model.state_names, model.input_names
+    ('rigid', ('theta1', 'theta2', 'omega1', 'omega2'), ('tau1', 'tau2'))
+    >>> x = model.state(theta1=np.pi / 3)  # link 1 raised by 60 degrees, link 2 hanging, at rest
+    >>> np.round(model.positions(x), 3)  # x1, y1, x2, y2 [m]
+    array([ 0.866, -0.5  ,  0.866, -1.5  ])
+    >>> lift = model.potential_energy(x) - model.potential_energy(model.rest_state())
+    >>> print(f"{lift:.4f} J, analytic {(1.0 + 0.5) * 9.81 * (1 - np.cos(np.pi / 3)):.4f} J")  # (m1 + m2) g L1 (1 - cos 60)
+    7.3575 J, analytic 7.3575 J
+    >>> heavier = model.with_params(m2=2.0)  # a copy sharing the CasADi functions
+    >>> heavier.params.m2, heavier.functions is model.functions
+    (2.0, True)
     """
 
     kind: str
@@ -533,6 +550,19 @@ def make_model(kind: str, **params: float) -> Model:
         An unknown ``kind`` or parameter name, or an invalid parameter value.
     TypeError
         A parameter value that is not a real number.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> model = pl.make_model("elastic", k1=2000.0, k2=2000.0)  # as pl.elastic(k1=2000.0, k2=2000.0)
+    >>> model.kind, model.nx, model.params.k1, model.params.m1
+    ('elastic', 8, 2000.0, 1.0)
+    >>> model.functions["rhs"] is pl.make_model("elastic").functions["rhs"]  # built once per process
+    True
+    >>> pl.make_model("rigid", k1=1.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: unknown parameter name(s) ['k1'] for the rigid model; expected one of ['m1', 'm2', ...]
     """
     classes = {"rigid": RigidParams, "elastic": ElasticParams}
     if kind not in classes:
@@ -573,9 +603,17 @@ def rigid(plant: str | os.PathLike[str] | None = None, **params: float) -> Model
 
     Examples
     --------
+    >>> import numpy as np
     >>> import pendulab as pl
-    >>> pl.rigid(m1=0.6, L1=0.3).params.L1
-    0.3
+    >>> model = pl.rigid(m1=0.6, L1=0.3)
+    >>> model.params.L1, model.params.m2  # the others keep their defaults
+    (0.3, 1.0)
+    >>> lift = model.energy(model.state(theta1=np.pi, theta2=np.pi)) - model.energy(model.rest_state())
+    >>> round(lift, 4), round(2 * 9.81 * (0.6 * 0.3 + 1.0 * 1.3), 4)  # raising both links upright [J]
+    (29.0376, 29.0376)
+    >>> robot = pl.rigid(plant="c1")  # RealAIGym's C.1 robot as pendulab identified it (shipped plant)
+    >>> robot.params.L1, robot.params.L2, robot.params.gr, robot.params.Ir > 0
+    (0.2, 0.3, 6.0, True)
     """
     if plant is not None:
         params = {**load_plant(plant).rigid_kwargs(), **params}
@@ -601,5 +639,16 @@ def elastic(**params: float) -> Model:
     ------
     ValueError
         An unknown parameter name or an invalid value (via :func:`make_model`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> model = pl.elastic(k1=500.0, k2=500.0)
+    >>> model.state_names
+    ('theta1', 'theta2', 'r1', 'r2', 'omega1', 'omega2', 'v1', 'v2')
+    >>> x0 = model.rest_state()  # hanging at rest: each spring carries the weight below it
+    >>> print(np.round(x0[2:4], 5), round(1 + 2 * 9.81 / 500, 5), round(1 + 9.81 / 500, 5))
+    [1.03924 1.01962] 1.03924 1.01962
     """
     return make_model("elastic", **params)

@@ -216,6 +216,21 @@ class RigidParams(_ParamsBase):
         On construction, a value that is not a real number.
     ValueError
         On construction, a non-finite value or one out of its range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> rods = dict(lc1=0.5, lc2=0.5, I1=1 / 12, I2=1 / 12)  # two uniform 1 kg, 1 m rods
+    >>> pl.RigidParams(**rods).lc1, pl.RigidParams().resolved()["lc1"]  # default: point masses, lc1 = L1
+    (0.5, 1.0)
+    >>> w = [mode.omega_n for mode in pl.modes(pl.rigid(**rods))]
+    >>> np.round(w, 4), np.round(np.sqrt(9.81 * (3 + np.array([-1, 1]) * 6 / np.sqrt(7))), 4)  # (g / L)(3 -+ 6 / sqrt 7)
+    (array([2.6801, 7.1887]), array([2.6801, 7.1887]))
+    >>> pl.RigidParams(m1=-1.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: parameter 'm1' must be > 0 [kg] (mass of link 1), got -1.0
     """
 
     m1: float = _p(1.0, "kg", "mass of link 1", positive=True)
@@ -288,6 +303,19 @@ class ElasticParams(_ParamsBase):
         On construction, a value that is not a real number.
     ValueError
         On construction, a non-finite value or one out of its range.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> params = pl.ElasticParams(k1=1e4, k2=1e4, c1=0.5)
+    >>> params.k1, params.L1, params.c2
+    (10000.0, 1.0, 0.0)
+    >>> pl.elastic(k1=1e4, k2=1e4, c1=0.5).params == params  # what the factory builds
+    True
+    >>> pl.ElasticParams(k1=0.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: parameter 'k1' must be > 0 [N/m] (stiffness of spring 1), got 0.0
     """
 
     m1: float = _p(1.0, "kg", "mass of bob 1", positive=True)

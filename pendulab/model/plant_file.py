@@ -48,6 +48,19 @@ class IdentifiedPlant:
         The fitted standard parameters.
     meta : dict
         Provenance: robot, records, preprocessing, validation numbers.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.identify import load_plant
+    >>> plant = load_plant("c1")  # the shipped identification of RealAIGym's C.1 robot
+    >>> plant.structure[-3:], plant.torque_offset
+    (('cf1', 'cf2', 'Ir'), (0.0, 0.0))
+    >>> print(f"rotor inertia {plant.params['Ir']:.2e} +- {plant.stderr['Ir']:.1e} kg.m2")
+    rotor inertia 4.74e-05 +- 2.2e-05 kg.m2
+    >>> model = pl.rigid(**plant.rigid_kwargs())  # the links and viscous damping as RigidParams
+    >>> model.params == pl.rigid(plant="c1").params
+    True
     """
 
     params: dict[str, float]
@@ -88,6 +101,17 @@ def save_plant(plant: IdentifiedPlant, path: str | os.PathLike[str]) -> Path:
     -------
     Path
         The file written.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.identify import load_plant, save_plant
+    >>> plant = load_plant("c1")
+    >>> path = save_plant(plant, "robot/plant.json")  # what ``pendulab identify --out robot`` writes
+    >>> path.as_posix(), load_plant(path).params == plant.params
+    ('robot/plant.json', True)
+    >>> pl.rigid(plant=path).params == pl.rigid(plant="c1").params  # a plant file feeds every study
+    True
     """
     doc = {
         "format": FORMAT,
@@ -125,6 +149,17 @@ def load_plant(path: str | os.PathLike[str]) -> IdentifiedPlant:
         Not JSON, another format, or a parameter that is not finite or not physical.
     KeyError
         A parameter missing or unknown.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.identify import load_plant
+    >>> plant = load_plant("c1")  # a shipped plant by name, or the path of a plant file
+    >>> plant.params["l1"], plant.params["l2"], plant.meta["robot"]
+    (0.2, 0.3, 'C.1')
+    >>> robot = pl.rigid(plant="c1")  # the same file read by the model factory
+    >>> print(f"m2 = {robot.params.m2:.3f} kg, cf2 = {robot.params.cf2:.3f} N.m")
+    m2 = 0.534 kg, cf2 = 0.117 N.m
     """
     p = Path(path)
     if not p.exists() and str(path) in SHIPPED_PLANTS:

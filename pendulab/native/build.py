@@ -8,11 +8,12 @@ process. The cache directory is ``$PENDULAB_CACHE_DIR`` if set, else
 ``native/`` folder under a name that carries the digest, so a change of any
 source or flag builds a new file and stale files are never loaded.
 
-A cached file cannot poison later runs (:func:`cached_artifact`, also used for the
-Gymnasium backend's cached FMU): each file is built to a temporary name, its SHA-256
-is written beside it (``<file>.sha256``) and both are renamed into place; every
-later use checks the digest *before* the file is loaded (loading a damaged shared
-library can crash the process), and a missing or wrong digest rebuilds the file
+A cached file cannot poison later runs (:func:`cached_artifact`, the one mechanism of every
+cache: also the Gymnasium backend's cached FMU and the plan library): each file is built to a
+temporary name, its seal (SHA-256 and the key of the entry: here the full digest of the sources
+and flags) is written beside it (``<file>.sha256``) and both are renamed into place; every
+later use checks the seal *before* the file is loaded (loading a damaged shared
+library can crash the process), and a missing, wrong or another entry's seal rebuilds the file
 once, with a :class:`CacheRebuildWarning` naming the path. Builds of one file are
 serialized by a lock file (``<file>.lock``, POSIX ``flock``), so concurrent
 processes neither build twice nor see a half-written file. An interrupted build
@@ -32,7 +33,18 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from .cache import CacheRebuildWarning, cache_dir, cached_artifact, digest_path, file_digest, verify_cached
+from .cache import (
+    CacheRebuildWarning,
+    cache_dir,
+    cached_artifact,
+    digest_path,
+    file_digest,
+    publish,
+    read_sealed,
+    seal,
+    sealed_key,
+    verify_cached,
+)
 from .compiler import (
     CFLAGS,
     COMPILER_HINT,
@@ -61,10 +73,14 @@ __all__ = [
     "digest_path",
     "verify_cached",
     "cached_artifact",
+    "publish",
+    "read_sealed",
+    "seal",
+    "sealed_key",
 ]
 
 #: Part of the cache key: bump when the way a library is built changes in a way the flags do not show.
-_BUILD_VERSION = "2"  # 2: every cached file has its SHA-256 beside it
+_BUILD_VERSION = "3"  # 2: every cached file has its SHA-256 beside it; 3: its seal names the entry's key too
 
 
 def source_digest(sources: Mapping[str, bytes], units: Sequence[str], extra_flags: Sequence[str] = ()) -> str:
@@ -142,8 +158,10 @@ def build_cached(
         The cache folder cannot be written, or the compiler failed; the message names the cache path.
     """
     folder = cache_dir() if directory is None else Path(directory)
-    path = folder / f"{name}-{source_digest(sources, units)[:20]}{shared_library_suffix()}"
-    reason = rebuild if rebuild is not None else verify_cached(path)
+    digest = source_digest(sources, units)
+    path = folder / f"{name}-{digest[:20]}{shared_library_suffix()}"
+    key = f"{name}-{digest}"  # sealed with the file: another entry's library moved here (seal and all) is refused
+    reason = rebuild if rebuild is not None else verify_cached(path, key)
     if reason is None:
         return path
     who = f"{purpose} needs" if purpose else "pendulab needs"
@@ -163,4 +181,4 @@ def build_cached(
                 (src / fname).write_bytes(data)
             compile_shared(src, units, out, cc=cc_path)
 
-    return cached_artifact(path, compile_into, what=f"{who} its native library; it", rebuild=rebuild)
+    return cached_artifact(path, compile_into, what=f"{who} its native library; it", rebuild=rebuild, key=key)

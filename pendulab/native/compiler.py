@@ -35,7 +35,18 @@ COMPILER_HINT = "install gcc or clang (e.g. apt-get install gcc), or set $CC to 
 
 
 class CompilerNotFoundError(RuntimeError):
-    """No C compiler was found."""
+    """No C compiler was found.
+
+    Examples
+    --------
+    >>> import pendulab as pl
+    >>> from pendulab.fmu import CompilerNotFoundError, export
+    >>> try:
+    ...     export(pl.rigid(), "rigid.fmu", cc="no-such-cc")  # a compiler that is not installed
+    ... except CompilerNotFoundError as err:  # a RuntimeError
+    ...     print(err)
+    no C compiler found (tried ['no-such-cc']); install gcc or clang, or pass cc=/path/to/compiler
+    """
 
 
 def _candidates(cc: str | None) -> list[str]:

@@ -153,6 +153,17 @@ def choose_model(
         the rule's domain (:func:`check_rule_domain`).
     SimulationError
         With ``verify``: the reference or the chosen level failed to integrate.
+
+    Examples
+    --------
+    >>> from pendulab.scene import choose_model, load_scene
+    >>> scene = load_scene("stiff_moderate_amplitude")  # k = 1e6 N/m, 1 rad release, 5 s, tolerance 1e-3
+    >>> choice = choose_model(scene)  # decided a priori: nothing is integrated
+    >>> choice.chosen, choice.trusted_until
+    ('rigid', 5.0)
+    >>> proof = choose_model(scene, verify=True).verification  # runs the rigid level and the elastic reference
+    >>> proof.level, proof.within, bool(proof.measured_error < 1e-3)
+    ('rigid', True, True)
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a pendulab Scene (pendulab.scene.load_scene), got {type(scene).__name__}")

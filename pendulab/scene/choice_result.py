@@ -145,6 +145,23 @@ class ModelChoice:
         With ``verify=True``.
     _linear : LinearSolution or None
         The linear solution the rule computed (reused by :meth:`simulate` when ``linearized`` is chosen).
+
+    Examples
+    --------
+    >>> from pendulab.scene import choose_model, load_scene
+    >>> scene = load_scene("stiff_moderate_amplitude")
+    >>> choice = choose_model(scene)
+    >>> for level in choice.levels:  # cheapest first, the reference (the scene's own model) last
+    ...     print(level.name, level.within)
+    linearized False
+    rigid True
+    rigid+quasi-static True
+    elastic True
+    >>> choice.chosen, choice.reference_horizon, choice.tolerance
+    ('rigid', 5.0, 0.001)
+    >>> traj = choice.simulate(scene)  # the scene run with the chosen level, in the elastic model's signals
+    >>> traj.method, traj.x.shape
+    ('rigid (cvodes)', (501, 8))
     """
 
     scene: str

@@ -98,6 +98,23 @@ class Scene:
         present in the file, unvalidated, for the feature that uses them.
     path : Path or None
         The file the scene came from.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.scene import load_scene
+    >>> scene = load_scene("seed_paper")
+    >>> scene.name, scene.kind, scene.start
+    ('seed_paper', 'elastic', 'static')
+    >>> scene.x0  # stated: both angles 1.2 rad, springs at their rest length 1 m
+    array([1.2, 1.2, 1. , 1. , 0. , 0. , 0. , 0. ])
+    >>> stiffer = scene.with_settings(k1=2000.0, k2=2000.0)  # parameters and initial values by name
+    >>> traj = stiffer.simulate(t_final=2.0)  # pendulab.simulate with the scene's settings
+    >>> float(traj.t[-1]), traj.method
+    (2.0, 'cvodes')
+    >>> e = stiffer.model.energy(traj.x)
+    >>> bool(np.ptp(e) < 1e-6)  # undamped: energy conserved to the scene's tolerances [J]
+    True
     """
 
     name: str
@@ -284,6 +301,18 @@ def initial_state(model: Model, initial: Mapping[str, float], start: str = "stat
     ------
     ValueError
         Unknown state name or start rule.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pendulab as pl
+    >>> from pendulab.scene import initial_state
+    >>> model = pl.elastic()  # k1 = k2 = 500 N/m
+    >>> for start in ("static", "rest-length", "quasi-static"):  # how the unstated spring lengths are set
+    ...     print(start, np.round(initial_state(model, {"theta1": 1.0}, start)[2:4], 4))
+    static [1.0392 1.0196]
+    rest-length [1. 1.]
+    quasi-static [1.0124 1.0034]
     """
     if start not in STARTS:
         raise ValueError(f"start must be one of {list(STARTS)}, got {start!r}")
@@ -326,6 +355,19 @@ def default_scene(kind: str) -> Scene:
     ------
     ValueError
         Unknown ``kind`` (from :func:`~pendulab.model.model.make_model`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pendulab.scene import default_scene
+    >>> scene = default_scene("elastic")
+    >>> scene.name, scene.t_final, scene.dt, scene.method
+    ('elastic_default', 10.0, 0.01, 'auto')
+    >>> np.round(scene.x0[:4], 5)  # hanging at rest, springs at their static lengths [rad, m]
+    array([0.     , 0.     , 1.03924, 1.01962])
+    >>> traj = scene.with_settings(theta1=0.5, k1=2000.0).simulate(t_final=2.0)
+    >>> traj.x.shape
+    (201, 8)
     """
     model = make_model(kind)
     d = _SIMULATION_DEFAULTS
@@ -361,6 +403,18 @@ def list_scenes(group: str | None = None) -> tuple[str, ...]:
     ------
     ValueError
         Unknown group.
+
+    Examples
+    --------
+    >>> from pendulab.scene import list_scenes, load_scene
+    >>> names = list_scenes()
+    >>> len(names), names[:4]
+    (15, ('elastic_soft', 'elastic_stiff', 'rigid_chaotic', 'rigid_regular'))
+    >>> list_scenes("validation")  # a group: the FMU validation scenes
+    ('validation/elastic_soft_forced', 'validation/elastic_stiff_forced',
+     'validation/rigid_chaotic_forced', 'validation/rigid_forced')
+    >>> load_scene(names[2]).kind
+    'rigid'
     """
     if group is None:
         return tuple(sorted(p.stem for p in SCENE_DIR.glob("*.toml")))
@@ -387,6 +441,18 @@ def scene_path(path_or_name: str | Path) -> Path:
     ------
     FileNotFoundError
         Neither an existing file nor a shipped scene name.
+
+    Examples
+    --------
+    >>> from pendulab.scene import scene_path
+    >>> scene_path("seed_paper").name
+    'seed_paper.toml'
+    >>> scene_path("bench/rigid_chaotic_10s.toml").parent.name
+    'bench'
+    >>> scene_path("no_such_scene")
+    Traceback (most recent call last):
+        ...
+    FileNotFoundError: scene 'no_such_scene': no such file and no shipped scene of that name; shipped: [...]
     """
     candidate = Path(path_or_name)
     if candidate.is_file():

@@ -114,6 +114,41 @@ def load_scene(path_or_name: str | Path) -> Scene:
     (``task``, ``validation``), which are kept unvalidated in
     ``Scene.extra`` for their feature. A new feature that stores settings in
     scene files adds its section name to ``FEATURE_SECTIONS``.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from pendulab.scene import load_scene
+    >>> scene = load_scene("seed_paper")  # a shipped scene by name
+    >>> scene.kind, scene.t_final, scene.method, scene.outputs
+    ('elastic', 10.0, 'cvodes', ('theta1', 'theta2', 'x2', 'y2'))
+
+    A scene file of your own (unstated settings take their defaults):
+
+    >>> _ = Path("light.toml").write_text('''
+    ... [model]
+    ... kind = "rigid"
+    ... [model.params]
+    ... m2 = 0.5
+    ... [initial]
+    ... theta1 = 0.3
+    ... ''')
+    >>> mine = load_scene("light.toml")
+    >>> mine.name, mine.model.params.m2, mine.x0, mine.t_final
+    ('light', 0.5, array([0.3, 0. , 0. , 0. ]), 10.0)
+
+    A misspelt section is refused, not ignored:
+
+    >>> _ = Path("typo.toml").write_text('''
+    ... [model]
+    ... kind = "rigid"
+    ... [simulaton]
+    ... t_final = 5.0
+    ... ''')
+    >>> load_scene("typo.toml")
+    Traceback (most recent call last):
+        ...
+    ValueError: scene file 'typo.toml': unknown section [simulaton] = {'t_final': 5.0}: expected one of the sections [...]
     """
     path = scene_path(path_or_name)
     try:

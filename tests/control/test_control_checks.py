@@ -197,7 +197,7 @@ def test_score_default_output_and_resume(tmp_path, monkeypatch, capsys):
     assert main(argv) == 0
     out = tmp_path / "pendulab-out" / "score" / "lqr-pendubot"  # default, short task name
     records = json.loads((out / "records.json").read_text())
-    assert records["complete"] is True and len(records["records"]) == 5
+    assert records["meta"]["complete"] is True and len(records["records"]) == 5
     capsys.readouterr()
     assert main([*argv, "--resume", "--json"]) == 0
     card = json.loads(capsys.readouterr().out)

@@ -108,7 +108,7 @@ def test_score_stops_and_keeps_finished_runs(tmp_path, delay):
     # Finished batches were recorded (atomically: the file always parses) for --resume.
     if (out / "records.json").exists():
         data = json.loads((out / "records.json").read_text())
-        assert data["complete"] is False and data["runs"] == 200 and data["task"] == "pendubot"
+        assert data["meta"]["complete"] is False and data["settings"]["runs"] == 200 and data["settings"]["task"] == "pendubot"
     assert not list(out.glob("*.tmp*")) and not list(out.glob(".*"))  # no temporary file left
 
 

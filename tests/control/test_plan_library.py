@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+import shutil
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from pendulab.control.plan_library import (
 )
 from pendulab.control.realai.spec import HEIGHT_FRACTION
 from pendulab.model.pycode import to_python
+from pendulab.native.cache import CacheRebuildWarning, digest_path, sealed_key
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +82,8 @@ def test_cache_rebuilds_a_damaged_entry(tiny) -> None:
     assert len(files) == 4
     damaged = max(files, key=lambda q: q.stat().st_mtime)  # the last band-entry entry written
     damaged.write_bytes(b"not a zip archive")
-    again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d)
+    with pytest.warns(CacheRebuildWarning, match=f"{damaged}.*does not match its SHA-256"):
+        again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d)
     assert len(again.library) == 2 and again.library.n_refined == lib.n_refined
     for a, b in zip(lib.x_ref, again.library.x_ref, strict=True):
         np.testing.assert_allclose(a, b, atol=1e-6)  # the re-solved plan is the same plan (deterministic IPOPT, capped)
@@ -87,11 +91,48 @@ def test_cache_rebuilds_a_damaged_entry(tiny) -> None:
         assert bool(z["ok"])
 
 
+def _resave(path, change) -> None:
+    """Edit an entry the way a person would: load it, change an array, save a valid ``.npz`` over it."""
+    with np.load(path) as z:
+        entry = {k: np.array(z[k]) for k in z.files}
+    change(entry)
+    np.savez(path, **entry)
+
+
+def test_edited_or_swapped_entries_are_never_used(tiny, tmp_path) -> None:
+    ctrl, d = tiny
+    root = tmp_path / "library"
+    shutil.copytree(d, root)
+    entries = sorted((root / "pendubot").glob("plan-*.npz"))
+    band = [p for p in entries if '"band"' in sealed_key(p)]
+    base = [p for p in entries if p not in band]
+    assert len(band) == 2 and len(base) == 2
+    _resave(band[0], lambda e: e["x_ref"].__setitem__((slice(None), 0), e["x_ref"][:, 0] + 0.5))  # reference + 0.5 rad
+    _resave(band[1], lambda e: e.__setitem__("K", -e["K"]))  # TVLQR gains sign-flipped
+    for x, y in ((base[0], base[1]), (digest_path(base[0]), digest_path(base[1]))):  # two plans swapped, seals and all
+        os.replace(x, root / "tmp")
+        os.replace(y, x)
+        os.replace(root / "tmp", y)
+    # Cached plans only: all four entries are refused (and deleted), none is used, so there is no library.
+    with pytest.warns(CacheRebuildWarning) as record, pytest.raises(ValueError, match="at least one solved plan"):
+        library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=root, build=False)
+    messages = [str(w.message) for w in record if issubclass(w.category, CacheRebuildWarning)]
+    assert sorted(next(w for w in m.split() if w.endswith(".npz")) for m in messages) == sorted(map(str, entries))
+    assert sum("does not match its SHA-256" in m for m in messages) == 2
+    assert sum("built for another entry" in m for m in messages) == 2
+    # Built: solved again, the very plans of the intact library.
+    again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=root)
+    for name in ("x_ref", "u_ref", "K"):
+        for a, b in zip(getattr(ctrl.library, name), getattr(again.library, name), strict=True):
+            np.testing.assert_allclose(a, b, atol=1e-6)
+
+
 def test_cache_load_discards_wrong_shapes(tmp_path) -> None:
     cache = PlanCache(tmp_path, {"task": "pendubot"})
     s = np.zeros(4)
     cache.save(s, {"ok": np.array(True), "x_ref": np.zeros((5, 4)), "u_ref": np.zeros(3), "K": np.zeros((4, 4))})
-    assert cache.load(s) is None and cache.rebuilt == 1
+    with pytest.warns(CacheRebuildWarning, match="inconsistent shapes"):
+        assert cache.load(s) is None and cache.rebuilt == 1
     assert not cache.path(s).exists()
     cache.save(s, {"ok": np.array(False)})
     assert not bool(cache.load(s)["ok"])

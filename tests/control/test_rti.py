@@ -16,7 +16,7 @@ from pendulab.control.nmpc.rti_step import rk4_interval, rti_step_function
 from pendulab.control.realai.spec import leaderboard_task
 from pendulab.model.model import elastic
 from pendulab.native import CacheRebuildWarning, compiler_unavailable_reason
-from pendulab.native.cache import digest_path, file_digest
+from pendulab.native.cache import seal, sealed_key, verify_cached
 
 pytestmark = pytest.mark.skipif(compiler_unavailable_reason() is not None, reason="needs a C compiler")
 
@@ -217,8 +217,23 @@ def test_cache_rebuilds_an_entry_that_fails_to_load(small, tmp_path):
     path = build_step_library(small.graph, meta, directory=tmp_path)
     tmp = path.with_name("garbage.tmp")
     tmp.write_bytes(b"not a shared library")
+    key = sealed_key(path)
     os.replace(tmp, path)
-    digest_path(path).write_text(file_digest(path) + "\n", encoding="ascii")  # intact by its digest, yet unloadable
+    seal(path, key)  # intact by its seal, yet unloadable
     with pytest.warns(CacheRebuildWarning, match="failed to load"):
         fn = compiled_step(small.graph, meta, directory=tmp_path)
     assert fn.name() == small.graph.name()
+
+
+def test_cache_refuses_the_step_of_another_entry(small, tmp_path):
+    # Two steps of other build parameters (same C symbol): swapped, seals and all, each is intact but the other's.
+    a, b = (build_step_library(small.graph, {"test": t}, directory=tmp_path) for t in ("a", "b"))
+    key_a = sealed_key(a)
+    assert key_a.startswith(f"{small.graph.name()}-") and key_a != sealed_key(b)
+    for x, y in ((a, b), (a.with_name(a.name + ".sha256"), b.with_name(b.name + ".sha256"))):
+        os.replace(x, tmp_path / "swap")
+        os.replace(y, x)
+        os.replace(tmp_path / "swap", y)
+    with pytest.warns(CacheRebuildWarning, match="built for another entry"):
+        fn = compiled_step(small.graph, {"test": "a"}, directory=tmp_path)
+    assert fn.name() == small.graph.name() and sealed_key(a) == key_a and verify_cached(a, key_a) is None

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 import pytest
@@ -140,11 +139,12 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
     fresh = run_protocols(["lqr"], tasks=["pendubot"], quick=True, root=root, max_wall_time=1e-9)
     assert all(c.status == "not run" and "budget" in c.reason for c in fresh.cases)
 
-    # A journal of other settings is refused on resume, not silently reused.
+    # A journal of other settings is refused on resume, not silently reused (one edited by hand is stale instead:
+    # tests/reliability/test_journals.py).
+    from pendulab._journal import Journal
+
     rec = root / "quick" / "v2" / "pendubot-lqr.json"
-    data = json.loads(rec.read_text())
-    data["settings"]["controller"] = "best"
-    rec.write_text(json.dumps(data))
+    Journal(rec, "leaderboard-case", {"protocol": "v2", "task": "pendubot", "controller": "best"}).record("summary", {})
     with pytest.raises(ValueError, match="other settings"):
         run_protocols(["lqr"], tasks=["pendubot"], protocols=["v2"], quick=True, resume=True, root=root)
 

@@ -193,6 +193,36 @@ def test_bad_values_are_refused(built, tmp_path, version):
     fresh.freeInstance()
 
 
+@pytest.mark.parametrize("version", [2, 3])
+def test_do_step_of_size_zero_negative_or_not_finite_is_an_error(built, tmp_path, version, capsys):
+    """As the plant FMUs and the Reference FMUs: DoStep(h <= 0 or non-finite) returns Error with a log line, changes nothing."""
+    inst = Instance(built[("lqr", version)], tmp_path)
+    h = float(inst.get(["sample_time"])[0])
+    inst.fmu.doStep(0.0, h)
+    for bad in (0.0, -0.0, -h, float("nan"), float("inf"), -float("inf")):
+        capsys.readouterr()
+        with pytest.raises(FMICallException):
+            inst.fmu.doStep(h, bad)
+        log = capsys.readouterr().out
+        assert "communication step size must be positive and finite" in log, (bad, log)
+    inst.fmu.doStep(h, h)  # the instance is still usable at its time
+    if inst.v3:
+        assert inst.get(["time"])[0] == 2 * h
+    inst.close()
+    # a defined tolerance must be in (0, 1), as for the plant (the controller has no solver and ignores a valid one)
+    md = read_model_description(str(built[("lqr", version)]))
+    fresh = (FMU3Slave if version == 3 else FMU2Slave)(
+        guid=md.guid, unzipDirectory=extract(str(built[("lqr", version)]), str(tmp_path / "t")),
+        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t",
+    )  # fmt: skip
+    fresh.instantiate()
+    capsys.readouterr()
+    with pytest.raises(FMICallException):
+        fresh.enterInitializationMode(tolerance=0.0) if version == 3 else fresh.setupExperiment(tolerance=0.0)
+    assert "tolerance must be in (0, 1)" in capsys.readouterr().out
+    fresh.freeInstance()
+
+
 def test_fmpy_validate_and_the_interface(built, designs):
     for (key, _version), path in built.items():
         assert validate_fmu(str(path)) == [], (key, _version)

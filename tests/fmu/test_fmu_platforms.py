@@ -16,7 +16,14 @@ import pendulab as pl
 from pendulab._checks import MissingExtraError
 from pendulab.fmu import export
 from pendulab.fmu.export import find_compiler
-from pendulab.fmu.platforms import PLATFORMS, cross_compiler, exported_symbols, fmi_functions, resolve_platforms
+from pendulab.fmu.platforms import (
+    PLATFORMS,
+    cross_compiler,
+    exported_symbols,
+    fmi_functions,
+    resolve_platforms,
+    runtime_requirement,
+)
 
 HARNESS = Path(__file__).parent / "c"
 TARGETS = ("x86_64-linux", "x86_64-windows", "aarch64-linux")
@@ -108,6 +115,29 @@ def test_cross_binaries_run_under_an_emulator_like_the_host_binary(cross_fmus, f
     # same C code from another compiler (FMA contraction, libm): rounding-level differences over 200 adaptive steps
     assert abs(other - host) < 1e-11
     assert abs(host) > 1e-3  # the pendulum moved
+
+
+@needs_cross
+def test_windows_dll_imports_the_c_runtime_its_documentation_names(cross_fmus, tmp_path):
+    """The DLL's C runtime (Zig: the Universal C Runtime, api-ms-win-crt-*.dll), read from its imports and stated on the
+    FMU's documentation page; checked against ``objdump -p`` where binutils is installed."""
+    import html
+
+    with zipfile.ZipFile(cross_fmus[3]) as zf:
+        name = next(n for n in zf.namelist() if n.endswith(".dll"))
+        data, page = zf.read(name), zf.read("documentation/index.html").decode()
+    need = runtime_requirement(data)
+    assert f"<code>{name}</code>: needs {html.escape(need)}" in page
+    if shutil.which("objdump") is None:
+        pytest.skip("objdump (binutils) is not installed: the imports were read by pendulab only")
+    (tmp_path / "x.dll").write_bytes(data)
+    out = subprocess.run(["objdump", "-p", str(tmp_path / "x.dll")], capture_output=True, text=True, check=True).stdout
+    crt = {d.lower() for d in re.findall(r"DLL Name: (\S+)", out)} - {"kernel32.dll"}
+    assert crt, out[:2000]
+    if all(d.startswith("api-ms-win-crt-") for d in crt):
+        assert need == "the Universal C Runtime (UCRT: api-ms-win-crt-*.dll)"
+    else:
+        assert need == ", ".join(sorted(crt))
 
 
 def test_platform_names_are_validated():

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pendulab.native.build import digest_path, file_digest, verify_cached
+from pendulab.native.build import digest_path, seal, sealed_key, verify_cached
 
 pytestmark = pytest.mark.needs_cc
 
@@ -102,8 +102,9 @@ def test_missing_digest_and_unreadable_fmu_with_a_matching_digest_are_rebuilt(bu
     out = json.loads(run(cache).stdout)
     assert any("no digest file" in w and str(fmu) in w for w in out["warnings"]) and out["x"] == x_good
     # A file whose digest matches but that is no FMU (as if an export had gone wrong): read failure -> rebuild.
+    key = sealed_key(fmu)
     fmu.write_bytes(b"PK\x03\x04 not really a zip")
-    digest_path(fmu).write_text(file_digest(fmu) + "\n")
+    seal(fmu, key)
     proc = run(cache)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)

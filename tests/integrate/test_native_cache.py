@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import pendulab as pl
-from pendulab.native.build import digest_path, file_digest, shared_library_suffix, verify_cached
+from pendulab.native.build import digest_path, seal, sealed_key, shared_library_suffix, verify_cached
 
 pytestmark = pytest.mark.needs_cc
 
@@ -125,8 +125,9 @@ def test_a_library_that_fails_to_load_despite_its_digest_is_rebuilt(built, tmp_p
     cache = tmp_path / "cache"
     shutil.copytree(good, cache)
     lib = library(cache)
+    key = sealed_key(lib)
     lib.write_bytes(b"not a shared library\n")
-    digest_path(lib).write_text(file_digest(lib) + "\n")
+    seal(lib, key)
     proc = run(cache)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)

@@ -88,6 +88,15 @@ def realai_score(
         Unknown task or controller name, or a controller that cannot be built or run.
     TypeError
         ``task`` is not a string, ``controller`` neither a name nor a sampled controller.
+
+    Examples
+    --------
+    >>> from pendulab.evaluate import realai_score
+    >>> res = realai_score("pendubot", "best")  # TVLQR at 2 ms along the shipped score-designed plan
+    >>> res.success, round(res.score, 3), round(res.swingup_time, 3)  # score v2 in [0, 1]; swing-up time [s]
+    (True, 0.696, 1.558)
+    >>> res.to_dict()["beats_published"]  # above the best published pendubot entry
+    True
     """
     if not isinstance(task, str):
         raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")

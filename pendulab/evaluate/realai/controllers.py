@@ -16,7 +16,7 @@ from ...control.feedback import SampledController
 from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
-__all__ = ["CONTROLLERS", "REPLAN_DELAY", "resolve_controller"]
+__all__ = ["CONTROLLERS", "REPLAN_DELAY", "controller_name", "resolve_controller"]
 
 #: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
 REPLAN_DELAY: float = 0.5
@@ -107,17 +107,45 @@ def resolve_controller(task: str, controller: str | SampledController | Callable
     TypeError
         Neither a name, a controller nor a factory, or a factory returning something else.
     """
+    name = controller_name(controller)
+    if isinstance(controller, str):
+        return name, CONTROLLERS[controller](task)
+    if _is_controller(controller):
+        return name, controller  # type: ignore[return-value]
+    made = controller(task)  # type: ignore[operator]
+    if isinstance(made, tuple) and len(made) == 2:
+        made = made[0]
+    if not _is_controller(made):
+        raise TypeError(f"a controller factory must return a SampledController, got {type(made).__name__}")
+    return name, made
+
+
+def controller_name(controller: str | SampledController | Callable[[str], Any]) -> str:
+    """The name :func:`resolve_controller` gives ``controller``, without building it (journals are checked first).
+
+    Parameters
+    ----------
+    controller : str, SampledController or callable
+        As for :func:`resolve_controller`.
+
+    Returns
+    -------
+    str
+        The name; the factory's or the class's ``__name__`` for objects.
+
+    Raises
+    ------
+    ValueError
+        Unknown name.
+    TypeError
+        Neither a name, a controller nor a factory.
+    """
     if isinstance(controller, str):
         if controller not in CONTROLLERS:
             raise ValueError(f"controller must be one of {list(CONTROLLERS)} or a SampledController, got {controller!r}")
-        return controller, CONTROLLERS[controller](task)
+        return controller
     if _is_controller(controller):
-        return type(controller).__name__, controller  # type: ignore[return-value]
+        return type(controller).__name__
     if callable(controller):
-        made = controller(task)
-        if isinstance(made, tuple) and len(made) == 2:
-            made = made[0]
-        if not _is_controller(made):
-            raise TypeError(f"a controller factory must return a SampledController, got {type(made).__name__}")
-        return getattr(controller, "__name__", type(controller).__name__), made
+        return getattr(controller, "__name__", type(controller).__name__)
     raise TypeError(f"controller must be a name, a SampledController or a factory task -> controller, got {type(controller)}")

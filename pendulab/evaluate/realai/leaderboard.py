@@ -22,7 +22,6 @@ v3 one seed over the first 10 s (score = uptime / 10 s); v2 is one deterministic
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -31,8 +30,10 @@ from pathlib import Path
 from typing import Any
 
 from ..._checks import bounded_int, positive_float
+from ..._io import check_writable
+from ..._journal import trusted_records
 from .controllers import CONTROLLERS
-from .leaderboard_runs import _read, _run_robustness, _run_v2, _run_v3, _write
+from .leaderboard_runs import CASE_KIND, _read, _run_robustness, _run_v2, _run_v3, _summary_check, _write
 
 __all__ = [
     "PROTOCOLS",
@@ -314,7 +315,11 @@ def run_protocols(
     Raises
     ------
     ValueError
-        Unknown task, protocol or controller name; a journal of other settings (with ``resume``).
+        Unknown task, protocol or controller name; a journal of other settings (with ``resume``:
+        :class:`~pendulab._journal.JournalError`; an edited, incomplete or older journal is run again instead,
+        with a :class:`~pendulab._journal.JournalWarning`).
+    PermissionError, NotADirectoryError
+        The journal directory cannot be written (checked before the first case).
     TypeError
         Badly typed ``controllers``, ``tasks`` or ``protocols``.
     KeyboardInterrupt
@@ -332,6 +337,7 @@ def run_protocols(
     settings = QUICK if quick else FULL
     base = DEFAULT_ROOT if root is None else Path(root)
     jroot = base / "quick" if quick else base
+    check_writable(jroot)  # before the first case, not at its first save
     w0 = time.perf_counter()
     cases: list[Case] = []
     for protocol in (p for p in PROTOCOLS if p in protocols):
@@ -359,17 +365,19 @@ def _finished(case: Case, settings: ProtocolSettings, jroot: Path) -> bool:
     """Whether a case's journal holds all of it (reading it back runs nothing)."""
     task, name = case.task, case.controller
     base = IDENTIFIED.get(case.protocol, (case.protocol,))[0]
+    # Only journals that validate count as finished (an edited one would otherwise be re-run past the budget).
     if base == "v2":
-        return (jroot / case.protocol / f"{task}-{name}.json").is_file()
+        return "summary" in trusted_records(jroot / case.protocol / f"{task}-{name}.json", CASE_KIND, _summary_check(base))
     if base == "v3":
-        return all((jroot / case.protocol / f"{task}-{name}-seed{s}.json").is_file() for s in settings.v3_seeds)
+        return all(
+            "summary" in trusted_records(jroot / case.protocol / f"{task}-{name}-seed{s}.json", CASE_KIND, _summary_check(base))
+            for s in settings.v3_seeds
+        )
+    from .robustness import JOURNAL_KIND
     from .robustness_grid import plan_runs
 
     journal = jroot / "robustness-v2" / f"{task}-{name}" / "runs.json"
-    try:
-        n = len(json.loads(journal.read_text())["records"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return False
+    n = len(trusted_records(journal, JOURNAL_KIND))
     total = len(plan_runs(task, **settings.robustness))
     if n < total:
         case.reason = f"{n} of {total} runs journaled; "

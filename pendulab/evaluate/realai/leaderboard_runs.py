@@ -2,38 +2,55 @@
 
 from __future__ import annotations
 
-import json
 import statistics
 import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..._io import atomic_write_text
+from ..._journal import Journal
 from ...control.realai.spec import DT
 from .controllers import resolve_controller
 
 __all__: list[str] = []
 
 
+#: Kind of the journal of one v2 run or one v3 seed of the leaderboard (one record, ``"summary"``).
+CASE_KIND = "leaderboard-case"
+#: Fields of a case's summary that the leaderboard's tables and figures read (v2 run, v3 seed).
+_SUMMARY_FIELDS = {
+    "v2": ("success", "score", "criteria", "wall_time", "controller_time"),
+    "v3": ("uptime_fraction", "n_swingups", "wall_time_s", "controller_time"),
+}
+
+
+def _summary_check(protocol: str) -> Callable[[str, Any], None]:
+    need = _SUMMARY_FIELDS["v3" if protocol.startswith("v3") else "v2"]
+
+    def check(key: str, summary: Any) -> None:
+        if key != "summary" or not isinstance(summary, Mapping):
+            raise ValueError(f"a case journal holds one summary object, got {key!r}")
+        for name in need:
+            if name not in summary:
+                raise KeyError(name)
+
+    return check
+
+
 def _read(path: Path, settings: Mapping[str, Any]) -> dict[str, Any] | None:
-    """A recorded case, or None when there is none; ValueError for a record of other settings."""
+    """The journaled summary of a case that validates, else None (a JournalWarning says why it is run again).
+
+    A journal of this pendulab version with other settings raises :class:`~pendulab._journal.JournalError`.
+    """
     if not path.is_file():
         return None
-    try:
-        data = json.loads(path.read_text())
-        stored, summary = data["settings"], data["summary"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise ValueError(f"journal {path} is not a leaderboard record ({exc}); delete it or run without resume") from None
-    if stored != dict(settings):
-        raise ValueError(f"journal {path} was written with other settings ({stored} there, {dict(settings)} now); "
-                         "use another journal directory or resume=False")  # fmt: skip
-    return summary
+    log = Journal(path, CASE_KIND, settings, resume=True, check=_summary_check(str(settings["protocol"])))
+    summary = log.get("summary")
+    return None if summary is None else dict(summary)
 
 
 def _write(path: Path, settings: Mapping[str, Any], summary: Mapping[str, Any]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(path, json.dumps({"settings": dict(settings), "summary": dict(summary)}) + "\n")
+    Journal(path, CASE_KIND, settings).record("summary", dict(summary))
 
 
 class _Timed:
@@ -80,13 +97,16 @@ def _run_robustness(
 ) -> tuple[dict[str, Any], int, int]:  # fmt: skip
     from .robustness import robustness_v2
 
-    before = 0
-    if resume and journal.is_file():
-        try:
-            before = len(json.loads(journal.read_text()).get("records", []))
-        except (OSError, ValueError, AttributeError):
-            before = 0  # robustness_v2 reports the broken journal itself
-    res = robustness_v2(task, name, seed=0, workers=workers, progress=progress, journal=journal, resume=resume, **reduced)
+    counted: list[int] = []
+
+    def report(done: int, total: int) -> None:
+        if not counted:
+            counted.append(done)  # the first report: the runs taken from the journal (validated)
+        if progress is not None:
+            progress(done, total)
+
+    res = robustness_v2(task, name, seed=0, workers=workers, progress=report, journal=journal, resume=resume, **reduced)
+    before = counted[0] if counted else 0
     d = res.to_dict()
     d["wall_total"] = float(sum(r.get("wall", 0.0) for r in res.records))
     act = 0 if task == "pendubot" else 1

@@ -42,7 +42,6 @@ plan: workers, journal, resume).
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -50,13 +49,13 @@ from pathlib import Path
 from typing import Any
 
 from ..._checks import bounded_int
-from ..._io import atomic_write_text
+from ..._journal import Journal
 from ...control.feedback import SampledController
 from ...control.realai.spec import DT, check_task
 from ...control.swingup.tasks import short_name
 from ...ensemble.pool import default_workers, map_runs
 from ...model.plant_file import IdentifiedPlant
-from .controllers import resolve_controller
+from .controllers import controller_name, resolve_controller
 from .plant import MODEL_VARIATIONS, plant_label
 from .robustness_episode import _hold_ratio, run_protocol_episode
 from .robustness_grid import (
@@ -111,30 +110,34 @@ def _levels(plan: Sequence[RunSpec]) -> dict[str, Any]:
     return lv
 
 
-#: Settings a journal may lack (written before they existed): the full protocol's values.
-_JOURNAL_DEFAULTS: Mapping[str, Any] = {
-    "categories": list(CATEGORIES),
-    "model_params": list(MODEL_VARIATIONS),
-    "u_noise_repetitions": REPETITIONS,
-    "every_step": False,
-    "plant": "nominal",
-}
+#: Kind of the robustness-v2 journals (:mod:`pendulab._journal`).
+JOURNAL_KIND = "robustness-v2"
+#: Fields of every journaled run (:func:`run_protocol_episode`); a perturbation run also has :data:`_PULSE_FIELDS`.
+_RUN_FIELDS = (
+    "index", "category", "param", "level_index", "level", "rep", "success", "final", "ctrl_median", "ctrl_max", "calls",
+    "wall",
+)  # fmt: skip
+_PULSE_FIELDS = ("mu", "sigma", "amplitude")
 
 
-def _read_journal(path: Path, settings: Mapping[str, Any]) -> dict[int, dict[str, Any]]:
-    if not path.is_file():
-        return {}
-    try:
-        data = json.loads(path.read_text())
-        recs = {int(r["index"]): r for r in data["records"]}
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise ValueError(f"journal {path} is not a robustness-v2 journal ({exc})") from None
-    stored = {**_JOURNAL_DEFAULTS, **data.get("settings", {})}
-    differ = {k: (stored.get(k), v) for k, v in settings.items() if stored.get(k) != v}
-    if differ:
-        what = ", ".join(f"{k} {old!r} there, {new!r} now" for k, (old, new) in differ.items())
-        raise ValueError(f"journal {path} was written with other settings ({what}); use another journal or resume=False")
-    return recs
+def _run_check(plan: Sequence[RunSpec]) -> Callable[[str, Any], None]:
+    """``check(key, record)`` of the journal: raise for a record that lacks a field or is not the plan's run ``key``."""
+    by_index = {str(s.index): s for s in plan}
+
+    def check(key: str, rec: Any) -> None:
+        if not isinstance(rec, Mapping):
+            raise TypeError(f"a run record is a JSON object, got {type(rec).__name__}")
+        spec = by_index.get(key)
+        if spec is None:
+            raise ValueError(f"run {key} is not in this plan")
+        for name in _RUN_FIELDS + (_PULSE_FIELDS if spec.category == "perturbation" else ()):
+            if name not in rec:
+                raise KeyError(name)
+        stored = (rec["index"], rec["category"], rec["param"], rec["level_index"], rec["rep"])
+        if stored != (spec.index, spec.category, spec.param, spec.level_index, spec.rep) or not isinstance(rec["success"], bool):
+            raise ValueError(f"its fields are not those of run {key} ({spec.category} {spec.param} level {spec.level_index})")
+
+    return check
 
 
 def robustness_v2(
@@ -170,9 +173,12 @@ def robustness_v2(
     progress : callable, optional
         ``progress(done, total)`` in runs (journaled runs count as done).
     journal : str or Path, optional
-        JSON file rewritten atomically after every batch of finished runs (settings and records).
+        Journal rewritten atomically after every batch of finished runs (:mod:`pendulab._journal`: pendulab
+        version, settings, each run with its SHA-256).
     resume : bool
-        Read ``journal`` first and run only the runs it lacks (same settings, else ValueError).
+        Read ``journal`` first (before the controller is built) and run only the runs it lacks; runs that were
+        edited, lack fields or were written by another pendulab version are run again, with a
+        :class:`~pendulab._journal.JournalWarning` naming the file and the runs.
     levels : sequence of int, optional
         Reduced grid: the grid indices (0 ... 20) to run in every category (default all).
     repetitions : int
@@ -199,8 +205,10 @@ def robustness_v2(
     Raises
     ------
     ValueError
-        Unknown task or controller name, bad grid, seed out of range, a journal of other settings,
-        a controller whose sample time is not a multiple of 2 ms.
+        Unknown task or controller name, bad grid, seed out of range, a journal of other settings
+        (:class:`~pendulab._journal.JournalError`), a controller whose sample time is not a multiple of 2 ms.
+    PermissionError
+        Nothing can be written where ``journal`` goes (checked before any run).
     TypeError
         A controller that is neither a name, a controller nor a factory.
     KeyboardInterrupt
@@ -217,13 +225,10 @@ def robustness_v2(
         task, levels=levels, repetitions=repetitions, perturbation_repetitions=perturbation_repetitions,
         categories=categories, model_params=model_params, u_noise_repetitions=u_noise_repetitions, plant=plant,
     )  # fmt: skip
-    name, ctrl = resolve_controller(task, controller)
-    if not every_step:
-        _hold_ratio(ctrl)
     settings = {
         "protocol": "robustness-v2",
         "task": task,
-        "controller": name,
+        "controller": controller_name(controller),
         "seed": seed,
         "levels": None if levels is None else sorted({int(v) for v in levels}),
         "repetitions": int(repetitions),
@@ -234,8 +239,13 @@ def robustness_v2(
         "every_step": bool(every_step),
         "plant": plant_label(plant),
     }
-    jpath = None if journal is None else Path(journal)
-    done: dict[int, dict[str, Any]] = _read_journal(jpath, settings) if (resume and jpath is not None) else {}
+    # The journal is validated before the controller is built (a plan or an ROA takes seconds to minutes): only
+    # runs that pass their hashes and belong to this plan are reused; the others are run again (JournalWarning).
+    log = Journal(journal, JOURNAL_KIND, settings, resume=resume, check=_run_check(plan))
+    done: dict[int, dict[str, Any]] = {int(k): rec for k, rec in log.records.items()}
+    name, ctrl = resolve_controller(task, controller)
+    if not every_step:
+        _hold_ratio(ctrl)
     total = len(plan)
     if progress is not None:
         progress(len(done), total)
@@ -243,12 +253,6 @@ def robustness_v2(
 
     def one(i: int) -> dict[str, Any]:
         return run_protocol_episode(task, ctrl, plan[i], states[i], every_step=every_step, plant=plant)
-
-    def save() -> None:
-        if jpath is not None:
-            jpath.parent.mkdir(parents=True, exist_ok=True)
-            recs = [done[i] for i in sorted(done)]
-            atomic_write_text(jpath, json.dumps({"settings": settings, "records": recs}) + "\n")
 
     todo = [s.index for s in plan if s.index not in done]
     n_work = default_workers() if workers is None else bounded_int("workers", workers, high=256, why="worker processes")
@@ -263,7 +267,8 @@ def robustness_v2(
 
         for rec in map_runs(one, batch, workers=n_work, progress=report, chunks_per_worker=1):
             done[rec["index"]] = rec
-        save()
+            log.add(str(rec["index"]), rec)
+        log.save()
     records = [done[s.index] for s in plan]
     successes = level_successes(records)
     rates = category_rates(successes)

@@ -211,6 +211,12 @@ CtrlStatus ctrl_set_real(CtrlInstance *inst, const char *fname, const unsigned i
 }
 
 /* ------------------------------------------------------------ life cycle */
+CtrlStatus ctrl_check_tolerance(CtrlInstance *inst, int defined, double tolerance, const char *fname) {
+    if (!defined || (tolerance > 0.0 && tolerance < 1.0)) return CST_OK;
+    ctrl_logf(inst, CST_ERROR, "%s: tolerance must be in (0, 1), got %g", fname, tolerance);
+    return CST_ERROR;
+}
+
 CtrlStatus ctrl_enter_initialization(CtrlInstance *inst, double start_time, const char *fname) {
     if (ctrl_check(inst, CMS_INSTANTIATED, fname) != CST_OK) return CST_ERROR;
     if (!isfinite(start_time)) {
@@ -234,8 +240,11 @@ CtrlStatus ctrl_do_step(CtrlInstance *inst, double current, double h, const char
     if (ctrl_check(inst, CMS_STEP, fname) != CST_OK) return CST_ERROR;
     CtrlData *d = &inst->d;
     double slack = CTRL_SAMPLE_SLACK * d->sample_time;
-    if (!isfinite(current) || !isfinite(h) || h < 0.0) {
-        ctrl_logf(inst, CST_ERROR, "%s: communication point %g and step %g must be finite, the step >= 0", fname, current, h);
+    if (!isfinite(current) || !isfinite(h) || !(h > 0.0) || !isfinite(current + h)) {
+        /* as the plant FMUs and the Reference FMUs: a step of size 0 (or negative, NaN, Inf) is an Error */
+        ctrl_logf(inst, CST_ERROR,
+                  "%s: communication step size must be positive and finite (and end at a finite time), got %g at point %g", fname,
+                  h, current);
         return CST_ERROR;
     }
     if (fabs(current - d->time) > slack + 1e-12 * fmax(1.0, fabs(d->time))) {
@@ -284,6 +293,12 @@ CtrlStatus ctrl_check_state(CtrlInstance *inst, const void *blob, size_t size, c
         return CST_ERROR;
     }
     return CST_OK;
+}
+
+int ctrl_is_state_block(const void *p) {
+    unsigned long first;
+    memcpy(&first, p, sizeof(first)); /* p points to at least a pointer's worth of memory either way */
+    return first == CTRL_MAGIC;
 }
 
 CtrlStatus ctrl_restore(CtrlInstance *inst, const void *blob, const char *fname) {

@@ -71,11 +71,16 @@ void ctrl_logf(CtrlInstance *inst, CtrlStatus status, const char *fmt, ...)
 CtrlStatus ctrl_check(CtrlInstance *inst, int allowed, const char *fname);
 CtrlStatus ctrl_get_real(CtrlInstance *inst, const char *fname, const unsigned int *vr, size_t n, double *value);
 CtrlStatus ctrl_set_real(CtrlInstance *inst, const char *fname, const unsigned int *vr, size_t n, const double *value);
+/* A tolerance the master defined (toleranceDefined) must be in (0, 1), as for the plant FMUs; unused otherwise. */
+CtrlStatus ctrl_check_tolerance(CtrlInstance *inst, int defined, double tolerance, const char *fname);
 CtrlStatus ctrl_enter_initialization(CtrlInstance *inst, double start_time, const char *fname);
 CtrlStatus ctrl_exit_initialization(CtrlInstance *inst, const char *fname);
 CtrlStatus ctrl_do_step(CtrlInstance *inst, double current, double h, const char *fname);
 /* FMU state = the bytes of CtrlData; checked (size, magic, every field) before use; a rejected state changes nothing. */
 CtrlStatus ctrl_check_state(CtrlInstance *inst, const void *blob, size_t size, const char *fname);
 CtrlStatus ctrl_restore(CtrlInstance *inst, const void *blob, const char *fname);
+/* Does p point to an FMU state (its magic) rather than to a pointer to one? FreeFMUState with the state itself
+ * (an importer bug) is then freed instead of dereferenced, as in the plant FMUs. */
+int ctrl_is_state_block(const void *p);
 
 #endif

@@ -84,9 +84,9 @@ void fmi2FreeInstance(fmi2Component c) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     GET_INSTANCE("fmi2SetupExperiment");
-    (void)toleranceDefined; /* no solver: the tolerance does not apply */
-    (void)tolerance;
     if (ctrl_check(inst, CMS_INSTANTIATED, "fmi2SetupExperiment") != CST_OK) return fmi2Error;
+    /* no solver: a tolerance does not apply, but a defined one must be valid (as for the plant FMUs) */
+    if (ctrl_check_tolerance(inst, toleranceDefined, tolerance, "fmi2SetupExperiment") != CST_OK) return fmi2Error;
     if (!isfinite(startTime) || (stopTimeDefined && !(stopTime >= startTime)))
         return refuse(inst, "fmi2SetupExperiment", "start time must be finite and not after the stop time");
     inst->d.start_time = inst->d.time = startTime;
@@ -191,6 +191,12 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GET_INSTANCE("fmi2FreeFMUstate");
     if (FMUstate == NULL) return refuse(inst, "fmi2FreeFMUstate", "FMUstate is NULL");
+    if (ctrl_is_state_block(FMUstate)) { /* the importer passed the state, not its address: free it, never crash */
+        c2->cb.freeMemory(FMUstate);
+        ctrl_logf(inst, CST_WARNING, "fmi2FreeFMUstate: got the FMU state itself instead of a pointer to it (importer bug); "
+                  "the state was freed, the importer's variable still holds the freed address");
+        return fmi2OK; /* as the plant FMUs: the call did what it was meant to */
+    }
     if (*FMUstate != NULL) c2->cb.freeMemory(*FMUstate);
     *FMUstate = NULL;
     return fmi2OK;

@@ -127,8 +127,9 @@ void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
     GET_INSTANCE("fmi3EnterInitializationMode");
-    (void)toleranceDefined; /* no solver: the tolerance does not apply */
-    (void)tolerance;
+    if (ctrl_check(inst, CMS_INSTANTIATED, "fmi3EnterInitializationMode") != CST_OK) return fmi3Error;
+    /* no solver: a tolerance does not apply, but a defined one must be valid (as for the plant FMUs) */
+    if (ctrl_check_tolerance(inst, toleranceDefined, tolerance, "fmi3EnterInitializationMode") != CST_OK) return fmi3Error;
     if (stopTimeDefined && !(stopTime >= startTime)) return refuse(inst, "fmi3EnterInitializationMode", "stop time before start time");
     return (fmi3Status)ctrl_enter_initialization(inst, startTime, "fmi3EnterInitializationMode");
 }
@@ -468,6 +469,12 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     GET_INSTANCE("fmi3FreeFMUState");
     if (FMUState == NULL) return refuse(inst, "fmi3FreeFMUState", "FMUState is NULL");
+    if (ctrl_is_state_block(FMUState)) { /* the importer passed the state, not its address: free it, never crash */
+        free(FMUState);
+        ctrl_logf(inst, CST_WARNING, "fmi3FreeFMUState: got the FMU state itself instead of a pointer to it (importer bug); "
+                  "the state was freed, the importer's variable still holds the freed address");
+        return fmi3OK; /* as the plant FMUs: the call did what it was meant to */
+    }
     free(*FMUState);
     *FMUState = NULL;
     return fmi3OK;

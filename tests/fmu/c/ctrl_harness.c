@@ -139,6 +139,14 @@ int main(int argc, char **argv) {
 
     Inst c = make("c", CTRL_TOKEN);
     CHECK(c != NULL);
+#if FMI_VERSION == 2 /* a defined tolerance must be in (0, 1), as for the plant FMUs (the controller has no solver) */
+    CHECK(fmi2SetupExperiment(c, fmi2True, NAN, 0.0, fmi2False, 0.0) == ERR);
+    CHECK(fmi2SetupExperiment(c, fmi2True, 0.0, 0.0, fmi2False, 0.0) == ERR);
+    CHECK(fmi2SetupExperiment(c, fmi2True, 1e-8, 0.0, fmi2False, 0.0) == OK);
+#else
+    CHECK(fmi3EnterInitializationMode(c, fmi3True, NAN, 0.0, fmi3False, 0.0) == ERR);
+    CHECK(fmi3EnterInitializationMode(c, fmi3True, 1.5, 0.0, fmi3False, 0.0) == ERR);
+#endif
     CHECK(GET(c, us, CTRL_NU, u) == ERR); /* outputs not before initialization */
     CHECK(STEP(c, 0.0, h) == ERR);        /* not before initialization */
     const VR vh = CTRL_VR_SAMPLE_TIME;
@@ -168,6 +176,11 @@ int main(int argc, char **argv) {
     CHECK(GET(c, us, CTRL_NU, NULL) == ERR);
     CHECK(STEP(c, 1234.5, h) == ERR);  /* communication point is not the FMU's time: refused, instance usable */
     CHECK(STEP(c, 300 * h, -h) == ERR); /* negative step */
+    CHECK(STEP(c, 300 * h, 0.0) == ERR); /* a step of size 0 (or -0, NaN, Inf): Error, as the plant FMUs */
+    CHECK(STEP(c, 300 * h, -0.0) == ERR);
+    CHECK(STEP(c, 300 * h, NAN) == ERR);
+    CHECK(STEP(c, 300 * h, INFINITY) == ERR);
+    CHECK(STEP(c, NAN, h) == ERR);
     CHECK(STEP(c, 300 * h, 1e300) == ERR); /* more samples than the work limit */
     CHECK(STEP(c, 300 * h, h) == OK);
     /* restart from the saved state (also from Error), replay bit-identically */
@@ -198,6 +211,9 @@ int main(int argc, char **argv) {
     CHECK(FREESTATE(c, &back) == OK);
     CHECK(FREESTATE(c, &saved) == OK);
     CHECK(FREESTATE(c, NULL) == ERR);
+    State direct = NULL; /* the state itself instead of its address (an importer bug): freed, never dereferenced */
+    CHECK(GETSTATE(c, &direct) == OK);
+    CHECK(FREESTATE(c, (State *)direct) == OK);
 
     /* random call sequences with edge values, NULL arrays and out-of-range references: never a crash */
     State good = NULL;
