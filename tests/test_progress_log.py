@@ -48,7 +48,7 @@ def test_the_swingup_animation_reports_every_frame(tmp_path):
     closed = pl.simulate(model, model.state(theta1=1.0), 1.0, 0.02)
     ep = SimpleNamespace(
         closed_loop=closed, height=None, result=SimpleNamespace(horizon=0.5),
-        task=SimpleNamespace(name="test", rest_lengths=(1.0, 1.0)),
+        task=SimpleNamespace(name="test", rest_lengths=(1.0, 1.0), model=model),
     )  # fmt: skip
     calls = []
     path = animate_episode(ep, tmp_path / "a.gif", fps=10, progress=lambda done, total: calls.append((done, total)))
