@@ -237,6 +237,10 @@ def run() -> NoReturn:
         # Before main() guards the command: building the parser imports every command module (NumPy,
         # CasADi), which a Ctrl-C at start-up lands in.
         status = _interrupted_status()
+    # The command has ended and its outputs are written: a Ctrl-C now stops nothing, and landing in the
+    # interpreter's teardown (worker pools, atexit) it killed the process by SIGINT, exit -2, after a
+    # complete run (measured by benchmarks/bench_interrupts.py).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if status == 130:
         sys.stdout.flush()
         sys.stderr.flush()
