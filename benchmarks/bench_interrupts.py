@@ -66,7 +66,10 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args()
-    rows = ["| phase | load | median [s] | max [s] | exit codes | traceback | finished before the signal |", "|---|---|---|---|---|---|---|"]
+    rows = [
+        "| phase | load | median [s] | max [s] | exit codes | traceback | finished before the signal |",
+        "|---|---|---|---|---|---|---|",
+    ]
     within = True
     jobs = [(case, load) for case in CASES for load in ("idle", "loaded")]
     for (phase, delay, argv), load in tqdm(jobs, desc="interrupt cases", unit="case"):
@@ -83,9 +86,8 @@ def main() -> None:
         med = statistics.median(lat) if lat else float("nan")
         if load == "idle" and (not lat or max(lat) > 1.0 or codes != [130] or tb):
             within = False
-        rows.append(
-            f"| {phase} | {load} | {med:.2f} | {max(lat, default=float('nan')):.2f} | {codes} | {'yes' if tb else 'no'} | {early} |"
-        )
+        worst = max(lat, default=float("nan"))
+        rows.append(f"| {phase} | {load} | {med:.2f} | {worst:.2f} | {codes} | {'yes' if tb else 'no'} | {early} |")
     load_avg = os.getloadavg()[0]
     text = "\n".join(
         [

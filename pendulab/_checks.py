@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any
+from typing import Any, NamedTuple
 
 __all__ = [
     "positive_float",
@@ -14,6 +14,9 @@ __all__ = [
     "check_spring_lengths",
     "is_interrupt",
     "MissingExtraError",
+    "BudgetError",
+    "BUDGETS",
+    "check_budget",
     "require_extra",
 ]
 
@@ -249,22 +252,132 @@ def within_budget(what: str, size: float, budget_name: str, default: int) -> int
     BudgetError
         ``size`` beyond the budget (or the variable is not a positive integer).
     """
-    raw = os.environ.get(budget_name)
-    if raw is None:
-        budget = default
-    else:
-        try:
-            budget = int(raw)
-        except ValueError:
-            budget = 0
-        if budget < 1:
-            raise BudgetError(f"{budget_name} must be a positive integer, got {raw!r}")
+    budget = budget_limit(budget_name, default)
     if not size <= budget:
         raise BudgetError(
             f"{what}: {size:.4g} is beyond the budget of {budget:.4g}; set the environment variable {budget_name} "
             "to a larger number for a deliberately large run"
         )
     return int(size)
+
+
+def budget_limit(budget_name: str, default: int) -> int:
+    """The budget in force: the environment variable ``budget_name`` (a positive integer) if set, else ``default``.
+
+    Parameters
+    ----------
+    budget_name : str
+        Environment variable overriding the budget.
+    default : int
+        The default budget.
+
+    Returns
+    -------
+    int
+        The budget.
+
+    Raises
+    ------
+    BudgetError
+        The variable is set but is not a positive integer.
+    """
+    raw = os.environ.get(budget_name)
+    if raw is None:
+        return default
+    try:
+        budget = int(raw)
+    except ValueError:
+        budget = 0
+    if budget < 1:
+        raise BudgetError(f"{budget_name} must be a positive integer, got {raw!r}")
+    return budget
+
+
+class Budget(NamedTuple):
+    """One resource budget: the variable overriding it, its default, what it counts and what the limit costs."""
+
+    env: str
+    default: int
+    counts: str
+    cost: str
+
+
+#: The one table of resource budgets (docs/reliability.md lists it): every size a user passes that multiplies
+#: into memory or work is checked against one of these before anything is allocated or run. The defaults are
+#: generous (a deliberate run is never near them); the environment variable raises (or lowers) a budget.
+BUDGETS: dict[str, Budget] = {
+    "output_points": Budget(
+        "PENDULAB_MAX_OUTPUT_POINTS", 5_000_000, "output points (t_final / dt + 1)",
+        "5e6 rows of states, inputs and outputs of one run: about 0.7 GB for the elastic model",
+    ),
+    "repeats": Budget(
+        "PENDULAB_MAX_REPEATS", 100, "timed repetitions of each benchmark point",
+        "every timed point run 100 times: about 33x the time of the default 3 repetitions",
+    ),
+    "runs": Budget(
+        "PENDULAB_MAX_RUNS", 10_000_000, "runs of one ensemble or benchmark workload",
+        "1e7 initial states and results (about 1 GB) and hours of integration on one core",
+    ),
+    "sweep_points": Budget(
+        "PENDULAB_MAX_SWEEP_POINTS", 10_000, "points of a sweep, each a full run (co-simulation at one step)",
+        "10,000 co-simulation runs per model kind: hours",
+    ),
+    "frames": Budget(
+        "PENDULAB_MAX_FRAMES", 2_000, "animation frames (shown duration x fps)",
+        "2,000 frames of 960 x 540 px held in memory before writing: about 3 GB, and minutes of rendering",
+    ),
+    "image_pixels": Budget(
+        "PENDULAB_MAX_IMAGE_PIXELS", 100_000_000, "pixels of one rendered image (width x height x dpi^2)",
+        "a 10,000 x 10,000 px canvas: 400 MB of RGBA buffer",
+    ),
+}  # fmt: skip
+
+
+def check_budget(key: str, name: str, value: Any, size: float | None = None) -> int:
+    """Check the size that input ``name = value`` asks for against budget ``key`` of :data:`BUDGETS`, before any work.
+
+    Parameters
+    ----------
+    key : str
+        Key of :data:`BUDGETS` (e.g. ``"repeats"``).
+    name : str
+        The input as the user typed it: the CLI option (``"--repeats"``) or the keyword (``"repeats"``).
+    value : Any
+        The value received, shown in the message (a string as it is, e.g. ``"1e+12 / 0.001"``).
+    size : float, optional
+        The size ``value`` asks for (may be huge or inf); default ``value`` itself.
+
+    Returns
+    -------
+    int
+        The size as an int.
+
+    Raises
+    ------
+    BudgetError
+        The size is beyond the budget (the message names the input, the value, the budget, what it costs and
+        the variable that raises it), or the variable is not a positive integer.
+
+    Examples
+    --------
+    >>> from pendulab._checks import check_budget
+    >>> check_budget("repeats", "repeats", 5)
+    5
+    >>> check_budget("repeats", "--repeats", 10**9)
+    Traceback (most recent call last):
+        ...
+    pendulab._checks.BudgetError: --repeats = 1000000000: timed repetitions of each benchmark point 1e+09 ...
+    """
+    b = BUDGETS[key]
+    n = float(value if size is None else size)
+    budget = budget_limit(b.env, b.default)
+    if not n <= budget:
+        shown = value if isinstance(value, str) else repr(value)
+        raise BudgetError(
+            f"{name} = {shown}: {b.counts} {n:.4g} is beyond the budget of {budget:.4g} (at the default limit: {b.cost}); "
+            f"set the environment variable {b.env} to a larger number for a deliberately large run"
+        )
+    return int(n)
 
 
 class MissingExtraError(ImportError):

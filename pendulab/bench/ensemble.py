@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import require_extra
+from .._checks import check_budget, require_extra
 
 __all__ = [
     "EnsembleBench",
@@ -286,10 +286,19 @@ def run_ensemble_bench(
 
     Raises
     ------
+    BudgetError
+        ``grid ** 2``, ``runs`` or ``hand_runs`` beyond the runs budget (``PENDULAB_MAX_RUNS``), or
+        ``repeats`` beyond the repetitions budget (``PENDULAB_MAX_REPEATS``); checked before any work.
     MissingExtraError
         heyoka (``pendulab[taylor]``) or, with ``workers``, dask.distributed (``pendulab[dask]``)
         is not installed; the message names the extra.
     """
+    # Budgets before any import or integration: grid^2 runs, each timed `repeats` times.
+    check_budget("runs", "grid", grid, float(grid) ** 2)
+    for name, value in (("runs", runs), ("hand_runs", hand_runs)):
+        if value is not None:
+            check_budget("runs", name, value)
+    check_budget("repeats", "repeats", repeats)
     require_extra("heyoka", "taylor", "pendulab bench ensemble")
     if workers:
         require_extra("dask.distributed", "dask", "pendulab bench ensemble --workers (Dask rows)")

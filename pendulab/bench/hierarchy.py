@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import is_interrupt, positive_float
+from .._checks import check_budget, is_interrupt, positive_float
 from ..analysis.model_error import validity_horizon
 from ..integrate import time_grid
 from ..model.model import elastic
@@ -212,6 +212,7 @@ def check_scene(scene: Scene, *, repeats: int = 3, tolerance: float | None = Non
         raise ValueError(f"scene {scene.name!r}: tolerance must be a positive number ([outputs] tolerance), got {tol!r}")
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    check_budget("repeats", "repeats", repeats)
     levels = levels_for(scene.model)
     with watch_interrupt() as interrupted:
         results, X_ref, wall_ref = _run_levels(scene, levels, repeats, tol, interrupted)

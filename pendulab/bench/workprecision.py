@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import is_interrupt, positive_float
+from .._checks import check_budget, is_interrupt, positive_float
 from ..integrate import SimulationError
 from ..model.model import Model
 from ..scene import Scene
@@ -167,6 +167,7 @@ def run_work_precision(
     """
     if not isinstance(repeats, int) or repeats < 1:
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    check_budget("repeats", "repeats", repeats)
     slow_run_s = positive_float("slow_run_s", slow_run_s, "[s]")
     selected = list(BENCH_METHODS) if methods is None else list(methods)
     unknown = [m for m in selected if m not in BENCH_METHODS]

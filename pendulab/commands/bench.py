@@ -12,6 +12,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from .._checks import check_budget
 from .._io import atomic_open, atomic_write_text
 from . import CLIError
 from ._common import ProgressBar, docs_page
@@ -90,6 +91,9 @@ def _work_precision(args: argparse.Namespace) -> int:
 
     if args.merge and args.resume:
         raise CLIError("--merge and --resume: use one (--resume continues this run's journal, --merge combines CSVs)")
+    if args.repeats < 1:
+        raise CLIError(f"--repeats {args.repeats}: expected an integer >= 1")
+    check_budget("repeats", "--repeats", args.repeats)  # before any reference or run
     out = Path(args.out)
     journal = out / "work_precision_journal.json"
     resumed = _resumable(journal, "work-precision", args)
@@ -322,6 +326,11 @@ def _ensemble(args: argparse.Namespace) -> int:
         raise CLIError(f"--t-max {args.t_max}: expected a number > 0")
     if any(n < 1 for n in [*args.threads, *args.workers]):
         raise CLIError("--threads/--workers: expected integers >= 1")
+    check_budget("runs", "--grid", args.grid, float(args.grid) ** 2)
+    for option, value in (("--runs", args.runs), ("--hand-runs", args.hand_runs)):
+        if value is not None:
+            check_budget("runs", option, value)
+    check_budget("repeats", "--repeats", args.repeats)
     out = Path(args.out)
     bench = eb.run_ensemble_bench(
         grid=args.grid,

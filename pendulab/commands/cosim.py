@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import bounded_int, relative_tolerance
+from .._checks import BudgetError, bounded_int, check_budget, relative_tolerance
 from .._io import atomic_write_text
 from . import CLIError
 from ._common import add_plant_option, add_vocabulary_option, docs_page, plant_settings, typed_flag
@@ -429,8 +429,11 @@ def _steps(text: str) -> list[float]:
             start, stop, step = (float(v) for v in text.split(":"))
             if step <= 0 or stop < start:
                 raise ValueError
+            check_budget("sweep_points", "--steps", text, (stop - start) / step + 1.0)  # before np.arange allocates
             return [round(v, 12) for v in np.arange(start, stop + 0.5 * step, step)]
         return [float(v) for v in text.split(",") if v.strip()]
+    except BudgetError:
+        raise
     except ValueError:
         raise CLIError(f"--steps: expected START:STOP:STEP or a comma list of positive steps [s], got {text!r}") from None
 

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from .._checks import check_budget
 from . import CLIError
 from ._common import docs_page
 
@@ -17,6 +18,8 @@ def _check(args: argparse.Namespace) -> int:
 
     if args.repeats is not None and not args.measure:
         raise CLIError("--repeats applies to --measure only (the a priori rule runs no level)")
+    if args.repeats is not None:
+        check_budget("repeats", "--repeats", args.repeats)
     if args.fail_on_miss and not args.verify:
         raise CLIError("--fail-on-miss applies to --verify (only a verification measures what a prediction missed)")
     if args.measure and args.verify:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_budget
 from .._io import atomic_path
 from ..integrate.trajectory import Trajectory
 
@@ -142,9 +143,15 @@ def animate_cosim(traj: Trajectory, path: str | Path, *, fps: int = 20, max_fram
     -------
     Path
         The written file.
+
+    Raises
+    ------
+    BudgetError
+        ``max_frames`` beyond the frames budget ``PENDULAB_MAX_FRAMES``.
     """
     from PIL import Image
 
+    check_budget("frames", "max_frames", max_frames)
     plt = _plt()
     n = len(traj.t)
     wanted = min(max_frames, max(2, int(round((traj.t[-1] - traj.t[0]) * fps)) + 1))

@@ -42,7 +42,15 @@ if TYPE_CHECKING:
 __all__ = ["score", "rerun", "MAX_RUNS", "MAX_LEVELS"]
 
 
-ControllerSpec = str | Callable[["Task"], tuple[SampledController, np.ndarray]]
+ControllerSpec = str | SampledController | Callable[["Task"], tuple[SampledController, np.ndarray]]
+
+
+def _is_object(controller: Any) -> bool:
+    """A controller object rather than a factory: a SampledController or a RealAIGym controller."""
+    from ..control.realai.adapter import is_realai_controller
+
+    sampled = callable(controller) and all(hasattr(controller, a) for a in ("sample_time", "input_names", "reset"))
+    return sampled or is_realai_controller(controller)
 
 
 def _resolve(
@@ -52,6 +60,16 @@ def _resolve(
     if isinstance(controller, str):
         ctrl, x0 = controller_for_task(controller, tk, estimator=estimator)
         return tk, controller, ctrl, np.asarray(x0, dtype=float)
+    if _is_object(controller):
+        # a controller object (pendulab's, or a RealAIGym one adapted at the task's sample time) starts at the task's start
+        from ..control.realai.adapter import from_realai, is_realai_controller
+
+        name = type(controller).__name__
+        if is_realai_controller(controller):
+            controller = from_realai(controller, task=tk.problem.actuation, sample_time=tk.dt)
+        x0 = np.asarray(tk.problem.start, dtype=float)
+        ctrl = controller if estimator is None else _estimated(controller, tk, x0, estimator)
+        return tk, name, ctrl, x0
     if not callable(controller):
         raise TypeError(f"controller must be a name or a factory task -> (controller, x0), got {type(controller).__name__}")
     made = controller(tk)
@@ -144,6 +162,10 @@ def score(
         A name of :func:`pendulab.control.controllers.controller_for_task`
         (``lqr``, ``tvlqr``, ``swingup``, ...) or a factory ``task -> (controller, x0)``.
         The controller is designed once on the nominal model; every run resets it.
+        Or a controller object started at the task's start state: a
+        :class:`~pendulab.control.feedback.SampledController`, or a RealAIGym controller (``init``,
+        ``get_control_output(x, t)``, ``reset``) adapted by :func:`~pendulab.control.realai.adapter.from_realai`
+        at the task's sample time on its driven joint.
     task : Task or str
         Swing-up task, or its name (``pendubot``; ``swingup_pendubot`` is an alias).
     runs : int

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import bounded_int, check_model, positive_float, relative_tolerance, within_budget
+from .._checks import BUDGETS, bounded_int, check_model, positive_float, relative_tolerance, within_budget
 from ..model.model import Model
 from .auto import choose_method
 from .energy import energy_flows, trajectory_energy_flows  # noqa: F401  (re-exported: their old home)
@@ -148,7 +148,7 @@ InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any] | Tim
 
 #: Default budget of output points of one run: 5e6 rows of states, inputs and outputs (about 0.7 GB for the
 #: elastic model); ``PENDULAB_MAX_OUTPUT_POINTS`` raises it for a deliberately large run.
-MAX_OUTPUT_POINTS: int = 5_000_000
+MAX_OUTPUT_POINTS: int = BUDGETS["output_points"].default  # 5_000_000, in the one table of budgets
 
 
 def time_grid(t_final: float, dt: float) -> np.ndarray:
@@ -185,7 +185,7 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
     pendulab._checks.BudgetError: ...
     """
     points = t_final / dt + 1.0
-    within_budget("output points (t_final / dt + 1)", points, "PENDULAB_MAX_OUTPUT_POINTS", MAX_OUTPUT_POINTS)
+    within_budget("output points (t_final / dt + 1)", points, BUDGETS["output_points"].env, MAX_OUTPUT_POINTS)
     n = max(1, math.ceil(t_final / dt - 1e-9))
     return np.linspace(0.0, t_final, n + 1)
 

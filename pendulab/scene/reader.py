@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import check_budget
 from ..integrate import METHODS
 from ..model.model import make_model
 from ..model.plant_file import load_plant
@@ -209,6 +210,9 @@ def load_scene(path_or_name: str | Path) -> Scene:
     t_final, dt, rtol, atol = (rd.real("simulation", k, settings[k], positive=True) for k in ("t_final", "dt", "rtol", "atol"))
     if dt > t_final:
         raise rd.error("simulation", "dt", dt, f"an output step <= t_final = {t_final}")
+    # The output grid every run of the scene allocates, budgeted when the file is read (not at the first run).
+    where = f"scene file {str(rd.path)!r}: [simulation] t_final / dt"
+    check_budget("output_points", where, f"{t_final:g} / {dt:g}", t_final / dt + 1.0)
 
     out_table = rd.table("outputs")
     rd.only("outputs", out_table, ("names", "tolerance"), "keys")

@@ -15,6 +15,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from PIL import Image  # noqa: E402
 
+from .._checks import check_budget  # noqa: E402
 from .._io import atomic_path  # noqa: E402
 from .drawing import as_runs, link_polylines, run_colors, view_limits  # noqa: E402
 
@@ -72,6 +73,9 @@ def animate(
     ValueError
         The runs do not share the same output times, ``fps <= 0`` or
         ``trail < 0``, or ``runs`` is empty or malformed.
+    BudgetError
+        More frames (shown duration x ``fps``) than ``PENDULAB_MAX_FRAMES``, or a frame (``width`` x ``dpi``)
+        of more pixels than ``PENDULAB_MAX_IMAGE_PIXELS``; checked before any frame is drawn.
     """
     runs = as_runs(runs)
     t = runs[0].traj.t
@@ -79,12 +83,15 @@ def animate(
         raise ValueError("animate: all runs must share the same output times")
     if fps <= 0 or trail < 0:
         raise ValueError(f"animate: fps must be > 0 and trail >= 0, got fps={fps!r}, trail={trail!r}")
+    shown = float(t[-1] if duration is None else min(duration, t[-1]))
+    check_budget("frames", "duration x fps", f"{shown:g} s x {fps!r}", shown * fps + 1.0)  # before the frame times are allocated
     frames = _frame_indices(t, fps, duration)
     n_trail = max(1, int(round(trail / max(t[1] - t[0], 1e-12)))) if len(t) > 1 else 1
     xlim, ylim = view_limits(runs)
 
     ratio = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
     size = (width, width / len(runs) * ratio + 0.55)
+    check_budget("image_pixels", "width, dpi", f"{width!r}, {dpi!r}", float(size[0] * dpi) * float(size[1] * dpi))
     fig, axes = plt.subplots(1, len(runs), figsize=size, dpi=dpi, squeeze=False)
     artists = []
     for ax, run, color in zip(axes[0], runs, run_colors(len(runs)), strict=True):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .._checks import check_budget
 from .._io import atomic_path
 
 __all__ = ["save_figure"]
@@ -31,11 +32,19 @@ def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     -------
     Path
         The file written.
+
+    Raises
+    ------
+    BudgetError
+        The image (figure size [in] x ``dpi``) has more pixels than the budget ``PENDULAB_MAX_IMAGE_PIXELS``;
+        checked before rendering (the figure is closed).
     """
     import matplotlib.pyplot as plt
 
     path = Path(path)
     try:
+        w, h = fig.get_size_inches()
+        check_budget("image_pixels", "dpi", dpi, float(w * dpi) * float(h * dpi))
         with atomic_path(path) as tmp:
             # The temporary name ends in ".tmp<suffix>"; name the format so it never depends on it.
             fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or plt.rcParams["savefig.format"])

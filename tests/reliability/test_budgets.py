@@ -159,3 +159,130 @@ def test_the_output_budget_is_named_and_overridable(monkeypatch):
     monkeypatch.setenv("PENDULAB_MAX_OUTPUT_POINTS", "-3")
     with pytest.raises(BudgetError, match="must be a positive integer"):
         pl.simulate(model, model.state(), 1.0, 0.02)
+
+
+# -- issue 31, item 3: one table of resource budgets, checked before any work ------------------
+def _never(*args, **kwargs):
+    raise AssertionError("work started: the budget must be checked before it")
+
+
+def test_every_budget_is_in_the_one_table_with_its_variable_and_cost():
+    from pendulab._checks import BUDGETS
+
+    assert set(BUDGETS) == {"output_points", "repeats", "runs", "sweep_points", "frames", "image_pixels"}
+    for b in BUDGETS.values():
+        assert b.env.startswith("PENDULAB_MAX_") and b.default >= 1 and b.counts and b.cost
+
+
+def test_a_budget_names_the_input_value_budget_and_variable_and_is_overridable(monkeypatch):
+    from pendulab._checks import BudgetError, check_budget
+
+    with pytest.raises(BudgetError, match=r"--repeats = 1000000000: .* beyond the budget of 100 .*PENDULAB_MAX_REPEATS"):
+        check_budget("repeats", "--repeats", 10**9)
+    monkeypatch.setenv("PENDULAB_MAX_REPEATS", "2000")
+    assert check_budget("repeats", "--repeats", 1000) == 1000
+    monkeypatch.setenv("PENDULAB_MAX_REPEATS", "many")
+    with pytest.raises(BudgetError, match="PENDULAB_MAX_REPEATS must be a positive integer"):
+        check_budget("repeats", "--repeats", 3)
+
+
+@pytest.mark.parametrize(("t_final", "dt"), [("1e12", "1e-3"), ("1.0", "1e-12")])
+def test_scene_output_grid_beyond_the_budget_is_refused_when_read(tmp_path, capsys, t_final, dt):
+    from pendulab._checks import BudgetError
+    from pendulab.cli import main
+    from pendulab.scene import load_scene
+
+    path = tmp_path / "big.toml"
+    path.write_text(f'[model]\nkind = "rigid"\n[simulation]\nt_final = {t_final}\ndt = {dt}\n')
+    with pytest.raises(BudgetError, match=r"\[simulation\] t_final / dt = .* PENDULAB_MAX_OUTPUT_POINTS"):
+        load_scene(path)  # no run, no grid: refused at reading
+    assert main(["scene", "check", str(path)]) == 2
+    assert "t_final / dt" in capsys.readouterr().err
+
+
+def test_bench_repeats_beyond_the_budget_are_refused_before_any_run(monkeypatch, tmp_path, capsys):
+    from pendulab._checks import BudgetError
+    from pendulab.bench import hierarchy, workprecision
+    from pendulab.cli import main
+    from pendulab.scene import load_scene
+
+    monkeypatch.setattr(workprecision, "run_work_precision", _never)
+    assert main(["bench", "work-precision", "--repeats", "1000000000", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "--repeats = 1000000000" in err and "PENDULAB_MAX_REPEATS" in err
+    assert not any(tmp_path.iterdir())  # no journal, no CSV
+    monkeypatch.undo()
+    monkeypatch.setattr(workprecision, "get_cases", _never)
+    with pytest.raises(BudgetError, match="repeats = 1000000000"):
+        workprecision.run_work_precision(repeats=10**9)
+    monkeypatch.setattr(hierarchy, "_run_levels", _never)
+    with pytest.raises(BudgetError, match="repeats = 1000000000"):
+        hierarchy.check_scene(load_scene("rigid_regular"), repeats=10**9)
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["--grid", "100000"], "--grid = 100000"),
+        (["--runs", "100000000"], "--runs = 100000000"),
+        (["--repeats", "500"], "--repeats = 500"),
+    ],
+)
+def test_bench_ensemble_sizes_beyond_the_budget_are_refused_before_any_run(monkeypatch, capsys, argv, option):
+    from pendulab.bench import ensemble as eb
+    from pendulab.cli import main
+
+    monkeypatch.setattr(eb, "run_ensemble_bench", _never)
+    assert main(["bench", "ensemble", *argv]) == 2
+    err = capsys.readouterr().err
+    assert option in err and "PENDULAB_MAX_" in err
+
+
+def test_bench_ensemble_api_checks_its_budgets_before_importing_or_running(monkeypatch):
+    from pendulab._checks import BudgetError
+    from pendulab.bench import ensemble as eb
+
+    monkeypatch.setattr(eb, "require_extra", _never)
+    monkeypatch.setattr(eb, "flipmap_workload", _never)
+    with pytest.raises(BudgetError, match=r"grid = 100000: runs .* 1e\+10 .*PENDULAB_MAX_RUNS"):
+        eb.run_ensemble_bench(grid=100_000)
+    with pytest.raises(BudgetError, match="repeats = 500"):
+        eb.run_ensemble_bench(grid=10, repeats=500)
+
+
+def test_cosim_sweep_steps_beyond_the_budget_are_refused_before_allocation(capsys):
+    from pendulab.cli import main
+
+    assert main(["cosim", "sweep", "--steps", "0.01:1e12:0.001"]) == 2  # 1e15 steps: np.arange never runs
+    err = capsys.readouterr().err
+    assert "--steps = 0.01:1e12:0.001" in err and "PENDULAB_MAX_SWEEP_POINTS" in err
+
+
+def test_animation_frames_and_pixels_beyond_the_budget_are_refused_before_drawing(monkeypatch, tmp_path):
+    from pendulab._checks import BudgetError
+    from pendulab.cosim.plots import animate_cosim
+    from pendulab.viz import animate as anim
+
+    model = pl.rigid()
+    runs = {"a": (model, pl.simulate(model, model.state(theta1=1.0), 2.0, 0.01))}
+    monkeypatch.setattr(anim.plt, "subplots", _never)
+    with pytest.raises(BudgetError, match=r"duration x fps = 2 s x 1000000000.0: .*PENDULAB_MAX_FRAMES"):
+        anim.animate(runs, tmp_path / "a.gif", fps=1e9)
+    with pytest.raises(BudgetError, match=r"width, dpi = 9.6, 100000: .*PENDULAB_MAX_IMAGE_PIXELS"):
+        anim.animate(runs, tmp_path / "a.gif", dpi=100_000)
+    with pytest.raises(BudgetError, match="max_frames = 1000000000"):
+        animate_cosim(runs["a"][1], tmp_path / "c.gif", max_frames=10**9)
+    assert not any(tmp_path.iterdir())
+
+
+def test_figure_pixels_beyond_the_budget_are_refused_before_rendering(tmp_path):
+    import matplotlib.pyplot as plt
+
+    from pendulab._checks import BudgetError
+    from pendulab.viz.save import save_figure
+
+    fig = plt.figure(figsize=(6, 4))
+    with pytest.raises(BudgetError, match=r"dpi = 100000: pixels .*PENDULAB_MAX_IMAGE_PIXELS"):
+        save_figure(fig, tmp_path / "f.png", dpi=100_000)  # 2.4e11 px: never rendered
+    assert not plt.fignum_exists(fig.number) and not any(tmp_path.iterdir())
+    assert save_figure(plt.figure(figsize=(2, 2)), tmp_path / "g.png", dpi=50).exists()

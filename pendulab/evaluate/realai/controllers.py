@@ -13,6 +13,7 @@ from typing import Any
 
 from ...control.controllers import controller_for_task
 from ...control.feedback import SampledController
+from ...control.realai.adapter import REALAI_METHODS, check_realai_controller, from_realai, is_realai_controller
 from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
@@ -91,7 +92,9 @@ def resolve_controller(task: str, controller: str | SampledController | Callable
     controller : str, SampledController or callable
         A name of :data:`CONTROLLERS`; a :class:`~pendulab.control.feedback.SampledController`
         (``reset()``, ``__call__(t, x)``, ``sample_time``, ``input_names``); or a factory
-        ``task -> SampledController`` (or ``-> (SampledController, x0)``, as the scorecard's).
+        ``task -> SampledController`` (or ``-> (SampledController, x0)``, as the scorecard's); or a RealAIGym
+        controller (``init``, ``get_control_output(x, t)``, ``reset``: upstream's ``AbstractController``), run
+        through :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms on the task's driven joint.
 
     Returns
     -------
@@ -112,6 +115,8 @@ def resolve_controller(task: str, controller: str | SampledController | Callable
         return name, CONTROLLERS[controller](task)
     if _is_controller(controller):
         return name, controller  # type: ignore[return-value]
+    if is_realai_controller(controller):
+        return name, from_realai(controller, task=task)
     made = controller(task)  # type: ignore[operator]
     if isinstance(made, tuple) and len(made) == 2:
         made = made[0]
@@ -144,8 +149,10 @@ def controller_name(controller: str | SampledController | Callable[[str], Any]) 
         if controller not in CONTROLLERS:
             raise ValueError(f"controller must be one of {list(CONTROLLERS)} or a SampledController, got {controller!r}")
         return controller
-    if _is_controller(controller):
+    if _is_controller(controller) or is_realai_controller(controller):
         return type(controller).__name__
     if callable(controller):
         return getattr(controller, "__name__", type(controller).__name__)
+    if any(hasattr(controller, m) for m in REALAI_METHODS):
+        check_realai_controller(controller)  # part of upstream's interface: name what is missing
     raise TypeError(f"controller must be a name, a SampledController or a factory task -> controller, got {type(controller)}")

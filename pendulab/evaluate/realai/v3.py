@@ -45,6 +45,7 @@ import numpy as np
 from ..._checks import bounded_int
 from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
+from ...control.realai.adapter import from_realai, is_realai_controller
 from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task
 from ...model.model import INPUT_NAMES, Model
 from ...model.plant_file import IdentifiedPlant
@@ -187,7 +188,9 @@ def run_v3(
         Leaderboard task.
     entry : SampledController or object with ``get_control_output_(x_rel, t)``
         A pendulab controller (wrapped in :class:`ProtocolController`) or an upstream-style entry
-        (relative angles, returns (tau1, tau2)).
+        (relative angles, returns (tau1, tau2)), called raw as upstream's v3 calls its entry; an object with
+        only upstream's public interface (``init``, ``get_control_output``, ``reset``) runs through
+        :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms.
     name : str
         Controller name for the result.
     seed : int
@@ -217,6 +220,8 @@ def run_v3(
     states, times = reset_schedule(seed)
     if hasattr(entry, "get_control_output_"):
         proto = entry
+    elif is_realai_controller(entry):
+        proto = ProtocolController(task, from_realai(entry, task=task))
     else:
         proto = ProtocolController(task, entry)
     model = protocol_model(task, plant)
