@@ -34,6 +34,7 @@ from hypothesis import HealthCheck, assume, given, note, settings
 from hypothesis import strategies as st
 
 import pendulab as pl
+from pendulab._checks import BUDGETS
 from pendulab.scene import load_scene
 
 # --------------------------------------------------------------------------- settings
@@ -938,7 +939,11 @@ def scene_tables(draw: st.DrawFn) -> tuple[dict[str, dict[str, Any]], bool]:
         else:
             ok = ok and is_real(sim[key]) and math.isfinite(sim[key]) and sim[key] > 0
             if key in ("t_final", "dt") and ok:
-                ok = sim["dt"] <= sim["t_final"]
+                # A valid horizon and step whose output grid fits the points budget (a larger one is a BudgetError,
+                # which is a ValueError naming the file: the clean refusal the oracle expects of an invalid scene).
+                budget = BUDGETS["output_points"]
+                limit = int(os.environ.get(budget.env, budget.default))
+                ok = sim["dt"] <= sim["t_final"] and sim["t_final"] / sim["dt"] + 1.0 <= limit
     tables["simulation"] = sim
     return tables, ok
 
