@@ -67,6 +67,7 @@ __all__ = [
     "compile_shared",
     "compile_shared_with",
     "build_cached",
+    "library_path",
     "source_digest",
     "CacheRebuildWarning",
     "file_digest",
@@ -106,6 +107,29 @@ def source_digest(sources: Mapping[str, bytes], units: Sequence[str], extra_flag
     for name in sorted(sources):
         h.update(b"\0" + name.encode() + b"\0" + hashlib.sha256(sources[name]).digest())
     return h.hexdigest()
+
+
+def library_path(name: str, sources: Mapping[str, bytes], units: Sequence[str], directory: Path | None = None) -> Path:
+    """Where :func:`build_cached` keeps the library of ``sources`` (whether or not it is built yet).
+
+    Parameters
+    ----------
+    name : str
+        Stem of the library file.
+    sources : mapping of str to bytes
+        Every file of the build by name.
+    units : sequence of str
+        Translation units among ``sources``.
+    directory : Path, optional
+        Cache folder; default :func:`cache_dir`.
+
+    Returns
+    -------
+    Path
+        ``<folder>/<name>-<digest prefix><suffix>``.
+    """
+    folder = cache_dir() if directory is None else Path(directory)
+    return folder / f"{name}-{source_digest(sources, units)[:20]}{shared_library_suffix()}"
 
 
 def build_cached(
@@ -157,10 +181,8 @@ def build_cached(
     RuntimeError
         The cache folder cannot be written, or the compiler failed; the message names the cache path.
     """
-    folder = cache_dir() if directory is None else Path(directory)
-    digest = source_digest(sources, units)
-    path = folder / f"{name}-{digest[:20]}{shared_library_suffix()}"
-    key = f"{name}-{digest}"  # sealed with the file: another entry's library moved here (seal and all) is refused
+    path = library_path(name, sources, units, directory)
+    key = f"{name}-{source_digest(sources, units)}"  # sealed with the file: another entry's library moved here is refused
     reason = rebuild if rebuild is not None else verify_cached(path, key)
     if reason is None:
         return path
@@ -170,7 +192,7 @@ def build_cached(
     except CompilerNotFoundError as exc:
         damaged = "" if reason == "is missing" else f" (the cached file {path} {reason} and must be rebuilt)"
         raise CompilerNotFoundError(
-            f"{who} a C compiler to build its native library (once per machine, cached in {folder}){damaged}, and no C "
+            f"{who} a C compiler to build its native library (once per machine, cached in {path.parent}){damaged}, and no C "
             f"compiler was found (tried {_candidates(cc)}); hint: {COMPILER_HINT}{', ' + hint if hint else ''}"
         ) from exc
 

@@ -111,12 +111,10 @@ def library_state(kind: str) -> str:
     ValueError
         Unknown kind.
     """
-    from .build import shared_library_suffix, source_digest
-    from .cache import cache_dir
+    from .build import library_path
 
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {list(KINDS)}, got {kind!r}")
     if _BY_KEY.get((kind, *(os.environ.get(v) for v in _CACHE_ENV))) is not None:
         return "loaded"
-    name = f"pendulab_native_{kind}-{source_digest(native_sources(kind), native_units())[:20]}{shared_library_suffix()}"
-    return "on disk" if (cache_dir() / name).is_file() else "not built"
+    return "on disk" if library_path(f"pendulab_native_{kind}", native_sources(kind), native_units()).is_file() else "not built"
