@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from typing import Any, NamedTuple
 
 __all__ = [
@@ -417,3 +418,23 @@ def require_extra(module: str, extra: str, purpose: str) -> Any:
         raise MissingExtraError(
             f'{purpose} needs {module.split(".")[0]}, which is not installed: pip install "pendulab[{extra}]"'
         ) from exc
+
+
+#: The pendulab package folder: a warning points at the first frame outside it (the user's call).
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def stacklevel_outside_package() -> int:
+    """``stacklevel`` for a ``warnings.warn`` in the caller that names the first frame outside pendulab.
+
+    Returns
+    -------
+    int
+        1 for the caller itself, plus one per enclosing frame inside the package.
+    """
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level

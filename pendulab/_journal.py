@@ -34,13 +34,12 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import sys
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from ._checks import stacklevel_outside_package
 from ._io import atomic_write_text, check_writable
 from ._version import __version__
 
@@ -116,19 +115,6 @@ def _problem(exc: BaseException) -> str:
     return f"malformed or not part of this run ({text[:200]})"
 
 
-#: The pendulab package folder: a notice points at the first frame outside it (the user's call).
-_PACKAGE_DIR = str(Path(__file__).resolve().parent) + os.sep
-
-
-def _stacklevel() -> int:
-    frame = sys._getframe(1)
-    level = 1
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame = frame.f_back
-        level += 1
-    return level
-
-
 def notify(notices: Iterable[str]) -> None:
     """Issue each notice as a :class:`JournalWarning` attributed to the first caller outside pendulab.
 
@@ -138,7 +124,7 @@ def notify(notices: Iterable[str]) -> None:
         One line each, naming the file and the problem.
     """
     for line in notices:
-        warnings.warn(line, JournalWarning, stacklevel=_stacklevel())
+        warnings.warn(line, JournalWarning, stacklevel=stacklevel_outside_package())
 
 
 def header(kind: str, settings: Mapping[str, Any], version: str = __version__) -> dict[str, Any]:

@@ -289,11 +289,7 @@ def glibc_versions(data: bytes) -> tuple[tuple[int, ...], ...]:
     ValueError
         Not a 64-bit little-endian ELF file.
     """
-    if data[4] != 2 or data[5] != 1:
-        raise ValueError("only 64-bit little-endian ELF files are supported")
-    (shoff,) = struct.unpack_from("<Q", data, 0x28)
-    shentsize, shnum = struct.unpack_from("<HH", data, 0x3A)
-    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize) for i in range(shnum)]
+    sections = _elf_sections(data)
     found = set()
     for sec in sections:
         if sec[1] != 0x6FFFFFFE:  # SHT_GNU_verneed
@@ -381,12 +377,17 @@ def _cstr(data: bytes, offset: int) -> str:
     return data[offset : data.index(b"\0", offset)].decode("ascii")
 
 
-def _elf_exports(data: bytes) -> tuple[str, ...]:
+def _elf_sections(data: bytes) -> list[tuple]:
+    """The section header table of a 64-bit little-endian ELF file (``Elf64_Shdr`` fields in order)."""
     if data[4] != 2 or data[5] != 1:
         raise ValueError("only 64-bit little-endian ELF files are supported")
     (shoff,) = struct.unpack_from("<Q", data, 0x28)
     shentsize, shnum = struct.unpack_from("<HH", data, 0x3A)
-    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize) for i in range(shnum)]
+    return [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize) for i in range(shnum)]
+
+
+def _elf_exports(data: bytes) -> tuple[str, ...]:
+    sections = _elf_sections(data)
     names = set()
     for sec in sections:
         if sec[1] != 11:  # SHT_DYNSYM

@@ -25,12 +25,12 @@ import contextlib
 import hashlib
 import json
 import os
-import sys
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from .._checks import stacklevel_outside_package
 from .compiler import CompilerNotFoundError
 
 __all__ = [
@@ -423,17 +423,13 @@ def cached_artifact(
             warnings.warn(
                 f"pendulab: the cached file {path} {reason}; rebuilding it (the cache folder is {folder})",
                 CacheRebuildWarning,
-                stacklevel=_stacklevel_outside_package(),
+                stacklevel=stacklevel_outside_package(),
             )
         _build_into(path, make, what, key, check, hint)
     reason = verify_cached(path, key)
     if reason is not None:  # pragma: no cover - someone damaged it again between the rename and here
         raise RuntimeError(f"{what}: the cached file {path} {reason} right after it was built; delete {folder} and retry")
     return path
-
-
-#: The pendulab package folder: a warning points at the first frame outside it (the user's call).
-_PACKAGE_DIR = str(Path(__file__).resolve().parents[1]) + os.sep
 
 
 def warn_rebuild(message: str) -> None:
@@ -444,17 +440,7 @@ def warn_rebuild(message: str) -> None:
     message : str
         What was found and what is done about it (names the cached file).
     """
-    warnings.warn(message, CacheRebuildWarning, stacklevel=_stacklevel_outside_package())
-
-
-def _stacklevel_outside_package() -> int:
-    """``stacklevel`` (for a ``warnings.warn`` in the caller) of the first frame outside the pendulab package."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame = frame.f_back
-        level += 1
-    return level
+    warnings.warn(message, CacheRebuildWarning, stacklevel=stacklevel_outside_package())
 
 
 def _build_into(
