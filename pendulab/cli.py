@@ -58,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for name in COMMAND_MODULES:
         importlib.import_module(f"pendulab.commands.{name}").register(sub)
+    from .commands.options import declare_options
+
+    declare_options(parser)
     _plain_text(parser)
     return parser
 
@@ -109,6 +112,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    from .commands.options import check_options
+
+    try:
+        check_options(args)
+    except ValueError as exc:  # InputError, BudgetError: one line, before any work
+        print(f"pendulab {args.command}: error: {exc}", file=sys.stderr)
+        return 2
     from .commands.outputs import forget_output_directories, mark_interrupted
 
     command = list(sys.argv[1:] if argv is None else argv)

@@ -22,6 +22,7 @@ PKG = ROOT / "pendulab"
 #: Lowest first. A module may import its own layer and the layers below it, never one above.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_checks", "_version", "_io", "_lazy"),
+    ("_inputs",),
     ("_journal",),
     ("model",),
     ("analysis", "native"),

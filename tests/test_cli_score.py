@@ -32,7 +32,7 @@ def test_score_writes_json_markdown_png(tmp_path, capsys):
         (["--controller", "pid", "--task", "pendubot"], "--controller 'pid'"),
         (["--controller", "lqr", "--task", "nope"], "unknown task"),
         (["--controller", "lqr", "--task", "pendubot", "--categories", "gravity"], "unknown ['gravity']"),
-        (["--controller", "lqr", "--task", "pendubot", "--runs", "0"], "--runs must be an integer >= 1, got '0'"),
+        (["--controller", "lqr", "--task", "pendubot", "--runs", "0"], "--runs = '0': out of range; expected an integer in [1, "),
         (["--controller", "lqr", "--task", "pendubot", "--categories", "stiffness"], "does not apply"),
         (["--task", "pendubot"], "--controller and --task are required"),
         (["--realai", "--controller", "best", "--task", "pendubot_elastic"], "pendubot or acrobot"),

@@ -167,7 +167,7 @@ def test_saturation_shrinks_region_of_attraction():
         (lambda: lqr_balance(pl.rigid(lc2=0.0, I2=0.1), "pendubot"), UncontrollableError, "uncontrollable configuration"),
         (lambda: lqr_balance(pl.rigid(), Q=np.eye(3)), ValueError, r"Q must be a finite \(4, 4\)"),
         (lambda: lqr_balance(pl.rigid(), "pendubot", R=[[-1.0]]), ValueError, "R must be positive definite"),
-        (lambda: lqr_balance(pl.rigid(), dt=-0.1), ValueError, "dt must be a positive sample time"),
+        (lambda: lqr_balance(pl.rigid(), dt=-0.1), ValueError, r"dt = -0.1: out of range; expected a finite number in \[1e-09"),
         (lambda: to_statespace(pl.rigid(), [0.0, 0.0]), ValueError, r"x must have shape \(4,\)"),
         (lambda: to_statespace(pl.rigid(), [0.0, np.nan, 0.0, 0.0]), ValueError, "x must be finite"),
         (lambda: to_nlsys(pl.rigid(), "both"), ValueError, "unknown actuation 'both'"),

@@ -81,7 +81,7 @@ def test_summary_matches_data(demo_dir, capsys):
 
 @pytest.mark.parametrize(
     ("args", "fragment"),
-    [(["--t-final", "-2"], "--t-final '-2'"), (["--scene", "no_such_scene"], "'no_such_scene'")],
+    [(["--t-final", "-2"], "--t-final = '-2'"), (["--scene", "no_such_scene"], "'no_such_scene'")],
 )
 def test_demo_bad_input_one_line_exit_2(tmp_path, capsys, args, fragment):
     assert main(["demo", "--out", str(tmp_path / "out"), *args]) == 2

@@ -39,7 +39,7 @@ def test_modes_table_controllability_and_plot(tmp_path, capsys):
         (["--model", "rigid", "--torque", "1"], "--torque '1'"),
         (["--model", "rigid", "--torque", "0,90"], "exceeds the largest gravity torque"),
         (["--model", "rigid", "--set", "k1=3"], "unknown parameter name(s) ['k1']"),
-        (["--model", "rigid", "--set", "m1"], "expected name=value"),
+        (["--model", "rigid", "--set", "m1"], "not NAME=VALUE"),
     ],
 )
 def test_modes_bad_input_exits_2(argv, fragment, capsys):

@@ -94,8 +94,6 @@ def run(args: argparse.Namespace) -> int:
             raise CLIError(str(exc)) from None
     if args.tolerance is not None and not (0.0 < args.tolerance < 1.0):
         raise CLIError(f"--tolerance must be a relative defect in (0, 1), got {args.tolerance}")
-    if args.starts < 0:
-        raise CLIError(f"--starts must be >= 0, got {args.starts}")
     budget = parse_number("--max-wall-time", None if args.max_wall_time is None else str(args.max_wall_time), positive=True)
     task = load_task(args.task or args.scene)
     robot = plant_settings(args, task.model.kind)

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .._inputs import checked
 from ..integrate import SimulationError, simulate
 from ..integrate.trajectory import Trajectory
 from ..model.model import Model
@@ -40,6 +41,7 @@ def _sample_time(design: LQRDesign, dt: float | None) -> float:
     return float(dt)
 
 
+@checked()
 def simulate_balance(
     model: Model,
     design: LQRDesign,
@@ -177,6 +179,7 @@ class ROAResult:
     simulations: int
 
 
+@checked()
 def region_of_attraction(
     model: Model,
     design: LQRDesign,

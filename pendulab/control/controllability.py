@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm, null_space
 
+from .._inputs import checked
 from ..analysis.equilibria import Equilibrium, equilibria, equilibrium
 from ..analysis.linearize import OutputSpec, linearize
 from ..model.model import ACTUATIONS, Model
@@ -30,6 +31,7 @@ __all__ = [
 ]
 
 
+@checked()
 def controllable_subspace(A: np.ndarray, B: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Orthonormal bases of the controllable subspace of (A, B) and of its complement.
 
@@ -84,6 +86,7 @@ def controllable_subspace(A: np.ndarray, B: np.ndarray, rtol: float = 1e-9) -> t
     return basis, Qu
 
 
+@checked()
 def finite_gramian(A: np.ndarray, B: np.ndarray, horizon: float) -> np.ndarray:
     """Finite-horizon controllability Gramian ``int_0^T e^(At) B B^T e^(A^T t) dt``.
 
@@ -218,6 +221,7 @@ def _weakest(W: np.ndarray, missing: np.ndarray, names: Sequence[str]) -> tuple[
     return float(max(w[0], 0.0)), _dominant(direction, names)
 
 
+@checked()
 def controllability_report(
     model: Model,
     at: Sequence[str | Equilibrium] | None = None,

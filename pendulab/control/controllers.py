@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._checks import check_model, positive_float
+from .._inputs import checked
 from ..analysis.linearize import linearize
 from ..model.model import INPUT_NAMES, Model
 from .feedback import SampledController, actuated_inputs, balance_controller, energy_swingup, upright_state
@@ -30,6 +31,7 @@ MAX_REFERENCE_SAMPLES = 1_000_000
 CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr", "nmpc")
 
 
+@checked()
 def make_controller(
     name: str,
     model: Model,
@@ -209,6 +211,7 @@ def _make_plain(
 TASK_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc", "robust")
 
 
+@checked()
 def controller_for_task(
     name: str,
     task: Task | str,

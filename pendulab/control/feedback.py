@@ -30,6 +30,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from .._checks import positive_float
+from .._inputs import checked
 from ..analysis.equilibria import equilibrium
 from ..analysis.linearize import linearize
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
@@ -271,6 +272,7 @@ class LinearStateFeedback:
         return float(e @ self.P @ e) if self.P is not None else float(e @ e)
 
 
+@checked()
 def balance_controller(
     model: Model,
     sample_time: float,
@@ -519,6 +521,7 @@ ENERGY_SWINGUP_DEFAULTS: dict[str, tuple[float, float]] = {"full": (2.0, 20.0), 
 _RELEASE_FACTOR = 4.0
 
 
+@checked()
 def energy_swingup(
     model: Model,
     sample_time: float,

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov, solve_discrete_lyapunov
 
 from .._checks import check_model
+from .._inputs import checked
 from ..analysis.equilibria import Equilibrium, equilibrium
 from ..analysis.linearize import check_actuation, linearize, linearize_along, not_equilibrium_error
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model
@@ -239,6 +240,7 @@ def weight_matrix(W: Any, n: int, name: str, definite: bool) -> np.ndarray:
     return W
 
 
+@checked()
 def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold discretization of (A, B): ``Ad = expm(A dt)`` and ``Bd = (int_0^dt expm(A s) ds) B``.
 
@@ -328,6 +330,7 @@ def _cost_to_go(Acl: np.ndarray, Qcl: np.ndarray, dt: float | None, P_ctrl: np.n
     return 0.5 * (P + P.T)
 
 
+@checked()
 def lqr_balance(
     model: Model,
     actuation: str | Sequence[str] = "full",
@@ -457,6 +460,7 @@ def lqr_balance(
     )
 
 
+@checked()
 def discrete_tvlqr(
     model: Model,
     x_lin: Any,

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._checks import positive_float
+from .._inputs import checked
 from ..model.model import INPUT_NAMES
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
@@ -290,6 +291,7 @@ def plan_swingup(
 REPLAN_DEFAULTS: dict[str, tuple[float, int, bool]] = {"pendubot": (1.2, 40, True), "acrobot": (2.0, 30, True)}
 
 
+@checked()
 def replanning_controller(
     task: str, *, plan_delay: float = 0.0, horizon: float | None = None, min_time: bool | None = None, **options: float
 ) -> ReplanningSwingUp:

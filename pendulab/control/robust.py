@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .._inputs import checked
 from ..model.model import INPUT_NAMES
 from .estimation import ExtendedKalmanFilter, MultipleModelEstimator, StateEstimator
 from .feedback import SampledController
@@ -76,6 +77,7 @@ class EstimatedController:
     EstimatedController torque jitter 0.03 N.m
     """
 
+    @checked()
     def __init__(
         self,
         controller: SampledController,

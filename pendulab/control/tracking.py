@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._checks import positive_float
+from .._inputs import checked
 from ..model.model import INPUT_NAMES, Model
 from .feedback import LinearStateFeedback, actuated_inputs, as_feedback, energy_swingup, upright_state
 from .lqr import UncontrollableError, discrete_tvlqr, lqr_balance, weight_matrix, wrap_state_error
@@ -219,6 +220,7 @@ def _design(
     return TVLQRTracker(model, t_s, x_s, u_ref, K_out, sample_time, out_names, final=final, u_max=u_max)
 
 
+@checked()
 def tvlqr(
     result: SwingUpResult,
     dt: float = 0.01,
@@ -283,6 +285,7 @@ def tvlqr(
     return _design(model, t_s, x_s, u_s, x_lin, pb.target, float(dt), names, INPUT_NAMES, Q, R, pb.torque_limit)
 
 
+@checked()
 def tvlqr_tracker(
     model: Model,
     t: np.ndarray,
@@ -340,6 +343,7 @@ def tvlqr_tracker(
     return _design(model, ts, xs, us, xs[:-1], upright_state(model), h, names, names, Q, R, u_max)
 
 
+@checked()
 def swingup_reference(
     model: Model, sample_time: float, t_final: float, *, x0: np.ndarray | None = None, u_max: float = 20.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -391,6 +395,7 @@ def swingup_reference(
     return traj.t, traj.x, traj.u
 
 
+@checked()
 def resample_reference(
     t: np.ndarray, x: np.ndarray, u: np.ndarray, sample_time: float, model: Model | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._checks import positive_float
+from .._inputs import checked
 from ..control.feedback import SampledController, full_input
 from ..integrate.trajectory import Trajectory
 from ..model.model import INPUT_NAMES
@@ -194,6 +195,7 @@ def _run(
     return X, Y, U, stats, time.perf_counter() - wall
 
 
+@checked()
 def cosim(
     fmu_path: str | Path,
     controller: SampledController,
@@ -326,6 +328,7 @@ def cosim(
     )
 
 
+@checked()
 def cosim_many(
     fmu_paths: Sequence[str | Path],
     controller: SampledController,

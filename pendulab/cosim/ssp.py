@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from .._inputs import checked
 from .._io import atomic_open
 from .._version import __version__
 from ..fmu.controller_export import design_controller, export_controller
@@ -230,6 +231,7 @@ def _ssd(model: Any, ctrl: Any, sample_time: float, stop_time: float, name: str,
     return _xml(root)
 
 
+@checked(stop_time="t_final")
 def export_ssp(
     path: str | os.PathLike,
     *,

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import bounded_int, check_model, positive_float, relative_tolerance
+from .._inputs import checked
 from ..integrate import METHODS, simulate
 from ..integrate.taylor.availability import check_tolerance_floor, heyoka_module
 from ..model.model import Model
@@ -34,6 +35,7 @@ DEFAULT_MAX_STEPS = 1_000_000
 _STATUS_NAMES = {STATUS_OK: "ok", STATUS_EVENT: "event", STATUS_FAILED: "failed"}
 
 
+@checked()
 def ensemble(
     model: Model,
     x0: Any,

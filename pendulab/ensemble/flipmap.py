@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import bounded_int, check_model, relative_tolerance
+from .._inputs import checked
 from .._io import check_writable
 from .flipmap_plot import plot_flip_map, plot_flip_map_compare
 from .flipmap_release import MAX_GRID, flip_energy_threshold, flip_initial_states, flip_map_grid
@@ -67,6 +68,7 @@ DEFAULT_BLOCK = 10000
 
 
 # -- the map --------------------------------------------------------------------
+@checked()
 def flip_map(
     model: Any,
     n_grid: int | tuple[int, int],

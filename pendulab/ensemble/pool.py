@@ -29,6 +29,7 @@ from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExe
 from typing import Any, TypeVar
 
 from .._checks import bounded_int
+from .._inputs import checked
 
 __all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed"]
 
@@ -165,6 +166,7 @@ def _run_chunk(job: int, chunk: list[Any]) -> list[Any]:
     return [fn(item) for item in chunk]
 
 
+@checked()
 def map_runs(
     fn: Callable[[T], R],
     items: Iterable[T],

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
+from .._inputs import checked
 from ..analysis.equilibria import equilibrium
 from ..control.feedback import SampledController
 from ..model.model import INPUT_NAMES, Model, model_functions
@@ -305,6 +306,7 @@ def _push_torque(pushes: list[tuple[int, float, float, float]], t: float) -> np.
     return tau
 
 
+@checked()
 def run_perturbed_episode(
     controller: SampledController,
     task: Task,

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._checks import bounded_int, positive_float
+from .._inputs import checked
 from ..control.controllers import controller_for_task
 from ..control.feedback import SampledController
 from ..control.swingup.tasks import resolve_task
@@ -138,6 +139,7 @@ MAX_RUNS = 5000
 MAX_LEVELS = 100
 
 
+@checked(runs="runs_per_level")
 def score(
     controller: ControllerSpec,
     task: Task | str,

@@ -35,6 +35,7 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
+from .._inputs import checked
 from .._io import atomic_open
 from .._version import __version__
 from ..native.build import shared_library_suffix
@@ -68,6 +69,7 @@ __all__ = [
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)
 
 
+@checked()
 def controller_model_description(
     law: ControllerLaw, fmi_version: int, token: str, *, timestamp: str | None = None, stop_time: float = 10.0
 ) -> bytes:
@@ -226,6 +228,7 @@ def _build_description(law: ControllerLaw) -> bytes:
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
 
+@checked(stop_time="t_final")
 def export_controller(
     controller: Any,
     path: str | os.PathLike,

@@ -16,6 +16,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._inputs import checked
 from ..control.feedback import EnergySwingUp, LinearStateFeedback
 from ..control.tracking import TVLQRTracker
 from ..model.model import Model
@@ -215,6 +216,7 @@ def controller_law(controller: Any) -> ControllerLaw:
     return ControllerLaw(kind, model, names, outs, float(controller.sample_time), funcs, consts, arrays, x_start)
 
 
+@checked()
 def design_controller(
     name: str,
     task: Any = None,

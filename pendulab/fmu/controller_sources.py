@@ -15,6 +15,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from .._inputs import checked
 from .codegen import C_DIR
 from .controller_laws import ControllerLaw
 
@@ -153,6 +154,7 @@ def compiled_units(fmi_version: int) -> tuple[str, ...]:
     return (f"ctrl_fmi{fmi_version}.c", "ctrl_core.c", "controller_functions.c", "controller_data.c")
 
 
+@checked()
 def generate_controller_sources(law: ControllerLaw, fmi_version: int) -> tuple[dict[str, bytes], str]:
     """All C sources of a controller FMU and its token.
 

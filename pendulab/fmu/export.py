@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._inputs import checked
 from .._io import atomic_open
 from ..model.model import Model
 from ..native.build import (
@@ -158,6 +159,7 @@ def _checked(binary: bytes, required: tuple[str, ...], where: str) -> bytes:
     return binary
 
 
+@checked(stop_time="t_final", step_size="comm_step")
 def export(
     model: Model,
     path: str | os.PathLike,

@@ -36,6 +36,7 @@ from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
 from .._checks import bounded_int, positive_float, relative_tolerance
+from .._inputs import checked
 from ..model.model import ACTUATIONS, Model, make_model
 from .backends import INTEGRATORS, FmuBackend, NativePlant
 from .observation import make_pipeline
@@ -215,6 +216,7 @@ class DoublePendulumEnv(gymnasium.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}
 
+    @checked(episode_length="t_final", tol="tolerance", torque_limit="u_max")
     def __init__(
         self,
         model: str | Model = "rigid",

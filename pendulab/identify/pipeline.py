@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._inputs import checked
 from ..model.plant_file import IdentifiedPlant
 from .fit import INERTIAL, Normals, fit_regression, normals, realize, regressor_rows
 from .output_error import OutputErrorFit, fit_output_error
@@ -226,6 +227,7 @@ def choose_structure(scores: Sequence[StructureScore]) -> StructureScore:
     return next(s for s in scores if s.cv_score <= best * (1.0 + CV_TOLERANCE))
 
 
+@checked(cutoff_hz="cutoff")
 def identify(
     records: Sequence[Record],
     fixed: Mapping[str, float],

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import BUDGETS, bounded_int, check_model, positive_float, relative_tolerance, within_budget
+from .._inputs import checked
 from ..model.model import Model
 from .auto import choose_method
 from .energy import energy_flows, trajectory_energy_flows  # noqa: F401  (re-exported: their old home)
@@ -151,6 +152,7 @@ InputSpec = None | float | np.ndarray | Callable[[float, np.ndarray], Any] | Tim
 MAX_OUTPUT_POINTS: int = BUDGETS["output_points"].default  # 5_000_000, in the one table of budgets
 
 
+@checked()
 def time_grid(t_final: float, dt: float) -> np.ndarray:
     """Uniform output grid from 0 to ``t_final`` with step at most ``dt``.
 
@@ -258,6 +260,7 @@ def input_schedule(model: Model, u: InputSpec, t: np.ndarray) -> np.ndarray | No
     )
 
 
+@checked()
 def simulate(
     model: Model,
     x0: Any,
@@ -440,7 +443,9 @@ def simulate(
         U_full = u.sample(model, t)
     else:
         U_full = np.vstack([U, U[-1:]])
-    Y = model.outputs(X, U_full)
+    # A family with compiled code of its own may evaluate the outputs too (Taylor: a heyoka cfunc, ~10x NumPy).
+    evaluate = spec.settings.get("outputs")
+    Y = evaluate(model, X, U_full) if evaluate is not None else model.outputs(X, U_full)
     return Trajectory(
         t=t,
         x=X,

@@ -61,6 +61,12 @@ def model_functions(kind: str) -> dict[str, ca.Function]:
 
 
 @cache
+def _scalar(kind: str, fname: str) -> Callable[..., np.ndarray]:
+    """Plain-Python (``math``) translation of one model function, for single points (lists of floats)."""
+    return to_python(model_functions(kind)[fname])
+
+
+@cache
 def _vectorized(kind: str, fname: str) -> Callable[..., np.ndarray]:
     """Element-wise NumPy translation of one model function (inputs (n_in, N), output (n_out, N))."""
     generated = to_python(model_functions(kind)[fname], vectorized=True)

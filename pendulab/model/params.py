@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from .._inputs import MAGNITUDE
+
 __all__ = [
     "ParamInfo",
     "RigidParams",
@@ -133,6 +135,12 @@ class _ParamsBase:
             value = float(value)
             if not math.isfinite(value):
                 raise ValueError(f"parameter {info.name!r} must be finite, got {value!r}")
+            if value != 0.0 and not MAGNITUDE[0] <= abs(value) <= MAGNITUDE[1]:
+                # pendulab._inputs: squares, products and inverses of parameters must stay finite and non-zero.
+                raise ValueError(
+                    f"parameter {info.name!r} = {value!r} [{info.unit}]: its square or inverse would overflow or underflow; "
+                    f"expected a magnitude in [{MAGNITUDE[0]:g}, {MAGNITUDE[1]:g}] or 0"
+                )
             if info.positive and value <= 0.0:
                 raise ValueError(f"parameter {info.name!r} must be > 0 [{info.unit}] ({info.description}), got {value!r}")
             if not info.positive and value < 0.0:

@@ -52,6 +52,7 @@ import time
 import numpy as np
 
 from .._checks import positive_float
+from .._inputs import checked
 from ..analysis.model_error import validity_horizon
 from ..integrate import time_grid
 from .choice_result import LevelPrediction, ModelChoice, Verification
@@ -118,6 +119,7 @@ def check_rule_domain(scene: Scene) -> None:
             )
 
 
+@checked()
 def choose_model(
     scene: Scene,
     *,

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import check_budget
+from .._inputs import INPUTS, InputError
 from ..integrate import METHODS
 from ..model.model import make_model
 from ..model.plant_file import load_plant
@@ -72,6 +73,16 @@ class _Reader:
         if positive and value <= 0:
             raise self.error(section, key, value, "a finite number > 0")
         return float(value)
+
+    def declared(self, section: str, key: str, value: Any, name: str | None = None) -> Any:
+        """``value`` checked against the declaration of input ``name`` (default ``key``), see pendulab._inputs."""
+        spec = INPUTS[name or key]
+        if value is _MISSING or isinstance(value, str) and spec.kind in ("real", "integer"):  # TOML is typed: "1.0" is a string
+            raise self.error(section, key, value, spec.expected())
+        try:
+            return spec.check(value, f"[{section}] {key}")
+        except InputError as exc:
+            raise ValueError(f"scene file {str(self.path)!r}: {exc}") from None
 
     def string(self, section: str, key: str, value: Any, choices: tuple[str, ...] | None = None) -> str:
         if not isinstance(value, str) or (choices is not None and value not in choices):
@@ -196,7 +207,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
     init_table = dict(rd.table("initial"))
     start = rd.string("initial", "start", init_table.pop("start", "static"), STARTS if kind == "elastic" else ("static",))
     rd.only("initial", init_table, model.state_names, f"{kind} state names (or 'start')")
-    initial = {k: rd.real("initial", k, v) for k, v in init_table.items()}
+    initial = {k: rd.declared("initial", k, v, "state") for k, v in init_table.items()}
     if start == "quasi-static" and ({"r1", "r2"} & set(initial)):
         raise rd.error("initial", "start", start, "no stated r1, r2 with a quasi-static start (it sets them)")
     x0 = initial_state(model, initial, start)
@@ -207,7 +218,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
     rd.only("simulation", sim, tuple(_SIMULATION_DEFAULTS), "keys")
     settings = {**_SIMULATION_DEFAULTS, **sim}
     method = rd.string("simulation", "method", settings["method"], ("auto", *METHODS))
-    t_final, dt, rtol, atol = (rd.real("simulation", k, settings[k], positive=True) for k in ("t_final", "dt", "rtol", "atol"))
+    t_final, dt, rtol, atol = (rd.declared("simulation", k, settings[k]) for k in ("t_final", "dt", "rtol", "atol"))
     if dt > t_final:
         raise rd.error("simulation", "dt", dt, f"an output step <= t_final = {t_final}")
     # The output grid every run of the scene allocates, budgeted when the file is read (not at the first run).
@@ -222,7 +233,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
         raise rd.error("outputs", "names", names, f"a non-empty list of signal names of the {kind} model {list(signals)}")
     tolerance = out_table.get("tolerance")
     if tolerance is not None:
-        tolerance = rd.real("outputs", "tolerance", tolerance, positive=True)
+        tolerance = rd.declared("outputs", "tolerance", tolerance)
 
     u = None
     amplitude, frequency = None, 0.0
@@ -231,7 +242,7 @@ def load_scene(path_or_name: str | Path) -> Scene:
         sine = rd.table("input.sine") if "sine" in in_table else {}
         in_table.pop("sine", None)
         rd.only("input", in_table, model.input_names, "input names (or the table 'sine')")
-        u = np.array([rd.real("input", k, in_table.get(k, 0.0)) for k in model.input_names])
+        u = np.array([rd.declared("input", k, in_table.get(k, 0.0), "torque") for k in model.input_names])
         if sine:
             rd.only("input.sine", sine, ("amplitude", "frequency"), "keys")
             amp = sine.get("amplitude", _MISSING)
@@ -239,8 +250,8 @@ def load_scene(path_or_name: str | Path) -> Scene:
                 raise rd.error(
                     "input.sine", "amplitude", amp, f"a list of {model.nu} amplitudes [N.m] for {list(model.input_names)}"
                 )
-            amplitude = np.array([rd.real("input.sine", "amplitude", a) for a in amp])
-            frequency = rd.real("input.sine", "frequency", sine.get("frequency", _MISSING), positive=True)
+            amplitude = np.array([rd.declared("input.sine", "amplitude", a, "torque") for a in amp])
+            frequency = rd.declared("input.sine", "frequency", sine.get("frequency", _MISSING))
 
     extra = {k: v for k, v in data.items() if k in FEATURE_SECTIONS}
     return Scene(

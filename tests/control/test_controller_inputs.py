@@ -23,11 +23,15 @@ from pendulab.control.controllers import (
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["--controller", "lqr", "--u-max", "0"], "u_max must be a positive finite number"),
-        (["--controller", "swingup", "--u-max", "-5"], "u_max must be a positive finite number"),
-        (["--controller", "lqr", "--sample-time", "1e9"], "sample_time must be in [1e-05, 0.346] s"),
-        (["--controller", "lqr", "--sample-time", "1e-9"], "sample_time must be in [1e-05, 0.346] s"),
-        (["--controller", "lqr", "--task", "pendubot", "--sample-time", "1e9"], "sample_time must be in [1e-05, 0.215] s"),
+        (["--controller", "lqr", "--u-max", "0"], "--u-max = '0': out of range; expected a finite number in (0, 10000] N.m"),
+        (["--controller", "swingup", "--u-max", "-5"], "--u-max = '-5': out of range"),
+        (
+            ["--controller", "lqr", "--sample-time", "1e9"],
+            "--sample-time = '1e9': out of range; expected a finite number in [1e-05, 10] s",
+        ),
+        (["--controller", "lqr", "--sample-time", "1e-9"], "--sample-time = '1e-9': out of range"),
+        (["--controller", "lqr", "--sample-time", "1"], "sample_time must be in [1e-05, 0.346] s"),  # the model's own bound
+        (["--controller", "lqr", "--task", "pendubot", "--sample-time", "1"], "sample_time must be in [1e-05, 0.215] s"),
     ],
 )
 def test_export_controller_refuses_useless_controllers(argv, message, tmp_path, capsys):

@@ -70,8 +70,11 @@ def test_tables_list_every_published_row_exactly_even_with_nothing_run():
     assert "| published History SAC (`history_sac`) | 1 | 1.15 | 7.67 | 2.36 | 0.007 | 62.07 | 0.682 |" in text
     assert "| published mcpilco (`mcpilco`) | 1 | 1.45 | 19.43 | 3.22 | 0.097 | 253.59 | 0.316 |" in text
     assert "0.799 (one unseeded run)" in text and "0.658 (one unseeded run)" in text
-    # 6 rows in the three protocol tables, plus one per task in the identified-robot table (its four cells)
-    assert text.count("| pendulab `best` | not run (test) |") == 8
+    # 6 rows in the three protocol tables, one per task in the identified-robot table (its four cells), 2 in v3-hardware
+    assert text.count("| pendulab `best` | not run (test) |") == 10
+    # the ICRA 2025 hardware final's rows beside the v3-hardware ones
+    assert "| published AcadosMPC (`acados_mpc`, real robot) |  |  |  | 0.721 | | | |" in text
+    assert "| published AcadosMPC (`acados_mpc`, real robot) |  |  |  | 0.775 | | | |" in text
     assert text.count("| pendulab `best` | not run (test) | not run (test) | not run (test) | not run (test) |") == 2
     assert "1e8544e" in text  # upstream's commit is cited
 
@@ -109,7 +112,11 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
         "v3": (1, 0),
         "v2-identified": (1, 0),
         "v3-identified": (1, 0),
+        "v3-hardware": (1, 0),
     }
+    hw = run.case("v3-hardware", "pendubot", "lqr").summary["seeds"][0]
+    assert hw["protocol"] == "v3-hardware" and hw["simulation"]["plant"].startswith("identified")
+    assert 0.0 <= hw["uptime_fraction"] <= 1.0 and hw["duration"] == pytest.approx(10.0)
     assert sum(p is None for p in plants) == 2 and {p.params["cf1"] for p in plants if p is not None} == {
         load_plant("c1").params["cf1"]
     }
@@ -129,13 +136,16 @@ def test_quick_leaderboard_runs_each_case_once_and_resumes_without_rerunning(tmp
     for heading in ("## RealAIGym simulation leaderboard v2", "## RealAIGym robustness leaderboard v2", "## RealAIGym v3",
                     "## On the identified robot"):  # fmt: skip
         assert heading in text
-    assert "NOT comparable" in text and "reused: v2 1, robustness-v2 13, v3 1, v2-identified 1, v3-identified 1" in text
+    assert (
+        "NOT comparable" in text
+        and "reused: v2 1, robustness-v2 13, v3 1, v2-identified 1, v3-identified 1, v3-hardware 1" in text
+    )
     assert (out.parent / "figures" / "leaderboard_robustness_pendubot.png").stat().st_size > 10_000
     assert (out.parent / "figures" / "leaderboard_v3.png").is_file()
 
     # Past a wall-time budget complete journals are still read back and nothing runs; without resume nothing runs.
     late = run_protocols(["lqr"], tasks=["pendubot"], quick=True, resume=True, root=root, max_wall_time=1e-9)
-    assert [c.status for c in late.cases] == ["done"] * 5 and calls == {"v2": 2, "robustness-v2": 13, "v3": 2}
+    assert [c.status for c in late.cases] == ["done"] * 6 and calls == {"v2": 2, "robustness-v2": 13, "v3": 2}
     fresh = run_protocols(["lqr"], tasks=["pendubot"], quick=True, root=root, max_wall_time=1e-9)
     assert all(c.status == "not run" and "budget" in c.reason for c in fresh.cases)
 

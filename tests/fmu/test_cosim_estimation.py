@@ -80,10 +80,10 @@ def test_cosim_rejects_bad_estimator_or_measurement(cosim_fmu, kwargs, exc, matc
 @pytest.mark.parametrize(
     ("args", "match"),
     [
-        (["--measurement-noise", "-0.1"], "--measurement-noise: velocity_noise must be"),
-        (["--measurement-noise", "loud"], "--measurement-noise must be"),
-        (["--measurement-delay", "1.5"], "--measurement-delay: delay"),
-        (["--measurement-delay", "-2"], "--measurement-delay: delay"),
+        (["--measurement-noise", "-0.1"], "--measurement-noise = '-0.1': out of range"),
+        (["--measurement-noise", "loud"], "--measurement-noise = 'loud': not a number"),
+        (["--measurement-delay", "1.5"], "--measurement-delay = '1.5': not an integer"),
+        (["--measurement-delay", "-2"], "--measurement-delay = '-2': out of range"),
         (["--measurement-seed", "3"], "--measurement-seed applies with --measurement-noise only"),
         (["--estimator", "kalman"], "--estimator"),
     ],

@@ -39,7 +39,7 @@ def test_identify_writes_a_plant_file_that_loads(tmp_path, synthetic_records, ca
         (["identify", "--dataset", "c9"], "--dataset 'c9'"),
         (["identify", "a.csv", "b.csv", "--columns", "time=t,q1=a"], "missing roles"),
         (["identify", "--dataset", "c1", "--geometry", "l3=1"], "unknown names \\['l3'\\]"),
-        (["identify", "--dataset", "c1", "--cutoff", "-1"], "--cutoff '-1'"),
+        (["identify", "--dataset", "c1", "--cutoff", "-1"], "--cutoff = '-1'"),
         (["identify", "--dataset", "c1", "--input", "volts"], "--input 'volts'"),
         (["identify", "nope1.csv", "nope2.csv"], "record file not found"),
     ],

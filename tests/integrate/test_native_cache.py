@@ -235,7 +235,7 @@ def test_rtol_of_one_or_more_is_refused_before_anything_is_built(tmp_path, monke
     monkeypatch.setenv("PENDULAB_CACHE_DIR", str(tmp_path / "cache"))
     for method in ("compiled-dopri5", "compiled-rodas4"):
         for rtol in (1.0, 10.0):
-            with pytest.raises(ValueError, match=r"rtol must be a relative tolerance in \(0, 1\)"):
+            with pytest.raises(ValueError, match=r"rtol = .*: out of range; expected a finite number in \[2.22e-16, 1\)"):
                 pl.simulate(pl.rigid(), X0, 1.0, method=method, rtol=rtol)
     assert not (tmp_path / "cache").exists()  # refused before the library was looked up or built
 

@@ -133,8 +133,9 @@ def test_budget_options_do_not_reach_families_without_them():
 @pytest.mark.parametrize(
     "argv",
     [
-        ["simulate", "--model", "rigid", "--t-final", "1e12", "--dt", "1e-3"],
-        ["simulate", "--model", "rigid", "--t-final", "1", "--dt", "1e-12"],
+        # In their declared ranges (pendulab._inputs), each alone; together beyond the output-points budget.
+        ["simulate", "--model", "rigid", "--t-final", "86400", "--dt", "1e-3"],
+        ["simulate", "--model", "rigid", "--t-final", "1", "--dt", "1e-9"],
     ],
 )
 def test_output_grids_beyond_the_budget_are_refused_before_allocation(argv, capsys):
@@ -186,7 +187,7 @@ def test_a_budget_names_the_input_value_budget_and_variable_and_is_overridable(m
         check_budget("repeats", "--repeats", 3)
 
 
-@pytest.mark.parametrize(("t_final", "dt"), [("1e12", "1e-3"), ("1.0", "1e-12")])
+@pytest.mark.parametrize(("t_final", "dt"), [("86400", "1e-3"), ("1.0", "1e-9")])
 def test_scene_output_grid_beyond_the_budget_is_refused_when_read(tmp_path, capsys, t_final, dt):
     from pendulab._checks import BudgetError
     from pendulab.cli import main
@@ -223,7 +224,7 @@ def test_bench_repeats_beyond_the_budget_are_refused_before_any_run(monkeypatch,
 @pytest.mark.parametrize(
     ("argv", "option"),
     [
-        (["--grid", "100000"], "--grid = 100000"),
+        (["--grid", "4000"], "--grid = 4000"),  # the largest declared grid: 1.6e7 runs
         (["--runs", "100000000"], "--runs = 100000000"),
         (["--repeats", "500"], "--repeats = 500"),
     ],

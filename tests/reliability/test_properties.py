@@ -35,6 +35,7 @@ from hypothesis import strategies as st
 
 import pendulab as pl
 from pendulab._checks import BUDGETS
+from pendulab._inputs import INPUTS, MAGNITUDE
 from pendulab.scene import load_scene
 
 # --------------------------------------------------------------------------- settings
@@ -197,13 +198,20 @@ OPTIONAL = {kind: {info.name for info in pl.make_model(kind).param_info if info.
 
 
 def param_ok(kind: str, name: str, value: Any) -> bool:
-    """Documented admissible value: a finite real number, > 0 or >= 0 by parameter (None where optional)."""
+    """Documented admissible value: a finite real number, > 0 or >= 0 by parameter (None where optional), and
+    zero or of a magnitude within pendulab._inputs.MAGNITUDE (its square and inverse stay finite and non-zero)."""
     if value is None:
         return name in OPTIONAL[kind]
     if not is_real(value):
         return False
     v = float(value)
-    return math.isfinite(v) and (v > 0.0 if POSITIVE[kind][name] else v >= 0.0)
+    in_magnitude = v == 0.0 or MAGNITUDE[0] <= abs(v) <= MAGNITUDE[1]
+    return math.isfinite(v) and in_magnitude and (v > 0.0 if POSITIVE[kind][name] else v >= 0.0)
+
+
+def nonneg(hi: float) -> st.SearchStrategy[float]:
+    """Floats in [0, hi] that are zero or of an admissible magnitude (hypothesis also draws 1e-300)."""
+    return st.floats(0.0, hi).filter(lambda v: v == 0.0 or v >= MAGNITUDE[0])
 
 
 def cross_field_ok(kind: str, values: dict[str, Any]) -> bool:
@@ -378,17 +386,17 @@ def moderate_models(draw: st.DrawFn, damped: bool = False, k_min: float = 50.0) 
         "m2": draw(pos),
         "L1": draw(pos),
         "L2": draw(pos),
-        "g": draw(st.floats(0.0, 20.0)),
+        "g": draw(nonneg(20.0)),
     }
     if damped:
-        params.update(b1=draw(st.floats(0.0, 2.0)), b2=draw(st.floats(0.0, 2.0)))
+        params.update(b1=draw(nonneg(2.0)), b2=draw(nonneg(2.0)))
     if kind == "rigid":
         # lc beyond the link end and lc = 0 are admissible (see docs/reliability.md)
         params.update(
-            lc1=draw(st.floats(0.0, 4.0)),
-            lc2=draw(st.floats(0.0, 4.0)),
-            I1=draw(st.floats(0.0, 1.0)),
-            I2=draw(st.floats(0.0, 1.0)),
+            lc1=draw(nonneg(4.0)),
+            lc2=draw(nonneg(4.0)),
+            I1=draw(nonneg(1.0)),
+            I2=draw(nonneg(1.0)),
         )
         # lc1 = I1 = 0 (link 1's mass at the pivot) with a point-mass link 2 (I2 = 0), or lc2 = I2 = 0, gives a
         # mass matrix that is singular at some configurations (theta1 = theta2): admissible, but not a
@@ -402,7 +410,7 @@ def moderate_models(draw: st.DrawFn, damped: bool = False, k_min: float = 50.0) 
     else:
         params.update(k1=draw(st.floats(k_min, 2000.0)), k2=draw(st.floats(k_min, 2000.0)))
         if damped:
-            params.update(c1=draw(st.floats(0.0, 5.0)), c2=draw(st.floats(0.0, 5.0)))
+            params.update(c1=draw(nonneg(5.0)), c2=draw(nonneg(5.0)))
     return pl.make_model(kind, **params)
 
 
@@ -897,6 +905,20 @@ toml_scalar = st.one_of(
 )
 
 
+def declared_ok(name: str, value: Any) -> bool:
+    """The documented rule of a real input of pendulab._inputs.INPUTS, from its fields: a real number, finite,
+    zero or of a magnitude within MAGNITUDE, inside [low, high] (ends excluded where declared open)."""
+    spec = INPUTS[name]
+    if not is_real(value) or not math.isfinite(value):
+        return False
+    v = float(value)
+    if v != 0.0 and not MAGNITUDE[0] <= abs(v) <= MAGNITUDE[1]:
+        return False
+    above_low = spec.low is None or (v > spec.low if spec.open_low else v >= spec.low)
+    below_high = spec.high is None or (v < spec.high if spec.open_high else v <= spec.high)
+    return above_low and below_high
+
+
 @st.composite
 def scene_tables(draw: st.DrawFn) -> tuple[dict[str, dict[str, Any]], bool]:
     """A scene as TOML tables and whether every value is admissible."""
@@ -923,7 +945,7 @@ def scene_tables(draw: st.DrawFn) -> tuple[dict[str, dict[str, Any]], bool]:
             initial[name] = draw(st.floats(-10, 10))
         else:
             initial[name] = draw(toml_scalar)
-            ok = ok and is_real(initial[name]) and math.isfinite(initial[name])
+            ok = ok and declared_ok("state", initial[name])
     if initial:
         tables["initial"] = initial
     sim: dict[str, Any] = {}
@@ -937,7 +959,7 @@ def scene_tables(draw: st.DrawFn) -> tuple[dict[str, dict[str, Any]], bool]:
         if key == "method":
             ok = ok and sim[key] in ("auto", *pl.METHODS)
         else:
-            ok = ok and is_real(sim[key]) and math.isfinite(sim[key]) and sim[key] > 0
+            ok = ok and declared_ok(key, sim[key])
             if key in ("t_final", "dt") and ok:
                 # A valid horizon and step whose output grid fits the points budget (a larger one is a BudgetError,
                 # which is a ValueError naming the file: the clean refusal the oracle expects of an invalid scene).

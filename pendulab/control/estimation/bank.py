@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import positive_float
+from ..._inputs import checked
 from ...model.model import INPUT_NAMES, Model
 from .ekf import ExtendedKalmanFilter, delay_steps
 
@@ -66,6 +67,7 @@ class MultipleModelEstimator:
     ((0.03, 1.0), True)
     """
 
+    @checked()
     def __init__(
         self,
         model: Model,

@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 
 from ..._checks import bounded_int, check_model, positive_float
+from ..._inputs import MAGNITUDE, checked
 from ...analysis.linearize import linearize
 from ...model.model import INPUT_NAMES, Model
 
@@ -20,7 +21,7 @@ MAX_DELAY_STEPS: int = 200
 
 #: Admissible non-zero standard deviations: their squares (the covariances the filter works with) and the
 #: ratios of those must stay normal doubles (1e-200 squared underflows to 0, 1e200 squared overflows).
-STD_RANGE: tuple[float, float] = (1e-100, 1e100)
+STD_RANGE: tuple[float, float] = MAGNITUDE
 
 
 #: Largest magnitude of a measured state entry [rad, rad/s, m, m/s] or a torque [N.m] the filter takes: far
@@ -87,6 +88,7 @@ class StateEstimator(Protocol):
         """
 
 
+@checked()
 def delay_steps(delay: float, sample_time: float) -> int:
     """Samples of a measurement delay, ``int(delay / sample_time)`` as RealAIGym's simulator counts them (to 1e-9).
 
@@ -215,6 +217,7 @@ class ExtendedKalmanFilter:
     rate error: measured 0.21 rad/s, estimated 0.002 rad/s
     """
 
+    @checked()
     def __init__(
         self,
         model: Model,

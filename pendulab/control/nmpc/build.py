@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import positive_float
+from ..._inputs import checked
 from ...model.counterpart import rigid_state
 from ...model.model import INPUT_NAMES, Model
 from ..feedback import actuated_inputs, upright_state
@@ -27,6 +28,7 @@ from .prediction import LENGTH_PARAMS, SlowStateMap, choose_prediction, predicti
 __all__ = ["nmpc_controller"]
 
 
+@checked()
 def nmpc_controller(
     model: Model,
     *,

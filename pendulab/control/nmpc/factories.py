@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..._checks import positive_float
+from ..._inputs import checked
 from ...model.counterpart import rigid_counterpart
 from ...model.model import Model
 from ..lqr import actuation_name
@@ -56,6 +57,7 @@ def check_options(**options: Any) -> NMPCOptions:
     return NMPCOptions(**options)
 
 
+@checked()
 def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int | None = None, degree: int = 3) -> Any:
     """Optimal swing-up of ``problem`` on its rigid model (the rigid counterpart of an elastic model).
 
@@ -92,6 +94,7 @@ def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int | Non
     return res
 
 
+@checked()
 def nmpc_for_task(
     task: Task, *, sample_time: float = 0.02, solver: str = "sqp", **options: Any
 ) -> tuple[NMPCController, np.ndarray]:
@@ -152,6 +155,7 @@ def nmpc_for_task(
     return ctrl, np.asarray(pb.start, dtype=float)
 
 
+@checked()
 def nmpc_swingup(
     model: Model,
     sample_time: float = 0.02,

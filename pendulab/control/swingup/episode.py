@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import bounded_int, positive_float, relative_tolerance
+from ..._inputs import checked
 from ...integrate import simulate
 from ...integrate.trajectory import Trajectory
 from ..tracking import TVLQRTracker, tvlqr
@@ -361,6 +362,7 @@ class SuccessRate:
         return self.successes / self.starts
 
 
+@checked()
 def closed_loop_success_rate(
     task: Task | str,
     starts: int = 20,

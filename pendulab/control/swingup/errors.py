@@ -38,6 +38,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..._inputs import checked
 from ...integrate import SimulationError, simulate
 from ...integrate.auto import choose_method
 from ...model.model import Model
@@ -156,6 +157,7 @@ class ErrorEstimate:
         )
 
 
+@checked()
 def estimate_error(
     result: PlanTrajectory,
     *,
@@ -231,6 +233,7 @@ def estimate_error(
     )
 
 
+@checked()
 def estimate_error_arrays(
     model: Model,
     t: Any,

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._inputs import checked
 from ...integrate import simulate
 from ...model import counterpart
 from ...model.model import Model
@@ -138,6 +139,7 @@ def linear_guess(problem: SwingUpProblem) -> Guess:
     return Guess(t, x, np.zeros((2, 2)))
 
 
+@checked()
 def energy_guess(problem: SwingUpProblem, dt: float = 0.01) -> Guess:
     """Simulate saturated energy pumping over the horizon.
 

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._inputs import checked
 from .errors import SCALES, ErrorEstimate, estimate_error_arrays, rescale
 from .guess import Guess, lift_plan, rigid_counterpart_problem
 from .mesh import oscillation_mesh
@@ -192,6 +193,7 @@ def solve_objective(
     )
 
 
+@checked()
 def plan(
     problem: SwingUpProblem,
     *,
@@ -391,6 +393,7 @@ def _elastic_warm_start(
 _TRANSCRIPTION_ONLY = ("integrator", "ipopt_options", "max_refinements", "mesh", "error_method", "max_wall_time")
 
 
+@checked(max_intervals="intervals")
 def swing_up(
     problem: SwingUpProblem,
     method: str = "radau",

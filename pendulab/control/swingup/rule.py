@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._inputs import checked
 from ...analysis.model_error import C_QUASI_STATIC, C_RIGID, mode_ratio_errors
 from ...analysis.modes import modes
 from ...model.model import Model
@@ -183,6 +184,7 @@ def _check_tolerance(tolerance: Any) -> float:
     return tol
 
 
+@checked()
 def planning_rule(model: Model, tolerance: float = 1e-3, planning: str = "auto") -> PlanningDecision:
     """Pick the cheapest planning model predicted to meet ``tolerance`` on the elastic dynamics.
 

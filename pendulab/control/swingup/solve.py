@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import bounded_int, positive_float
+from ..._inputs import checked
 from .errors import SCALES, ErrorEstimate, estimate_error
 from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart_problem
 from .iterations import SigintWatch, wall_time_budget, watch_sigint
@@ -53,6 +54,7 @@ _HOMOTOPY = (1.0, 0.3, 0.1, 0.03, 0.0)
 _WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-3}
 
 
+@checked(max_intervals="intervals")
 def solve_transcription(
     problem: SwingUpProblem,
     method: str = "radau",

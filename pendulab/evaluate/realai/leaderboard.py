@@ -10,7 +10,9 @@ Every finished case is recorded atomically under ``root`` (default ``./pendulab-
 * ``v3/TASK-CONTROLLER-seedS.json``: one v3 episode (:meth:`~.v3_result.V3Result.to_dict`);
 * ``v2-identified/...``, ``v3-identified/...``: the same v2 and v3 cases on the identified robot (the shipped
   identification of design C.1 from its measured records, :data:`pendulab.model.plant_file.SHIPPED_PLANTS`), the controllers
-  designed as for the nominal plant, as they would meet the real robot.
+  designed as for the nominal plant, as they would meet the real robot;
+* ``v3-hardware/TASK-CONTROLLER-seedS.json``: one episode of the ICRA 2025 *hardware* protocol (:mod:`.v3_hardware`:
+  10 PID resets of 1 s, the identified C.1 robot with its measured sensing and loop timing).
 
 With ``resume=True`` a recorded case is read back instead of run (robustness v2: only its missing runs are run);
 a record written with other settings is an error. Ctrl-C ends the current case; everything recorded before stays.
@@ -37,6 +39,8 @@ from .leaderboard_runs import CASE_KIND, _read, _run_robustness, _run_v2, _run_v
 
 __all__ = [
     "PROTOCOLS",
+    "IDENTIFIED",
+    "HARDWARE",
     "TASKS",
     "DEFAULT_CONTROLLERS",
     "DEFAULT_ROOT",
@@ -49,10 +53,13 @@ __all__ = [
     "run_protocols",
 ]
 
-#: The three protocols, then v2 and v3 on the identified robot (:data:`IDENTIFIED`), in table order.
-PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3", "v2-identified", "v3-identified")
+#: The three protocols, then v2 and v3 on the identified robot (:data:`IDENTIFIED`), then the v3 hardware protocol
+#: (:data:`HARDWARE`), in table order.
+PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3", "v2-identified", "v3-identified", "v3-hardware")
 #: Protocols run on the identified robot: protocol -> (the protocol it runs, the shipped plant's name).
 IDENTIFIED: Mapping[str, tuple[str, str]] = {"v2-identified": ("v2", "c1"), "v3-identified": ("v3", "c1")}
+#: Hardware-faithful protocols (:mod:`.v3_hardware`, journaled as v3 episodes): protocol -> the shipped plant's name.
+HARDWARE: Mapping[str, str] = {"v3-hardware": "c1"}
 #: Leaderboard tasks.
 TASKS: tuple[str, ...] = ("pendubot", "acrobot")
 #: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
@@ -65,6 +72,7 @@ DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
     "v3": ("best", "global", "replan", "library"),
     "v2-identified": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "v3-identified": ("best", "global", "replan", "library"),
+    "v3-hardware": ("best", "global", "replan", "library"),
 }
 #: Journal directory (relative to the current directory).
 DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"
@@ -83,13 +91,16 @@ class ProtocolSettings:
     v3_seeds : tuple of int
         Schedule seeds of the v3 episodes.
     v3_steps : int
-        RK4 steps per v3 episode (30000: the protocol's 60 s).
+        RK4 steps per v3 episode (30000: the protocol's 60 s); v3-hardware runs ``v3_steps * 2 ms`` of loop time.
+    passive_allowance : float
+        v3-hardware: torque the entry may put on the passive joint [N.m] (0, or up to the rules' 0.5).
     """
 
     name: str
     robustness: Mapping[str, Any]
     v3_seeds: tuple[int, ...]
     v3_steps: int
+    passive_allowance: float = 0.0
 
     @property
     def comparable(self) -> bool:
@@ -280,6 +291,7 @@ def run_protocols(
     workers: int = 1,
     progress: Callable[[str, int, int], None] | None = None,
     max_wall_time: float | None = None,
+    passive_allowance: float = 0.0,
 ) -> LeaderboardRun:
     """Run (or read back) every (protocol, task, controller) case of the leaderboard.
 
@@ -306,6 +318,9 @@ def run_protocols(
     max_wall_time : float, optional
         Budget [s] of this call, checked before each case: cases not started by then are "not run" (with
         ``resume``, cases whose journals are complete are still read back; a partial journal is reported as such).
+    passive_allowance : float
+        v3-hardware: torque the entries may put on the passive joint [N.m], in [0, 0.5] (the hardware rules'
+        friction allowance); journaled, so a record of another allowance is not read back.
 
     Returns
     -------
@@ -335,6 +350,12 @@ def run_protocols(
     workers = bounded_int("workers", workers, low=1, high=256, why="worker processes of the robustness-v2 runs")
     budget = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time)
     settings = QUICK if quick else FULL
+    if passive_allowance != 0.0:
+        from dataclasses import replace
+
+        from .v3_hardware import _check_allowance
+
+        settings = replace(settings, passive_allowance=_check_allowance(passive_allowance))
     base = DEFAULT_ROOT if root is None else Path(root)
     jroot = base / "quick" if quick else base
     check_writable(jroot)  # before the first case, not at its first save
@@ -364,7 +385,7 @@ def run_protocols(
 def _finished(case: Case, settings: ProtocolSettings, jroot: Path) -> bool:
     """Whether a case's journal holds all of it (reading it back runs nothing)."""
     task, name = case.task, case.controller
-    base = IDENTIFIED.get(case.protocol, (case.protocol,))[0]
+    base = "v3" if case.protocol in HARDWARE else IDENTIFIED.get(case.protocol, (case.protocol,))[0]
     # Only journals that validate count as finished (an edited one would otherwise be re-run past the budget).
     if base == "v2":
         return "summary" in trusted_records(jroot / case.protocol / f"{task}-{name}.json", CASE_KIND, _summary_check(base))
@@ -411,6 +432,11 @@ def _run_case(
 
         base, plant_name = IDENTIFIED[case.protocol]
         plant = load_plant(plant_name)
+    elif case.protocol in HARDWARE:
+        from ...model.plant_file import load_plant
+        from .plant import plant_label
+
+        base, plant = "v3", load_plant(HARDWARE[case.protocol])
     # a journal names its plant: a re-identified shipped plant is stale, not read back
     on = {} if plant is None else {"plant": plant_label(plant)}
     if base == "v2":
@@ -435,9 +461,15 @@ def _run_case(
         for seed in settings.v3_seeds:
             path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
             keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
+            hardware = case.protocol in HARDWARE
+            if hardware:
+                keys["passive_allowance"] = settings.passive_allowance
             summary = _read(path, keys) if resume else None
             if summary is None:
-                summary = _run_v3(task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"), plant)
+                summary = _run_v3(
+                    task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"), plant,
+                    passive_allowance=settings.passive_allowance if hardware else None,
+                )  # fmt: skip
                 _write(path, keys, summary)
                 case.executed += 1
             else:

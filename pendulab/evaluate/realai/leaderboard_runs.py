@@ -118,13 +118,23 @@ def _run_robustness(
 
 
 def _run_v3(
-    task: str, name: str, seed: int, steps: int, progress: Callable[[int, int], None] | None, plant: Any = None
-) -> dict[str, Any]:
-    from .v3 import run_v3
-
+    task: str, name: str, seed: int, steps: int, progress: Callable[[int, int], None] | None, plant: Any = None,
+    passive_allowance: float | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """One v3 episode; with ``passive_allowance`` (not None) the v3-hardware episode of ``steps * 2 ms``."""
     w0 = time.perf_counter()
     _, ctrl = resolve_controller(task, name)
-    res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress, plant=plant)
+    if passive_allowance is None:
+        from .v3 import run_v3
+
+        res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress, plant=plant)
+    else:
+        from .v3_hardware import run_v3_hardware
+
+        res = run_v3_hardware(
+            task, ctrl, name, seed=seed, passive_allowance=passive_allowance, duration=steps * DT, progress=progress,
+            plant=plant,
+        )  # fmt: skip
     d = res.to_dict()
     d["duration"] = steps * DT
     d["uptime_fraction"] = res.uptime / (steps * DT)

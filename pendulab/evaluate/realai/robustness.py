@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any
 
 from ..._checks import bounded_int
+from ..._inputs import checked
 from ..._journal import Journal
 from ...control.feedback import SampledController
 from ...control.realai.spec import DT, check_task
@@ -140,6 +141,7 @@ def _run_check(plan: Sequence[RunSpec]) -> Callable[[str, Any], None]:
     return check
 
 
+@checked()
 def robustness_v2(
     task: str,
     controller: str | SampledController | Callable[[str], Any] = "best",

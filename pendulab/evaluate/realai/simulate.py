@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._inputs import checked
 from ...control.feedback import SampledController, full_input
 from ...control.realai.spec import DT, N_STEPS, T_FINAL, TASKS, TORQUE_LIMIT, check_task
 from ...model.model import INPUT_NAMES, Model
@@ -152,6 +153,7 @@ def _hold_ratio(controller: SampledController) -> int:
     return ratio
 
 
+@checked()
 def rk4_rollout(model: Model, x0: np.ndarray, policy: Any, n_steps: int, dt: float = DT) -> tuple:
     """Fixed-step classic RK4 with the torque held over each step, as the leaderboard's ``Simulator.step``.
 

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import bounded_int
+from ..._inputs import checked
 from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
 from ...control.realai.adapter import from_realai, is_realai_controller
@@ -101,6 +102,12 @@ class ProtocolController:
         Leaderboard task (which joint is driven).
     controller : SampledController
         Reset once, now.
+    passive_limit : float
+        Torque the passive joint may get [N.m] (0: the simulation rules; the ICRA 2025 hardware rules allow 0.5 N.m
+        to compensate motor friction, :mod:`.v3_hardware`).
+    gap : float
+        A call more than this after the previous one follows a reset: the controller samples at once [s] (the
+        hardware loop's intervals reach 3.7 ms, so it widens this).
 
     Raises
     ------
@@ -110,7 +117,7 @@ class ProtocolController:
         ``controller`` is not a sampled controller.
     """
 
-    def __init__(self, task: str, controller: SampledController) -> None:
+    def __init__(self, task: str, controller: SampledController, *, passive_limit: float = 0.0, gap: float = 1.5 * DT) -> None:
         check_task(task)
         if not (callable(controller) and hasattr(controller, "sample_time") and hasattr(controller, "input_names")):
             raise TypeError(
@@ -124,6 +131,8 @@ class ProtocolController:
         self.ratio = ratio
         self.limit = np.zeros(len(INPUT_NAMES))
         self.limit[TASKS[task]] = TORQUE_LIMIT
+        self.limit[1 - TASKS[task]] = float(passive_limit)
+        self.gap = float(gap)
         self.call_times: list[float] = []
         self._held = np.zeros(len(INPUT_NAMES))
         self._last_t: float | None = None
@@ -145,7 +154,7 @@ class ProtocolController:
         ndarray, shape (2,)
             (tau1, tau2) [N.m], held on the controller's sample grid.
         """
-        if self._last_t is None or t - self._last_t > 1.5 * DT:
+        if self._last_t is None or t - self._last_t > self.gap:
             self._k = 0  # first call, or the first after a reset: sample now
         if self._k % self.ratio == 0:
             t0 = time.perf_counter()
@@ -170,6 +179,7 @@ def _gravity_compensation(model: Model) -> Callable[[np.ndarray], np.ndarray]:
     return comp
 
 
+@checked()
 def run_v3(
     task: str,
     entry: Any,
@@ -305,6 +315,7 @@ def run_v3(
     )
 
 
+@checked()
 def v3_score(
     task: str,
     controller: str | SampledController = "global",

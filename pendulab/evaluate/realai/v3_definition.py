@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._checks import bounded_int
+from ..._inputs import checked
 from ...control.realai.spec import DT
 from ...model.model import Model
 
@@ -39,6 +40,7 @@ PUBLISHED_V3: dict[str, dict[str, float]] = {"pendubot": {"vimppi": 0.799}, "acr
 SWINGUP_DEADTIME: float = 1.0
 
 
+@checked()
 def reset_schedule(seed: int, n_resets: int = N_RESETS, t_max: float = T_FINAL_V3) -> tuple[np.ndarray, np.ndarray]:
     """The random reset configurations and times, drawn as ``GlobalPolicyTestingControllerV2.__init__`` draws them.
 

@@ -58,6 +58,10 @@ LLVM's optimisation and code generation on a hit. pendulab adds no cache file
 of its own (heyoka's serialised integrators would need a version and CPU
 check that its disk cache already does).
 
+**Outputs.** ``simulate`` evaluates the outputs on the grid of a Taylor run with the
+model's ``outputs`` graph compiled as a heyoka ``cfunc`` (:mod:`.outputs`, once per model kind
+and process, from the second run of that kind on): ~6x cheaper than element-wise NumPy.
+
 **Tolerance mapping.** heyoka has one tolerance ``tol``, applied as a
 relative error where the state's norm is above 1 and as an absolute one
 below: ``tol = min(rtol, atol)``. The order follows from it (15 at 1e-12,

@@ -1,0 +1,65 @@
+"""The Taylor family's compiled outputs on the grid, its cached run set-up and the start-state check."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pendulab as pl
+
+pytest.importorskip("heyoka")
+
+from pendulab.integrate import taylor  # noqa: E402
+from pendulab.integrate.taylor import outputs as taylor_outputs  # noqa: E402
+
+
+@pytest.mark.parametrize("kind", ["rigid", "elastic"])
+def test_compiled_outputs_equal_model_outputs(kind):
+    model = pl.make_model(kind)
+    rng = np.random.default_rng(3)
+    X = np.tile(model.rest_state(), (257, 1))
+    X[:, :2] = rng.uniform(-np.pi, np.pi, (257, 2))
+    X[:, model.nx // 2 :] = rng.normal(0.0, 3.0, (257, model.nx // 2))
+    U = rng.normal(0.0, 1.0, (257, model.nu))
+    evaluate = taylor_outputs.output_evaluator(kind)
+    assert evaluate is not None
+    got = evaluate(X, U, model.p)
+    want = model.outputs(X, U)
+    assert got.shape == want.shape
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13)
+    # Parameters are runtime values: another parameter set needs no new evaluator.
+    heavy = model.with_params(m2=2.5)
+    np.testing.assert_allclose(evaluate(X, U, heavy.p), heavy.outputs(X, U), rtol=1e-13, atol=1e-13)
+
+
+def test_simulate_outputs_first_and_later_calls_agree():
+    model = pl.rigid(L2=0.7)
+    x0 = model.state(theta1=2.0, theta2=1.0)
+    first = pl.simulate(model, x0, 2.0, method="taylor", rtol=1e-12, atol=1e-12, u=[0.3, -0.2])
+    again = pl.simulate(model, x0, 2.0, method="taylor", rtol=1e-12, atol=1e-12, u=[0.3, -0.2])
+    np.testing.assert_array_equal(first.x, again.x)
+    np.testing.assert_allclose(again.y, model.outputs(again.x, again.u), rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(first.y, again.y, rtol=1e-13, atol=1e-13)
+
+
+def test_prepared_runs_follow_the_compilation_cache_and_parameters():
+    model = pl.rigid()
+    x0 = model.state(theta1=1.0)
+    a = pl.simulate(model, x0, 1.0, method="taylor")
+    taylor.clear_cache()
+    before = taylor.compile_count()
+    b = pl.simulate(model, x0, 1.0, method="taylor")
+    assert taylor.compile_count() == before + 1  # the cached set-up was forgotten with the integrators
+    assert b.stats["compiled"]
+    np.testing.assert_array_equal(a.x, b.x)
+    longer = model.with_params(L2=1.5)  # same structure, new parameter values: new runtime parameters
+    c = pl.simulate(longer, x0, 1.0, method="taylor")
+    assert not c.stats["compiled"]
+    assert not np.allclose(c.x[-1], b.x[-1])
+
+
+def test_check_start_single_state_refuses_non_finite_dynamics():
+    model = pl.elastic()
+    with pytest.raises(ValueError, match="not finite at this state"):
+        model.check_start(model.state(r1=1e-300))
+    np.testing.assert_array_equal(model.check_start(model.rest_state()), model.rest_state())
