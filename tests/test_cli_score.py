@@ -85,3 +85,24 @@ def test_score_help_names_every_controller_each_mode_accepts():
 
     assert cmd._SCORECARD_CONTROLLERS == tuple(TASK_CONTROLLERS)
     assert cmd._REALAI_CONTROLLERS == tuple(CONTROLLERS)
+
+
+def test_v3_hardware_protocol_is_a_cli_protocol_and_refuses_options_it_does_not_take(capsys, monkeypatch, tmp_path):
+    import pendulab.evaluate.realai.v3_hardware as hw
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["score", "--protocol", "v3-hardware", "--controller", "best", "--task", "pendubot", "--workers", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--protocol v3-hardware" in err and "--workers" in err and err.count("\n") == 1
+    # The command runs the hardware protocol (not the simulation one) with the seed and controller given.
+    seen = {}
+
+    def fake(task, controller, **kw):
+        seen.update(task=task, controller=controller, **kw)
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(hw, "v3_hardware_score", fake)
+    argv = ["score", "--protocol", "v3-hardware", "--controller", "best", "--task", "acrobot", "--seed", "777", "--no-progress"]
+    assert main(argv) == 2
+    assert seen["task"] == "acrobot" and seen["controller"] == "best" and seen["seed"] == 777
+    assert "--protocol v3-hardware (--controller 'best'): stop here" in capsys.readouterr().err

@@ -78,7 +78,8 @@ def register(subparsers: Any) -> None:
         choices=PROTOCOLS,
         help="a RealAIGym protocol on --task pendubot | acrobot: v2 (the simulation leaderboard, = --realai), "
         "robustness-v2 (the robustness leaderboard v2: 722 runs, journaled, --resume, --workers, --seed, --quick), "
-        "v3 (the ICRA 2025 global protocol)",
+        "v3 (the ICRA 2025 global protocol), v3-hardware (its hardware final: 10 PID resets of 1 s on the identified "
+        f"C.1 robot with measured sensing and loop timing, {docs_page('realai_v3')})",
     )
     p.add_argument(
         "--quick",
@@ -110,7 +111,7 @@ _REALAI_CONTROLLERS: tuple[str, ...] = (
 )  # fmt: skip
 
 #: RealAIGym protocols of ``--protocol`` (``v2`` is ``--realai``).
-PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3")
+PROTOCOLS: tuple[str, ...] = ("v2", "robustness-v2", "v3", "v3-hardware")
 
 #: Options of the scorecard that the other modes do not take (an error there, not ignored).
 _SCORECARD_ONLY = (
@@ -170,7 +171,7 @@ def run_score(args: argparse.Namespace) -> int:
     plant = read_plant(args)
     from ..evaluate.realai.plant import plant_label
 
-    if args.protocol in ("robustness-v2", "v3"):
+    if args.protocol in ("robustness-v2", "v3", "v3-hardware"):
         if args.controller is None or args.task is None:
             raise CLIError(f"--protocol {args.protocol} needs --controller and --task")
         return _run_protocol(args, plant)
@@ -335,8 +336,8 @@ def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
     common = (
         ("runs", "--runs"), ("categories", "--categories"), ("max_wall_time", "--max-wall-time"), ("estimator", "--estimator")
     )  # fmt: skip
-    if args.protocol == "v3":
-        _reject(args, "--protocol v3", (*common, ("workers", "--workers"), ("resume", "--resume")))
+    if args.protocol in ("v3", "v3-hardware"):
+        _reject(args, f"--protocol {args.protocol}", (*common, ("workers", "--workers"), ("resume", "--resume")))
         return _run_v3(args, plant)
     _reject(args, "--protocol robustness-v2", common)
     task = _protocol_task(args)
@@ -393,11 +394,17 @@ def _run_protocol(args: argparse.Namespace, plant: Any) -> int:
 def _run_v3(args: argparse.Namespace, plant: Any) -> int:
     task = _protocol_task(args)
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of the v3 protocol's resets", 0)
-    out = output_directory(args.out or Path("pendulab-out") / "score" / f"v3-{args.controller}-{task}{_plant_suffix(plant)}")
+    protocol = args.protocol
+    out = output_directory(
+        args.out or Path("pendulab-out") / "score" / f"{protocol}-{args.controller}-{task}{_plant_suffix(plant)}"
+    )
     try:
         from ..evaluate.realai.v3 import v3_score
+        from ..evaluate.realai.v3_hardware import v3_hardware_score
     except ImportError as exc:
-        raise CLIError(f"--protocol v3 is not available in this installation ({exc})") from None
+        raise CLIError(f"--protocol {protocol} is not available in this installation ({exc})") from None
+    # The hardware protocol's plant is the identified C.1 robot unless --plant names another.
+    run = v3_hardware_score if protocol == "v3-hardware" else v3_score
     if args.controller == "library":  # the plan library is solved once and cached: build it with its own bar
         from ..control.plan_library import DEFAULT_LIBRARY_DIR, library_controller
 
@@ -406,21 +413,23 @@ def _run_v3(args: argparse.Namespace, plant: Any) -> int:
             library_controller(task, progress=plans)
         finally:
             plans.close()
-    bar = ProgressBar(f"v3 {args.controller} on {task}", not args.no_progress)
+    bar = ProgressBar(f"{protocol} {args.controller} on {task}", not args.no_progress)
     try:
-        res = v3_score(task, args.controller, seed=seed, progress=bar, out=out, plant=plant)
+        res = run(task, args.controller, seed=seed, progress=bar, out=out, plant=plant)
     except ValueError as exc:
-        raise CLIError(f"--protocol v3 (--controller {args.controller!r}): {exc}") from None
+        raise CLIError(f"--protocol {protocol} (--controller {args.controller!r}): {exc}") from None
     finally:
         bar.close()
     summary = res.to_dict()
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "v3.json", json.dumps(summary, indent=1) + "\n")
-    print(f"wrote {out / 'v3.json'}", file=sys.stderr)
+    name = protocol.replace("-", "_") + ".json"
+    atomic_write_text(out / name, json.dumps(summary, indent=1) + "\n")
+    print(f"wrote {out / name}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary, indent=1))
     else:
-        print(f"RealAIGym v3 (simulation), {task} / {args.controller}: score {res.score:.3f}")
+        where = "hardware protocol, simulated C.1 robot" if protocol == "v3-hardware" else "simulation"
+        print(f"RealAIGym {protocol.split('-')[0]} ({where}), {task} / {args.controller}: score {res.score:.3f}")
     return 0
 
 
