@@ -237,3 +237,30 @@ def test_cache_refuses_the_step_of_another_entry(small, tmp_path):
     with pytest.warns(CacheRebuildWarning, match="built for another entry"):
         fn = compiled_step(small.graph, {"test": "a"}, directory=tmp_path)
     assert fn.name() == small.graph.name() and sealed_key(a) == key_a and verify_cached(a, key_a) is None
+
+
+def test_nonuniform_grid_options(model, cache):
+    """A grid of equal intervals is the uniform controller; a non-uniform one validates, shifts per interval."""
+    x = upright_state(model) + np.array([0.1, -0.1, 0.2, 0.0])
+    uni = rti_controller(model, actuation="pendubot", u_max=6.0, horizon=4, interval=0.02, compiled=False)
+    grid = rti_controller(model, actuation="pendubot", u_max=6.0, intervals=(0.02,) * 4, compiled=False)
+    for t in (0.0, 0.002, 0.01):
+        np.testing.assert_allclose(grid(t, x), uni(t, x), rtol=0, atol=1e-12)
+    opts = RTIOptions(intervals=[0.004, 0.004, 0.016], sample_time=0.002, terminal_weights=(1.0, 2.0, 3.0, 4.0))
+    assert (opts.horizon, opts.interval, opts.grid_steps, opts.prediction) == (3, 0.004, (1, 1, 2), pytest.approx(0.024))
+    ctrl = rti_controller(model, actuation="pendubot", u_max=6.0, options=opts, cost_per_second=True, cache_directory=cache)
+    assert ctrl._offsets.tolist() == [0, 2, 4, 12]
+    assert np.all(np.isfinite(ctrl(0.0, x))) and np.all(np.isfinite(ctrl(0.004, x)))
+    np.testing.assert_allclose(
+        ctrl.step(*[a.T if a.ndim == 2 else a for a in ctrl._in])[0],
+        ctrl.graph(*[a.T if a.ndim == 2 else a for a in ctrl._in])[0],
+        atol=1e-10,
+    )
+    with pytest.raises(ValueError, match="sample_time must be at most interval"):
+        RTIOptions(intervals=(0.004, 0.001), sample_time=0.002)
+    with pytest.raises(ValueError, match="intervals"):
+        RTIOptions(intervals=(0.004, -0.01))
+    with pytest.raises(TypeError, match="intervals"):
+        RTIOptions(intervals=0.01)
+    with pytest.raises(ValueError, match="terminal_weights"):
+        rti_controller(model, actuation="pendubot", u_max=6.0, horizon=4, terminal_weights=(1.0, 2.0), compiled=False)

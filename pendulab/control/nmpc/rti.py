@@ -57,19 +57,28 @@ class RTIOptions:
     Attributes
     ----------
     horizon : int
-        Shooting intervals N (prediction ``N * interval`` seconds).
+        Shooting intervals N (prediction ``N * interval`` seconds). Set from ``intervals`` when given.
     interval : float
-        Length of a shooting interval [s], at least ``sample_time``.
+        Length of a shooting interval [s], at least ``sample_time``. Set to ``intervals[0]`` when given.
+    intervals : tuple of float or None
+        A non-uniform grid: the N interval lengths [s], each at least ``sample_time`` (best a multiple
+        of it: the reference is read at the nearest sample). None: ``horizon`` intervals of ``interval``.
     sample_time : float
         Controller sample time [s] (one SQP step per sample).
     substeps : int or None
-        RK4 steps per interval; default one per 10 ms (``ceil(interval / 0.01)``).
+        RK4 steps per interval; default one per 10 ms of each interval (``ceil(interval / 0.01)``).
     qp_iterations : int
         Primal-dual active-set solves of the box QP (the first holds the warm start's saturated torques).
     q_angle, q_rate : float
         Stage weights on angle errors [1/rad^2] and rate errors [s^2/rad^2].
     r : float or None
         Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
+    terminal_weights : tuple of float or None
+        Diagonal of the terminal weight (one per state, angles first); default the discrete LQR
+        cost-to-go about the goal at the last interval.
+    cost_per_second : bool
+        Weight each stage cost by its interval length [s] (the cost approximates an integral, as acados
+        does); default False (every stage weighs the same).
     compiled : bool
         Run the step as cached C (default) or as the uncompiled CasADi graph (same numbers, slower).
     """
@@ -83,8 +92,23 @@ class RTIOptions:
     q_rate: float = 1.0
     r: float | None = None
     compiled: bool = True
+    intervals: tuple[float, ...] | None = None
+    terminal_weights: tuple[float, ...] | None = None
+    cost_per_second: bool = False
 
     def __post_init__(self) -> None:
+        if self.intervals is not None:
+            if isinstance(self.intervals, str) or np.ndim(self.intervals) != 1 or len(self.intervals) == 0:
+                raise TypeError(f"intervals must be a non-empty sequence of interval lengths [s], got {self.intervals!r}")
+            grid = tuple(positive_float(f"intervals[{k}]", v, "[s]") for k, v in enumerate(self.intervals))
+            object.__setattr__(self, "intervals", grid)
+            object.__setattr__(self, "horizon", len(grid))
+            object.__setattr__(self, "interval", grid[0])
+        if self.terminal_weights is not None:
+            if isinstance(self.terminal_weights, str) or np.ndim(self.terminal_weights) != 1:
+                raise TypeError(f"terminal_weights must be a sequence of weights, got {self.terminal_weights!r}")
+            tw = tuple(positive_float(f"terminal_weights[{k}]", v) for k, v in enumerate(self.terminal_weights))
+            object.__setattr__(self, "terminal_weights", tw)
         object.__setattr__(
             self, "horizon", bounded_int("horizon", self.horizon, low=1, high=MAX_RTI_HORIZON, why="the condensed QP is dense")
         )
@@ -97,18 +121,36 @@ class RTIOptions:
             object.__setattr__(self, name, positive_float(name, getattr(self, name), unit))
         if self.r is not None:
             object.__setattr__(self, "r", positive_float("r", self.r))
-        if self.sample_time > self.interval * (1 + 1e-9):
+        if self.sample_time > min(self.grid) * (1 + 1e-9):
             raise ValueError(
-                f"sample_time must be at most interval ({self.interval!r} s: the warm start shifts inside the first "
-                f"interval), got {self.sample_time!r}"
+                f"sample_time must be at most interval (the shortest, {min(self.grid)!r} s: the warm start shifts "
+                f"inside each interval), got {self.sample_time!r}"
             )
-        if not isinstance(self.compiled, bool):
-            raise TypeError(f"compiled must be True or False, got {self.compiled!r}")
+        for name in ("compiled", "cost_per_second"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"{name} must be True or False, got {getattr(self, name)!r}")
+
+    @property
+    def grid(self) -> tuple[float, ...]:
+        """The N interval lengths [s] (``intervals``, or ``horizon`` times ``interval``)."""
+        return self.intervals if self.intervals is not None else (self.interval,) * self.horizon
+
+    @property
+    def prediction(self) -> float:
+        """Prediction horizon [s] (sum of the intervals)."""
+        return float(sum(self.grid))
 
     @property
     def steps_per_interval(self) -> int:
-        """RK4 steps per interval actually used."""
-        return self.substeps if self.substeps is not None else max(1, math.ceil(self.interval / 0.01 - 1e-9))
+        """RK4 steps per interval actually used (of the first interval on a non-uniform grid)."""
+        return self.grid_steps[0]
+
+    @property
+    def grid_steps(self) -> tuple[int, ...]:
+        """RK4 steps of each interval actually used."""
+        if self.substeps is not None:
+            return (self.substeps,) * self.horizon
+        return tuple(max(1, math.ceil(h / 0.01 - 1e-9)) for h in self.grid)
 
 
 @dataclass
@@ -167,8 +209,8 @@ class RTIController:
             self._buf.set_arg(i, memoryview(a))
         for i, a in enumerate(self._out):
             self._buf.set_res(i, memoryview(a))
-        ratio = self.options.interval / self.options.sample_time
-        self._offsets = np.round(np.arange(N + 1) * ratio).astype(int)
+        self._nodes = np.concatenate([[0.0], np.cumsum(self.options.grid)])  # node times [s]
+        self._offsets = np.round(self._nodes / self.options.sample_time).astype(int)
         self._k_prev = -1
         self._warm = False
 
@@ -260,8 +302,8 @@ class RTIController:
         elif s == 0:
             X[:], U[:] = Xn, Un
         else:
-            N, frac = self.options.horizon, s * self.options.sample_time / self.options.interval
-            nodes, at = np.arange(N + 1.0), np.minimum(np.arange(N + 1.0) + frac, N)
+            nodes = self._nodes
+            at = np.minimum(nodes + s * self.options.sample_time, nodes[-1])
             X[:] = np.column_stack([np.interp(at, nodes, Xn[:, i]) for i in range(X.shape[1])])
             Ug = np.vstack([Un, Un[-1:]])
             U[:] = np.column_stack([np.interp(at[:-1], nodes, Ug[:, i]) for i in range(U.shape[1])])
@@ -372,12 +414,19 @@ def rti_controller(
     n = model.nx // 2
     Q = np.diag([opts.q_angle] * n + [opts.q_rate] * n)
     R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)
-    top = lqr_balance(model, names, Q, R, opts.interval, at=goal)
-    build = {
+    top = lqr_balance(model, names, Q, R, opts.grid[-1], at=goal)
+    P = top.P if opts.terminal_weights is None else np.diag(opts.terminal_weights)
+    if P.shape != Q.shape:
+        raise ValueError(f"terminal_weights must have {model.nx} entries (one per state), got {len(opts.terminal_weights)}")
+    build: dict[str, Any] = {
         "N": opts.horizon, "interval": opts.interval, "substeps": opts.steps_per_interval,
-        "shift": opts.sample_time / opts.interval, "Q": Q, "R": R, "P": top.P, "u_max": u_max,
+        "shift": opts.sample_time / opts.interval, "Q": Q, "R": R, "P": P, "u_max": u_max,
         "qp_iterations": opts.qp_iterations,
     }  # fmt: skip
+    if opts.intervals is not None:  # the uniform build (and its cache key) stays as it was
+        build.update(interval=list(opts.grid), substeps=list(opts.grid_steps), shift=[opts.sample_time / h for h in opts.grid])
+    if opts.cost_per_second:
+        build["stage_scale"] = list(opts.grid)
     graph = rti_step_function(model, names, **build)
     if opts.compiled:
         meta = {**{k: np.asarray(v).tolist() for k, v in build.items()}, "model_p": np.asarray(model.p).tolist(), "inputs": names}

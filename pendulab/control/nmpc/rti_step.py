@@ -2,8 +2,10 @@
 
 The step is the Gauss-Newton SQP iteration of the multiple-shooting problem
 
-``min sum_k |x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2 + |x_N - xr_N|_P^2``
-``s.t. x_{k+1} = F(x_k, u_k), x_0 = x_meas, |u_k| <= u_max``
+``min sum_k c_k (|x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2) + |x_N - xr_N|_P^2``
+``s.t. x_{k+1} = F_k(x_k, u_k), x_0 = x_meas, |u_k| <= u_max``
+
+(``c_k``: 1, or the interval length for a cost per second; the intervals may differ, a non-uniform grid)
 
 (``F``: RK4 over one interval; the same cost as :mod:`.ocp`), linearized at the current guess
 ``(X, U)`` and solved in three parts, all in one graph:
@@ -26,6 +28,9 @@ compact (it compiles in seconds) and its run time does not depend on the state.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -116,19 +121,30 @@ def _box_qp_pdas(
     return z, feasible, ca.sum1(act)
 
 
+def _per_interval(value: Any, N: int, kind: type, name: str) -> list:
+    """``value`` as a list of N entries: one number repeated, or a sequence of N."""
+    if np.ndim(value) == 0:
+        return [kind(value)] * N
+    out = [kind(v) for v in value]
+    if len(out) != N:
+        raise ValueError(f"{name} must be one number or {N} of them (one per interval), got {len(out)}")
+    return out
+
+
 def rti_step_function(
     model: Model,
     input_names: tuple[str, ...],
     *,
     N: int,
-    interval: float,
-    substeps: int,
-    shift: float,
+    interval: float | Sequence[float],
+    substeps: int | Sequence[int],
+    shift: float | Sequence[float],
     Q: np.ndarray,
     R: np.ndarray,
     P: np.ndarray,
     u_max: float,
     qp_iterations: int,
+    stage_scale: Sequence[float] | None = None,
     name: str = "rti_step",
 ) -> ca.Function:
     """The whole real-time iteration as one MX Function (see the module docstring).
@@ -141,19 +157,22 @@ def rti_step_function(
         Driven torques (m of them).
     N : int
         Shooting intervals.
-    interval : float
-        Interval length [s].
-    substeps : int
-        RK4 steps per interval.
-    shift : float
-        Controller sample time as a fraction of ``interval`` (in (0, 1]): how far the warm start
-        ``X_next, U_next`` is shifted.
+    interval : float or sequence of float
+        Interval length [s], or the N interval lengths of a non-uniform grid.
+    substeps : int or sequence of int
+        RK4 steps per interval (one number, or one per interval).
+    shift : float or sequence of float
+        Controller sample time as a fraction of the interval (in (0, 1]; one per interval on a
+        non-uniform grid): how far the warm start ``X_next, U_next`` is shifted.
     Q, R, P : ndarray
         Stage state weight (nx, nx), torque weight (m, m), terminal weight (nx, nx).
     u_max : float
         Torque bound [N.m].
     qp_iterations : int
         Primal-dual active-set solves of the box QP.
+    stage_scale : sequence of float, optional
+        Factor of each stage cost (N of them, e.g. the interval lengths for a cost per second);
+        default 1 (the terminal cost is never scaled).
     name : str
         Function name (the C symbol).
 
@@ -166,11 +185,21 @@ def rti_step_function(
     """
     nx, m = model.nx, len(input_names)
     cols = [INPUT_NAMES.index(n) for n in input_names]
-    lin = _stage_linearization(rk4_interval(model, cols, interval, substeps), nx, m).map(N)
+    dts = _per_interval(interval, N, float, "interval")
+    steps = _per_interval(substeps, N, int, "substeps")
+    shifts = _per_interval(shift, N, float, "shift")
+    scale = _per_interval(1.0 if stage_scale is None else stage_scale, N, float, "stage_scale")
     x0 = ca.MX.sym("x0", nx)
     X, U = ca.MX.sym("X", nx, N + 1), ca.MX.sym("U", m, N)
     XR, UR = ca.MX.sym("XR", nx, N + 1), ca.MX.sym("UR", m, N)
-    F, A, B = lin(X[:, :N], U)
+    # One mapped SX kernel per run of equal intervals (a single map on a uniform grid).
+    parts, k0 = [], 0
+    for k in range(1, N + 1):
+        if k == N or (dts[k], steps[k]) != (dts[k0], steps[k0]):
+            lin = _stage_linearization(rk4_interval(model, cols, dts[k0], steps[k0]), nx, m).map(k - k0)
+            parts.append(lin(X[:, k0:k], U[:, k0:k]))
+            k0 = k
+    F, A, B = (ca.horzcat(*col) for col in zip(*parts, strict=True))
     d = F - X[:, 1:]
     # Condensing: xi_k (free response) and G_k (sensitivity of x_k to all torque corrections), forward.
     xi = [x0 - X[:, 0]]
@@ -181,8 +210,8 @@ def rti_step_function(
         head = ca.mtimes(Ak, G[k][:, : k * m]) if k else ca.MX(nx, 0)
         G.append(ca.horzcat(head, Bk, ca.MX(nx, (N - k - 1) * m)))
     Gbar, Xi = ca.vertcat(*G), ca.vertcat(*xi)
-    W = ca.DM(ca.diagcat(*([ca.DM(Q)] * N + [ca.DM(P)])))
-    Rbar = ca.DM(ca.diagcat(*([ca.DM(R)] * N)))
+    W = ca.DM(ca.diagcat(*([ca.DM(Q) * c for c in scale] + [ca.DM(P)])))
+    Rbar = ca.DM(ca.diagcat(*[ca.DM(R) * c for c in scale]))
     E = ca.vec(X - XR) + Xi
     WG = ca.mtimes(W, Gbar)
     H = ca.mtimes(Gbar.T, WG) + Rbar
@@ -194,8 +223,11 @@ def rti_step_function(
     X_new = X + ca.reshape(ca.mtimes(Gbar, dU) + Xi, nx, N + 1)
     U_new = ca.reshape(ca.fmin(ca.fmax(Uv + dU, -u_max), u_max), m, N)
     # Warm start of the next call: the trajectory a fraction `shift` of an interval later (last interval held).
-    X_next = (1 - shift) * X_new + shift * ca.horzcat(X_new[:, 1:], X_new[:, N:])
-    U_next = (1 - shift) * U_new + shift * ca.horzcat(U_new[:, 1:], U_new[:, N - 1 :])
+    # (node k moves the fraction shifts[k] of its interval towards node k+1; the last node is held).
+    sx = ca.repmat(ca.DM(shifts + [shifts[-1]]).T, nx, 1)
+    su = ca.repmat(ca.DM(shifts).T, m, 1)
+    X_next = X_new * (1 - sx) + ca.horzcat(X_new[:, 1:], X_new[:, N:]) * sx
+    U_next = U_new * (1 - su) + ca.horzcat(U_new[:, 1:], U_new[:, N - 1 :]) * su
     info = ca.vertcat(settled, n_active, ca.mmax(ca.fabs(d)))
     return ca.Function(
         name, [x0, X, U, XR, UR], [U_new[:, 0], X_new, U_new, X_next, U_next, info], list(STEP_INPUTS), list(STEP_OUTPUTS)
