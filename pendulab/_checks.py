@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from contextvars import ContextVar
 from typing import Any, NamedTuple
 
 __all__ = [
@@ -19,7 +20,14 @@ __all__ = [
     "BUDGETS",
     "check_budget",
     "require_extra",
+    "ENTRY_DEPTH",
 ]
+
+#: How many public entry points (functions and classes decorated with :func:`pendulab._inputs.checked`) are
+#: running in this context. The outermost one (depth 1) checks its inputs where they enter; an entry point or a
+#: model check reached from inside another (depth 2 and more) trusts what it receives. A thread starts at 0, so
+#: work handed to a thread pool is checked again (harmless); a forked worker inherits its parent's depth.
+ENTRY_DEPTH: ContextVar[int] = ContextVar("pendulab_entry_depth", default=0)
 
 
 def positive_float(name: str, value: Any, unit: str = "") -> float:
@@ -51,7 +59,8 @@ def check_model(model: Any, name: str = "model") -> Any:
     linearization, python-control bridge, LQR, simulation), so that a wrong
     argument (a kind name such as ``"rigid"``, ``None``, a parameter object)
     fails with ``TypeError("model must be a pendulab Model, got str")`` instead
-    of an ``AttributeError`` deep inside.
+    of an ``AttributeError`` deep inside. Reached from inside an entry point
+    (:data:`ENTRY_DEPTH` of 2 or more) it trusts the model, checked where it entered.
 
     Parameters
     ----------
@@ -70,6 +79,8 @@ def check_model(model: Any, name: str = "model") -> Any:
     TypeError
         ``model`` is not a :class:`pendulab.model.model.Model`.
     """
+    if ENTRY_DEPTH.get() >= 2:  # reached from inside an entry point, which checked it where it entered
+        return model
     if not _is_model(model):
         hint = ""
         if isinstance(model, str):

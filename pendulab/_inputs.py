@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-from ._checks import check_budget
+from ._checks import ENTRY_DEPTH, check_budget
 
 __all__ = ["Input", "InputError", "INPUTS", "MAGNITUDE", "check_input", "checked", "markdown_table"]
 
@@ -334,6 +334,8 @@ _DECLARED: tuple[Input, ...] = (
     _r("u_max", "torque limit of the actuated joint(s)", "N.m", 0.0, 1e4, open_low=True),
     _r("state", "an initial-state value: angle [rad], rate [rad/s], spring length [m] or its rate [m/s]", "", -1e6, 1e6),
     _r("torque", "a joint torque (an input's value or amplitude)", "N.m", -1e4, 1e4),
+    # = pendulab.evaluate.realai.v3_hardware.PASSIVE_ALLOWANCE: the hardware rules' motor-friction allowance.
+    _r("passive_allowance", "torque the controller may put on the passive joint (hardware rules)", "N.m", 0.0, 0.5),
     _r("frequency", "frequency of a sinusoidal input", "Hz", 0.0, 1e4, open_low=True),
     _r("horizon", "prediction or planning horizon", "s", 0.0, 30.0, open_low=True),
     _r("measurement_noise", "standard deviation of the measurement noise (angles rad, rates rad/s)", "", 0.0, 100.0),
@@ -342,15 +344,64 @@ _DECLARED: tuple[Input, ...] = (
     _r("delay", "a delay", "s", 0.0, 10.0),
     _r("velocity_scale", "rate that maps to 1 in a normalized observation", "rad/s", 0.0, 1e4, open_low=True),
     _r("reset_noise", "spread of the random initial state of an episode", "rad", 0.0, 10.0),
-    _i("render_size", "side of a rendered frame", 16, 4096),
+    _i("render_size", "side of a rendered frame", 32, 4096),
     _i("max_episode_steps", "steps after which an episode is truncated", 1, 10**9),
     # = pendulab.control.swingup.problem.MAX_INTERVALS (tests/reliability/test_input_battery.py keeps them equal):
     # each interval adds a block of the NLP; an elastic NLP of 600 intervals needs ~6 GB to build.
+    # = pendulab.control.nmpc.controller.MAX_HORIZON (kept equal by the battery test).
+    _i("horizon_intervals", "shooting intervals of an NMPC prediction (N; the horizon is N sample times)", 1, 500),
     _i("N", "collocation or shooting intervals of a trajectory optimization", 2, 1000),
     _i("intervals", "intervals of a trajectory optimization", 2, 1000),
     _i("starts", "initial guesses tried by a multi-start optimization", 1, 1000),
     _i("tracking_starts", "randomized starts the plan is also tracked from (0: none)", 0, 1000),
     _i("gif_fps", "frames per second of an animation", 1, 120),
+    _r("velocity_limit", "bound on both link rates in a plan or prediction", "rad/s", 0.0, 1e4, open_low=True),
+    _r("plan_delay", "time a plan takes to arrive (simulated planning latency)", "s", 0.0, 10.0),
+    _r("max_solve_time", "wall-time cap of one solve", "s", 0.0, 60.0, open_low=True),
+    _i("max_iter", "iteration cap of one solve", 1, 10_000),
+    _i("substeps", "RK4 steps per interval of a prediction (unrolled into the NLP)", 1, 1000),
+    _i("n_sub", "integration sub-steps per controller sample", 1, 10_000),
+    _i("max_halvings", "halvings of a rejected co-simulation step", 0, 60),
+    # Controller design: gains, weights and levels of the swing-up and balance laws
+    _r("k_energy", "energy-pumping gain (its unit is the controller's: N.m/(J.rad/s) or 1/(J.s))", "", 0.0, 1e4, open_low=True),
+    _r("kp", "proportional gain of a joint PD law (N.m/rad, or 1/s^2 for an acceleration law)", "", 0.0, 1e6),
+    _r("kd", "derivative gain of a joint PD law (N.m.s/rad, or 1/s for an acceleration law)", "", 0.0, 1e6),
+    _r("alpha", "amplitude of the acrobot's elbow target alpha (2/pi) atan(omega1)", "rad", 0.0, 10.0),
+    _r("catch_cost", "LQR cost-to-go below which the balance controller takes over", "", 0.0, None, open_low=True),
+    _r("release_factor", "cost-to-go, in multiples of catch_cost, at which a failed catch is released", "", 1.0, 1e6),
+    _r("level", "a cost-to-go level of a catch or release (LQR cost x'Px)", "", 0.0, None, open_low=True),
+    _r("weight", "a weight of an optimal-control cost (state, torque, torque rate, time or slack)", "", 0.0, 1e12, open_low=True),
+    _r("slack_tol", "slack on the soft state bounds above which a solve counts as infeasible", "", 0.0, 1e3, open_low=True),
+    _r("error_level", "tracking cost e'e above which a plan is abandoned", "", 0.0, 1e6, open_low=True),
+    _r("retry", "time between two attempts of a failed plan", "s", 0.0, 60.0, open_low=True),
+    _r("window", "length of an estimator's likelihood window", "s", 0.0, 1e4, open_low=True),
+    _r("accel_std", "model-error allowance of an estimator (acceleration standard deviation)", "rad/s^2", 0.0, 1e6),
+    _r("spread", "half-width of a box of random initial angles [rad] or rates [rad/s]", "", 0.0, 1e4),
+    _r("settle_tol", "convergence threshold on angles [rad] and rates [rad/s]", "", 0.0, 1e3, open_low=True),
+    _r("torque_margin", "fraction of the torque limit a plan may use", "", 0.0, 1.0, open_low=True),
+    _r("response", "ratio of applied to commanded torque (a torque-response hypothesis)", "", 0.0, 2.0, open_low=True),
+    _r("amplitude_max", "largest amplitude a region-of-attraction search tries", "rad", 0.0, 1e6, open_low=True),
+    _i("degree", "degree of the collocation polynomial", 1, 9),
+    _i("max_refinements", "mesh refinements of a trajectory optimization", 0, 50),
+    # Protocols and metrics
+    _r("threshold", "tip height above which the pendulum counts as up", "m", -100.0, 100.0),
+    _r("gap", "time without a controller call after which the controller is reset (a new episode)", "s", 0.0, 60.0),
+    _r("deadtime", "shortest time between two counted swing-ups", "s", 0.0, 60.0),
+    _i("n_resets", "resets of a global-protocol run", 1, 1000),
+    _i("repetitions", "repetitions of each level of a robustness category", 1, 5000),
+    _i("n_steps", "fixed steps of a rollout or protocol run", 1, 10**9),
+    # Environments and rendering
+    _i("num_envs", "environments of a vector environment", 1, 4096),
+    _r("bonus", "reward added while the tip is above the goal height", "", 0.0, 1e6),
+    _r("extent", "half-width of the rendered scene", "m", 0.0, 1e3, open_low=True),
+    _r("goal_fraction", "goal height as a fraction of the reach", "", 0.0, 1.0),
+    # Ensembles: batching and chunking (= pendulab.ensemble.batch.MAX_BATCH_SIZE and engine_checks.MAX_RUNS)
+    _i("batch_size", "SIMD lanes of one batch integrator", 1, 64),
+    _i("chunk_size", "runs per chunk handed to a worker", 1, 10**8),
+    _i("block_size", "runs per recorded block of a long ensemble", 1, 10**8),
+    _i("chunks_per_worker", "chunks each worker receives (load balancing)", 1, 10_000),
+    _i("max_steps", "step budget of each run", 1, 2**31 - 1),
+    _i("step_budget", "integrator steps of one long estimate (a Lyapunov exponent)", 1, 2**62),
     # Models
     _r("k", "spring stiffness of both elastic links", "N/m", 0.0, 1e12, open_low=True),
     _r("cutoff", "low-pass cut-off frequency of the identification filter", "Hz", 0.0, 1e4, open_low=True),
@@ -360,13 +411,15 @@ _DECLARED: tuple[Input, ...] = (
     # = pendulab.evaluate.scorecard.MAX_RUNS (kept equal by the battery test).
     _i("runs_per_level", "runs per level of each stochastic category of a scorecard", 1, 5000),
     _i("hand_runs", "runs of the hand-written reference loop", 1, 10**12, budget="runs"),
-    _i("grid", "points per axis of a square grid of initial states", 1, 4000),
+    _i("grid", "points per axis of a square grid of initial states", 1, 20_000),
     _i("elastic_grid", "points per axis of the elastic grid", 1, 4000),
     _r("t_max", "longest time a run of an ensemble lasts", "s", 0.0, MAX_HORIZON, open_low=True),
     _i("threads", "threads of a local ensemble", 1, 256),
     _i("workers", "worker processes (each a forked process)", 1, 256),
     _i("seed", "seed of a random generator", 0, 2**63 - 1),
+    _i("legacy_seed", "seed of numpy's legacy RandomState (upstream RealAIGym's generator)", 0, 2**32 - 1),
     _i("fmi_version", "FMI major version", 2, 3),
+    _i("fmu_index", "index of the FMU whose outputs feed the controller (below the number of FMUs)", 0, 10_000),
     # Text, choices, lists and paths (CLI)
     Input("name", "text", "a name: scene, controller, task, method, estimator, dataset, structure"),
     Input("set_item", "items", "parameter or initial-state value NAME=VALUE (SI units)"),
@@ -409,17 +462,26 @@ def check_input(name: str, value: Any, label: str | None = None) -> Any:
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def checked(**aliases: str) -> Callable[[F], F]:
-    """Decorate a public function: its keyword inputs are checked against :data:`INPUTS` before its body runs.
+def checked(forward: Callable[..., Any] | None = None, /, **aliases: str) -> Callable[[F], F]:
+    """Decorate a public entry point: its keyword inputs are checked against :data:`INPUTS` before its body runs.
 
     Every parameter whose name is a declared number is checked (``None`` passes: it means "the default");
     ``aliases`` maps a parameter to the declaration it uses under another name
     (``@checked(tol="tolerance")``). The checked value replaces the argument (an ``int`` for a real input
     becomes a ``float``); a string for a number is refused (only the CLI parses text).
+    A decorated class (a dataclass of settings or a controller) has its ``__init__`` checked. Keywords a
+    ``**options`` parameter forwards are checked too: as ``forward`` (the checked callable they are passed to)
+    declares them, else by their names (``aliases`` may name them).
+
+    Values are checked once, where they enter: only the outermost entry point checks
+    (:data:`pendulab._checks.ENTRY_DEPTH`); an entry point called from inside another trusts its arguments.
     The decorated function keeps its signature and records what it checks in ``__pendulab_inputs__``.
 
     Parameters
     ----------
+    forward : callable, optional
+        Where a ``**options`` parameter sends its keywords (a checked function or class): they are checked as
+        it declares them (``NMPCOptions``'s ``horizon`` is a count of intervals, not seconds).
     **aliases : str
         Parameter name to declared input name.
 
@@ -430,6 +492,9 @@ def checked(**aliases: str) -> Callable[[F], F]:
     """
 
     def decorate(func: F) -> F:
+        if inspect.isclass(func):
+            func.__init__ = decorate(func.__init__)  # type: ignore[misc]
+            return func
         sig = inspect.signature(func)
         # By name only numbers: a parameter called ``name`` or ``out`` is the function's own (text and path
         # declarations are the CLI's); anything else is checked when an alias names it.
@@ -438,8 +503,16 @@ def checked(**aliases: str) -> Callable[[F], F]:
             for p in sig.parameters
             if p in aliases or (p in INPUTS and INPUTS[p].kind in ("real", "integer"))
         }
+        # Keywords a ``**options`` parameter forwards are checked by name (or by an alias naming them) too: an
+        # inner layer reached through it trusts them.
+        forwards = any(q.kind is q.VAR_KEYWORD for q in sig.parameters.values())
+        target = getattr(forward, "__init__", None) if inspect.isclass(forward) else forward
+        target_plan = getattr(target, "__pendulab_inputs__", None)
+        if forward is not None and (not forwards or target_plan is None):
+            raise TypeError(f"@checked on {func.__qualname__}: forward needs **options and a @checked target")
+        forwarded = {p: INPUTS[n] for p, n in {**(target_plan or {}), **aliases}.items() if p not in sig.parameters}
         unknown = sorted(set(aliases.values()) - set(INPUTS))
-        if unknown or set(aliases) - set(plan):
+        if unknown or set(aliases) - set(plan) - set(forwarded):
             raise TypeError(f"@checked on {func.__qualname__}: unknown inputs {unknown} or parameters {sorted(aliases)}")
 
         # Where each checked parameter sits when passed by position (no Signature.bind per call: simulate is hot).
@@ -447,20 +520,39 @@ def checked(**aliases: str) -> Callable[[F], F]:
         slots = sorted((positional.index(p), p, INPUTS[n]) for p, n in plan.items() if p in positional)
         keywords = [(p, INPUTS[n]) for p, n in plan.items()]
 
-        @functools.wraps(func)
-        def wrapper(*args: Any, **kwargs: Any) -> Any:
+        def check(args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
             if slots and len(args) > slots[0][0]:
-                args = list(args)  # type: ignore[assignment]
+                listed = list(args)
                 for index, param, spec in slots:
-                    if index < len(args) and args[index] is not None:
-                        args[index] = _check_argument(spec, args[index], param)  # type: ignore[index]
+                    if index < len(listed) and listed[index] is not None:
+                        listed[index] = _check_argument(spec, listed[index], param)
+                args = tuple(listed)
             for param, spec in keywords:
                 value = kwargs.get(param)
                 if value is not None:
                     kwargs[param] = _check_argument(spec, value, param)
-            return func(*args, **kwargs)
+            if forwards:
+                for param, value in kwargs.items():
+                    spec = forwarded.get(param)
+                    if spec is None and target_plan is None and param not in sig.parameters:
+                        spec = INPUTS.get(param)
+                    if spec is not None and spec.kind in ("real", "integer") and value is not None:
+                        kwargs[param] = _check_argument(spec, value, param)
+            return args
+
+        @functools.wraps(func)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            depth = ENTRY_DEPTH.get()
+            if depth == 0:
+                args = check(args, kwargs)
+            token = ENTRY_DEPTH.set(depth + 1)
+            try:
+                return func(*args, **kwargs)
+            finally:
+                ENTRY_DEPTH.reset(token)
 
         wrapper.__pendulab_inputs__ = dict(plan)  # type: ignore[attr-defined]
+        wrapper.__pendulab_forwards__ = forwards  # type: ignore[attr-defined]
         return wrapper  # type: ignore[return-value]
 
     return decorate

@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from .._checks import check_model
+from .._inputs import checked
 from ..model.model import Model, model_functions
 from ..model.statics import static_spring_lengths
 
@@ -178,6 +179,7 @@ def _seed(model: Model, name: str, u: np.ndarray, grad_v: ca.Function) -> np.nda
     return q
 
 
+@checked()
 def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
     """Solve for one named equilibrium.
 
@@ -258,6 +260,7 @@ def equilibrium(model: Model, name: str, u: Any = None) -> Equilibrium:
     )
 
 
+@checked()
 def equilibria(model: Model, u: Any = None) -> list[Equilibrium]:
     """All four equilibria of the model under a constant torque.
 

@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from .._checks import check_model
+from .._inputs import checked
 from ..model.model import ACTUATIONS, INPUT_NAMES, Model, make_model, model_functions
 from .equilibria import Equilibrium
 
@@ -147,6 +148,7 @@ def check_actuation(actuation: Any) -> tuple[int, ...]:
     return ACTUATIONS[actuation]
 
 
+@checked()
 def resolve_outputs(model: Model, outputs: OutputSpec) -> tuple[str, ...]:
     """Expand an output specification into signal names.
 
@@ -217,6 +219,7 @@ def _output_function(kind: str, names: tuple[str, ...]) -> ca.Function:
     return ca.Function("y_sel", [x, u, p], [y, ca.jacobian(y, x), ca.jacobian(y, u)], ["x", "u", "p"], ["y", "C", "D"])
 
 
+@checked()
 def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...], ca.Function]:
     """Resolve output names and build the CasADi Function that evaluates them.
 
@@ -245,6 +248,7 @@ def selected_outputs(model: Model, outputs: OutputSpec) -> tuple[tuple[str, ...]
     return names, _output_function(model.kind, names)
 
 
+@checked()
 def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """Check an operating point: an Equilibrium (its own u unless ``u`` is given) or arrays.
 
@@ -285,6 +289,7 @@ def operating_point(model: Model, x: Any, u: Any = None) -> tuple[np.ndarray, np
     return xv, uv
 
 
+@checked()
 def linearize(
     model: Model,
     x: Any,
@@ -373,6 +378,7 @@ def _residual(model: Model, x: np.ndarray, u: np.ndarray, A: np.ndarray) -> tupl
     return float(np.max(f)), bool(np.all(f <= EQUILIBRIUM_RTOL * scale))
 
 
+@checked()
 def equilibrium_residual(model: Model, x: Any, u: Any = None) -> tuple[float, bool]:
     """How far an operating point is from an equilibrium: ``max_i |f_i(x, u)|`` and the verdict.
 
@@ -434,6 +440,7 @@ def not_equilibrium_error(where: str, lin: Linearization, keyword: str = "allow_
     )
 
 
+@checked()
 def linearize_along(model: Model, X: Any, U: Any = None, inputs: str = "full") -> tuple[np.ndarray, np.ndarray]:
     """Jacobians A(t_k), B(t_k) along a trajectory in one vectorized CasADi call.
 

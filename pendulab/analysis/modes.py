@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import check_model
+from .._inputs import checked
 from ..model.model import Model
 from .equilibria import Equilibrium, equilibrium
 from .linearize import linearize, not_equilibrium_error, operating_point
@@ -139,6 +140,7 @@ def _label(shape: np.ndarray, spring_share: float, nq: int) -> str:
     return "spring stretch " + phase if not phase.startswith("mostly") else phase.replace("mostly ", "") + " stretch"
 
 
+@checked()
 def modes(
     model: Model, at: str | Equilibrium | Any = "down-down", u: Any = None, *, allow_non_equilibrium: bool = False
 ) -> tuple[Mode, ...]:

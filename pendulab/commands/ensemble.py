@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
 
-from .._checks import relative_tolerance, require_extra
+from .._checks import require_extra
 from . import CLIError
 from ._common import VOCABULARY, ProgressBar
 from .outputs import output_directory
@@ -60,26 +59,6 @@ def register(subparsers: Any) -> None:
     fm.set_defaults(func=run_flipmap)
 
 
-def _int(option: str, text: str, lo: int, hi: int) -> int:
-    try:
-        value = int(text)
-    except (TypeError, ValueError):
-        raise CLIError(f"{option} {text!r}: expected an integer") from None
-    if not lo <= value <= hi:
-        raise CLIError(f"{option} {text!r}: expected an integer in [{lo}, {hi}]")
-    return value
-
-
-def _positive(option: str, text: str) -> float:
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        raise CLIError(f"{option} {text!r}: expected a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise CLIError(f"{option} {text!r}: expected a finite number > 0")
-    return value
-
-
 def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: float, rtol: float, threads: Any, out: Path) -> Any:
     from ..ensemble.flipmap import flip_map
     from ..model.model import make_model
@@ -87,7 +66,6 @@ def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: fl
     model = make_model(kind, **({"k1": k, "k2": k} if kind == "elastic" else {}))
     checkpoint = out / f"flipmap_{kind}.partial.npz"
     bar = ProgressBar(f"flip map {kind}", not args.no_progress)
-    wall = None if args.max_wall_time is None else _positive("--max-wall-time", args.max_wall_time)
     try:
         fmap = flip_map(
             model,
@@ -97,7 +75,7 @@ def _compute(kind: str, k: float, args: argparse.Namespace, grid: int, t_max: fl
             threads=threads,
             progress=bar,
             rtol=rtol,
-            max_wall_time=wall,
+            max_wall_time=args.max_wall_time,
             checkpoint=checkpoint,
             resume=args.resume,
             block_size=_BLOCK,
@@ -121,17 +99,12 @@ def run_flipmap(args: argparse.Namespace) -> int:
     """Execute ``pendulab ensemble flipmap``; return the exit status."""
     if args.model not in _KINDS:
         raise CLIError(f"--model {args.model!r}: expected one of {list(_KINDS)}")
-    grid = _int("--grid", args.grid, 1, 4000)
-    t_max = _positive("--t-max", args.t_max)
-    rtol = _positive("--rtol", args.rtol)
-    try:
-        relative_tolerance("--rtol", rtol)
-    except ValueError as exc:
-        raise CLIError(str(exc)) from None
-    threads = None if args.threads is None else _int("--threads", args.threads, 1, 256)
+    # --grid, --t-max, --rtol, --threads, --k and --max-wall-time were checked against their declarations
+    # right after parsing (pendulab.commands.options.check_options).
+    grid, t_max, rtol, threads = args.grid, args.t_max, args.rtol, args.threads
     if args.k is not None and args.model == "rigid" and not args.compare:
         raise CLIError("--k: only meaningful with --model elastic or --compare")
-    k = DEFAULT_K if args.k is None else _positive("--k", args.k)
+    k = DEFAULT_K if args.k is None else args.k
     if args.scheduler is not None and not args.scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
         raise CLIError(f"--scheduler {args.scheduler!r}: expected a Dask scheduler address like tcp://127.0.0.1:8786")
     compare = args.compare if args.compare is not None else args.model == "elastic"

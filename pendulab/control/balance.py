@@ -107,6 +107,7 @@ def simulate_balance(
     )
 
 
+@checked(tol="settle_tol")
 def balanced(design: LQRDesign, x: Any, tol: float = 1e-2) -> bool:
     """True when the angles and angular velocities are within ``tol`` of the equilibrium.
 
@@ -179,7 +180,7 @@ class ROAResult:
     simulations: int
 
 
-@checked()
+@checked(tol="settle_tol")
 def region_of_attraction(
     model: Model,
     design: LQRDesign,

@@ -13,6 +13,7 @@ import control as ct
 import numpy as np
 
 from .._checks import check_model
+from .._inputs import checked
 from ..analysis.equilibria import equilibrium
 from ..analysis.linearize import OutputSpec, check_actuation, linearize, not_equilibrium_error, selected_outputs
 from ..model.model import INPUT_NAMES, Model
@@ -20,6 +21,7 @@ from ..model.model import INPUT_NAMES, Model
 __all__ = ["to_statespace", "to_nlsys"]
 
 
+@checked()
 def to_statespace(
     model: Model,
     x: Any = "up-up",
@@ -102,6 +104,7 @@ def to_statespace(
     return sys
 
 
+@checked()
 def to_nlsys(
     model: Model,
     actuation: str = "full",

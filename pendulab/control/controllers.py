@@ -31,7 +31,7 @@ MAX_REFERENCE_SAMPLES = 1_000_000
 CONTROLLERS: tuple[str, ...] = ("lqr", "swingup", "tvlqr", "nmpc")
 
 
-@checked()
+@checked(t_ref="t_final")
 def make_controller(
     name: str,
     model: Model,

@@ -199,6 +199,7 @@ def _angular_weight(model: Model, Q: Any) -> np.ndarray:
 # -- controllers -----------------------------------------------------------------
 
 
+@checked()
 @dataclass
 class LinearStateFeedback:
     """``u = u_eq - K (x - x_eq)`` (angles wrapped), optionally saturated.
@@ -370,6 +371,7 @@ def closed_loop_spectral_radius(model: Model, K: np.ndarray, h: float, input_nam
     return float(np.max(np.abs(np.linalg.eigvals(Ad - Bd @ np.asarray(K)[:, sel]))))
 
 
+@checked()
 @dataclass
 class EnergySwingUp:
     """Energy pumping with the driven torques, then LQR balance.

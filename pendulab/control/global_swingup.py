@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._checks import check_model, positive_float
+from .._inputs import checked
 from ..model.model import INPUT_NAMES, Model
 from ..model.pycode import to_python
 from .feedback import LinearStateFeedback, balance_controller, upright_state
@@ -43,6 +44,7 @@ __all__ = [
 ]
 
 
+@checked(catch_level="level", release_level="level")
 @dataclass
 class GlobalSwingUp:
     """State-based global swing-up (pumping with the actuated joint) and LQR catch; see the module docstring.
@@ -210,6 +212,7 @@ GLOBAL_DEFAULTS: dict[str, tuple[float, float, float, float, float, float]] = {
 }
 
 
+@checked(catch_level="level", release_level="level")
 def global_swingup(
     model: Model,
     actuation: str,
@@ -271,6 +274,7 @@ def global_swingup(
     return GlobalSwingUp(model, lqr, h, names, limit, catch, release, vals[0], vals[1], vals[2], vals[3], bool(pfl))
 
 
+@checked(global_swingup)
 def global_controller(task: str, **options: float) -> GlobalSwingUp:
     """The global swing-up designed on a RealAIGym leaderboard task's plant (2 ms, 6 N.m).
 

@@ -26,6 +26,7 @@ __all__ = [
 ]
 
 
+@checked(n_intervals="intervals", replan_error="error_level")
 @dataclass
 class ReplanningSwingUp:
     """Global swing-up by online re-planning: an optimal swing-up from the current state, tracked by TVLQR.
@@ -94,8 +95,9 @@ class ReplanningSwingUp:
     max_iter: int = 150
     min_time: bool = False
     max_solve_time: float = 60.0
-    plan_times: list[float] = field(default_factory=list)
-    n_failed: int = 0
+    # Counters of the controller's own life, not inputs.
+    plan_times: list[float] = field(default_factory=list, init=False)
+    n_failed: int = field(default=0, init=False)
     _tracker: object = field(default=None, init=False, repr=False)
     _t_plan: float = field(default=0.0, init=False, repr=False)
     _t_last: float | None = field(default=None, init=False, repr=False)
@@ -291,7 +293,7 @@ def plan_swingup(
 REPLAN_DEFAULTS: dict[str, tuple[float, int, bool]] = {"pendubot": (1.2, 40, True), "acrobot": (2.0, 30, True)}
 
 
-@checked()
+@checked(global_controller)
 def replanning_controller(
     task: str, *, plan_delay: float = 0.0, horizon: float | None = None, min_time: bool | None = None, **options: float
 ) -> ReplanningSwingUp:

@@ -44,6 +44,7 @@ __all__ = [
 ]
 
 
+@checked()
 @dataclass
 class TVLQRTracker:
     """Track a reference with time-varying gains, then hand over to ``final``: the one TVLQR tracker.
@@ -114,7 +115,6 @@ class TVLQRTracker:
             raise ValueError(f"u_ref must have shape ({n}, {m}) or ({n - 1}, {m}), got {self.u_ref.shape}")
         if self.K.ndim != 3 or self.K.shape[0] not in (n - 1, n) or self.K.shape[1:] != (m, self.model.nx):
             raise ValueError(f"K must have shape ({n - 1}, {m}, {self.model.nx}), got {self.K.shape}")
-        self.sample_time = positive_float("sample_time", self.sample_time)
 
     @property
     def horizon(self) -> float:
@@ -137,6 +137,7 @@ class TVLQRTracker:
         return u if self.u_max is None else np.clip(u, -self.u_max, self.u_max)
 
 
+@checked(torque_limit="u_max")
 def default_weights(model: Model, torque_limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """State weight Q and per-torque input weight r used when none are given.
 

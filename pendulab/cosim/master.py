@@ -328,7 +328,7 @@ def cosim(
     )
 
 
-@checked()
+@checked(feedback_from="fmu_index")
 def cosim_many(
     fmu_paths: Sequence[str | Path],
     controller: SampledController,

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import bounded_int, check_model
+from .._inputs import checked
 
 __all__ = ["flip_map_grid", "flip_energy_threshold", "flip_initial_states", "MAX_GRID"]
 
@@ -31,6 +32,7 @@ def _check_range(name: str, rng: Any) -> tuple[float, float]:
     return lo, hi
 
 
+@checked(n="grid")
 def flip_map_grid(n: int, theta_range: Sequence[float] = (-math.pi, math.pi)) -> np.ndarray:
     """Cell-centred grid of ``n`` release angles over ``theta_range``.
 
@@ -63,6 +65,7 @@ def flip_map_grid(n: int, theta_range: Sequence[float] = (-math.pi, math.pi)) ->
     return centre + (np.arange(n) - (n - 1) / 2.0) * h
 
 
+@checked()
 def flip_energy_threshold(model: Any) -> float:
     """Least potential energy of a configuration in which a link has flipped.
 
@@ -124,6 +127,7 @@ def flip_energy_threshold(model: Any) -> float:
     return best
 
 
+@checked()
 def flip_initial_states(model: Any, theta1: Any, theta2: Any, *, start: str = "quasi-static") -> np.ndarray:
     """States released at rest at the angles (theta1[k], theta2[k]).
 

@@ -67,6 +67,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import bounded_int, check_model, check_spring_lengths, positive_float, relative_tolerance
+from .._inputs import checked
 from ..integrate.taylor.availability import check_tolerance_floor
 from ..model.model import Model
 from .lyapunov_states import SPRING_STARTS, energy_matched_state, energy_matched_states
@@ -182,6 +183,7 @@ def _check_tangent(model: Model, tangent0: Any, seed: int) -> np.ndarray:
 
 
 # -- the estimator ----------------------------------------------------------------------
+@checked(max_steps="step_budget")
 def largest_lyapunov(
     model: Model,
     x0: Any,

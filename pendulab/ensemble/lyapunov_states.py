@@ -13,6 +13,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .._checks import bounded_int, check_model
+from .._inputs import checked
 from ..model.model import Model
 from ..model.quasistatic import quasi_static_lengths
 from ..model.statics import static_spring_lengths
@@ -37,6 +38,7 @@ def _state_at(model: Model, theta: np.ndarray, omega: np.ndarray, springs: str) 
     return np.concatenate([theta, r, omega, np.zeros(2)])
 
 
+@checked()
 def energy_matched_state(model: Model, energy: float, theta: Any, direction: Any, *, springs: str = "quasi-static") -> np.ndarray:
     """A state at the angles ``theta`` whose total mechanical energy is ``energy``.
 
@@ -136,6 +138,7 @@ def _pair(name: str, value: Any) -> np.ndarray:
     return a
 
 
+@checked()
 def energy_matched_states(
     models: Sequence[Model], energy: float, n: int, *, seed: int = 0, springs: str = "quasi-static"
 ) -> list[np.ndarray]:

@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from .._checks import check_model
+from .._inputs import checked
 from ..model.model import Model
 
 __all__ = ["variational_taylor_system"]
@@ -68,6 +69,7 @@ def _taylor_integrator(model: Model, tol: float) -> tuple[Any, np.ndarray]:
     return copy.copy(ta), np.asarray(pars_of(np.zeros(model.nu), model.p))
 
 
+@checked()
 def variational_taylor_system(model: Model, tol: float = 1e-12) -> tuple[list, np.ndarray]:
     """The heyoka ODE system ``[(x, f(x)), ..., (delta, A(x) delta)]`` integrated by ``method="taylor"``.
 

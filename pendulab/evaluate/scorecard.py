@@ -357,6 +357,7 @@ def _plan_substeps(
     return n
 
 
+@checked()
 def rerun(
     controller: ControllerSpec, task: Task | str, record: RunRecord, *, n_sub: int | None = None, estimator: Any = None
 ) -> RunRecord:

@@ -69,7 +69,7 @@ __all__ = [
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)
 
 
-@checked()
+@checked(stop_time="t_final")
 def controller_model_description(
     law: ControllerLaw, fmi_version: int, token: str, *, timestamp: str | None = None, stop_time: float = 10.0
 ) -> bytes:

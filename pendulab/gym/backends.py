@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import relative_tolerance
+from .._inputs import checked
 from ..integrate.taylor import compiled_integrator, structure_key
 from ..integrate.taylor.availability import heyoka_module, taylor_unavailable_reason
 from ..model.model import ACTUATIONS, Model, make_model
@@ -122,6 +123,7 @@ class NativePlant:
     True
     """
 
+    @checked(tol="tolerance")
     def __init__(self, model: Model, actuation: str, *, integrator: str = "auto", tol: float = 1e-10) -> None:
         if actuation not in ACTUATIONS:
             raise ValueError(f"actuation must be one of {list(ACTUATIONS)}, got {actuation!r}")
@@ -342,6 +344,7 @@ class FmuBackend:
     >>> fmu.close()
     """
 
+    @checked(tol="tolerance")
     def __init__(self, model: Model, *, solver: str = "dopri5", tol: float = 1e-10, fmu_path: Any = None) -> None:
         from ..cosim.plant import StepRejectedError, inspect_fmu
 

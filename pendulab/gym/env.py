@@ -35,7 +35,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.registration import EnvSpec
 
-from .._checks import bounded_int, positive_float, relative_tolerance
+from .._checks import bounded_int, positive_float
 from .._inputs import checked
 from ..model.model import ACTUATIONS, Model, make_model
 from .backends import INTEGRATORS, FmuBackend, NativePlant
@@ -68,14 +68,6 @@ MAX_EPISODE_STEPS = 10**9
 #: ``metadata["render_fps"]`` of the class: one frame per sample at the default ``dt = 0.01`` s;
 #: an instance reports ``round(1 / dt)`` (Gymnasium's convention: frames advance by the env's own time step).
 DEFAULT_RENDER_FPS = 100
-
-
-#: Largest reset spread [rad, rad/s]: beyond it a "reset near hanging" starts anywhere at any speed, and a
-#: spread of 1e300 rad/s made the first step overflow to NaN.
-MAX_RESET_NOISE = 100.0
-#: Largest torque limit [N.m]: a pendulum of kilograms and metres needs tens; at 1e300 N.m the reward's squared
-#: torque overflowed to -inf.
-MAX_TORQUE_LIMIT = 1e6
 
 
 def horizon(dt: float, episode_length: Any = None, max_episode_steps: Any = None) -> int:
@@ -250,22 +242,14 @@ class DoublePendulumEnv(gymnasium.Env):
             raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, got {render_mode!r}")
         self.actuation = actuation
         self.backend = backend
-        self.dt = positive_float("dt", dt, "s")
-        self.action_scale = positive_float("torque_limit", torque_limit, "N.m")
-        if self.action_scale > MAX_TORQUE_LIMIT:
-            raise ValueError(
-                f"torque_limit must be at most {MAX_TORQUE_LIMIT:g} N.m (beyond it the reward's squared torque overflows), "
-                f"got {torque_limit!r}"
-            )
+        # dt, torque_limit (as u_max), velocity_scale, reset_noise and tol were checked against their
+        # declarations (pendulab._inputs) where they entered: @checked on this constructor.
+        self.dt = float(dt)
+        self.action_scale = float(torque_limit)
         self.max_episode_steps = horizon(self.dt, episode_length, max_episode_steps)
-        self.velocity_scale = positive_float("velocity_scale", velocity_scale, "rad/s")
-        if not (isinstance(reset_noise, (int, float)) and math.isfinite(reset_noise) and 0 <= reset_noise <= MAX_RESET_NOISE):
-            raise ValueError(
-                f"reset_noise must be a number in [0, {MAX_RESET_NOISE:g}] [rad, rad/s] (a spread about hanging at rest), "
-                f"got {reset_noise!r}"
-            )
+        self.velocity_scale = float(velocity_scale)
         self.reset_noise = float(reset_noise) + 0.0  # + 0.0: -0.0 becomes 0.0 (NumPy's uniform(0.0, -0.0) raises)
-        tol = relative_tolerance("tol", tol)
+        tol = float(tol)
         self.tol = tol
         self.reward_fn = make_reward(reward, self.model)
         self.render_mode = render_mode

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .._inputs import checked
 from ..model.model import Model
 from ..model.pycode import to_python
 from ..viz.drawing import spring_polyline
@@ -31,6 +32,7 @@ COLORS: dict[str, tuple[int, int, int]] = {
 }
 
 
+@checked(size="render_size")
 @dataclass
 class FrameRenderer:
     """Draws states of one model into (size, size, 3) uint8 frames, pivot at the centre, y up.

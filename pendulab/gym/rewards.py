@@ -18,6 +18,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .._inputs import checked
 from ..model.model import Model
 from ..model.pycode import to_python
 
@@ -216,6 +217,7 @@ def _default_q(model: Model) -> tuple[float, ...]:
     return tuple(q.get(n, 0.0) for n in model.state_names)
 
 
+@checked()
 def make_reward(
     reward: str | RewardFn,
     model: Model,

@@ -24,6 +24,7 @@ from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from .._inputs import checked
 from ..integrate.taylor import structure_key, translate
 from ..integrate.taylor.availability import heyoka_module
 from ..model.pycode import to_python
@@ -79,6 +80,7 @@ class DoublePendulumVectorEnv(VectorEnv):
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": DEFAULT_RENDER_FPS}
 
+    @checked(DoublePendulumEnv)
     def __init__(self, num_envs: int = 8, **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")

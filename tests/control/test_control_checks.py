@@ -53,14 +53,16 @@ def test_every_entry_point_accepts_the_task_name():
 
 def test_nmpc_sizes_are_bounded_before_planning(pendubot):
     # The bound fails at once: no swing-up is planned, no NLP of 10^7 intervals is built.
-    with pytest.raises(ValueError, match=r"horizon must be at most 500 \(each interval adds a block"):
+    with pytest.raises(ValueError, match=r"horizon = 10000000: out of range; expected an integer in \[1, 500\]"):
         nmpc_for_task(pendubot, horizon=10**7)
-    with pytest.raises(ValueError, match="r must be a positive number, got 'x'"):
+    with pytest.raises(ValueError, match="r = 'x': a str, not a number"):
         nmpc_for_task(pendubot, r="x")
     with pytest.raises(TypeError, match="unknown NMPC option"):
         nmpc_for_task(pendubot, horizn=10)
-    # A numeric string is the number it spells (as everywhere in the check layer), stored as a float.
-    assert NMPCOptions(r="1").r == 1.0 and isinstance(NMPCOptions(horizon=20.0).horizon, int)
+    # Only the CLI parses text: a numeric string is refused; a whole float is the count it spells.
+    with pytest.raises(ValueError, match="r = '1': a str, not a number"):
+        NMPCOptions(r="1")
+    assert isinstance(NMPCOptions(horizon=20.0).horizon, int) and NMPCOptions(r=1).r == 1.0
 
 
 def test_plan_lengths_are_bounded_and_named():
@@ -94,7 +96,7 @@ def test_nmpc_solve_time_budget_falls_back(pendubot):
     # IPOPT stopped by the budget: a counted failure, and the LQR fallback torque within the limit instead.
     assert capped.last_status == "Maximum_WallTime_Exceeded" and capped.failures == 1
     assert np.all(np.isfinite(u)) and abs(u[0]) <= 6.0
-    with pytest.raises(ValueError, match="max_solve_time must be a positive"):
+    with pytest.raises(ValueError, match=r"max_solve_time = 0.0: out of range; expected a finite number in \(0, 60\] s"):
         NMPCOptions(max_solve_time=0.0)
 
 

@@ -74,7 +74,7 @@ def test_tolerance_below_double_epsilon_is_refused_before_compiling(rigid: pl.Mo
         pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, rtol=1e-100)
     with pytest.raises(ValueError, match=r"atol must be at least 2.22e-16"):
         pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, atol=1e-20)
-    with pytest.raises(ValueError, match=r"rtol must be at least 2.22e-16"):
+    with pytest.raises(ValueError, match=r"rtol = 1e-300: out of range; expected a finite number in \[2.22e-16, 1\)"):
         largest_lyapunov(rigid, [2.0, 2.0, 0.0, 0.0], 1.0, rtol=1e-300)
 
 
@@ -101,7 +101,7 @@ def test_sizes_are_bounded_with_the_limit_named(rigid: pl.Model) -> None:
         flip_map(rigid, 10**6, 1.0)
     with pytest.raises(ValueError, match=r"n1 \* n2 must be at most 16000000"):
         flip_map(rigid, (10000, 10000), 1.0)
-    with pytest.raises(ValueError, match=r"max_steps must be at most"):
+    with pytest.raises(ValueError, match=r"max_steps = 1099511627776: out of range; expected an integer in \[1, 2147483647\]"):
         pl.ensemble(rigid, [[1.0, 1.0, 0.0, 0.0]], 1.0, max_steps=2**40)
     with pytest.raises(ValueError, match=r"len\(x0\) \* len\(t_eval\) must be at most"):
         pl.ensemble(rigid, np.zeros((2000, 4)), 1.0, t_eval=np.linspace(0, 1, 10**6))

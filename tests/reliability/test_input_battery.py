@@ -325,6 +325,104 @@ def test_the_named_entry_points_check_every_declared_keyword():
         assert not unchecked, f"{qual}: declared inputs not checked: {unchecked}"
 
 
+def scalar_number(annotation: Any) -> bool:
+    """A parameter annotated as one number (``float``, ``int``, optionally ``| None``): what a declaration covers.
+
+    Arrays, sequences and mappings of numbers (``x0``, ``levels``, ``R``) are checked by the function's shape and
+    finiteness checks; a name or an index into them is not a number.
+    """
+    parts = {part.strip() for part in str(annotation).split("|")} - {"None"}
+    return bool(parts) and parts <= {"float", "int"}
+
+
+def public_numeric_parameters() -> list[tuple[str, str, dict[str, str]]]:
+    """``(qualified name, parameter, plan)`` of every scalar numeric parameter of the public surface.
+
+    Result types (frozen dataclasses a function returns) and the model parameter tables (``*Params``: checked
+    by ``pendulab.model.params``, tested by ``test_model_parameter_battery``) are not inputs of this walk.
+    """
+
+    found, seen = [], set()
+    for package in PUBLIC_PACKAGES:
+        module = importlib.import_module(package)
+        for name in getattr(module, "__all__", ()):
+            obj = getattr(module, name, None)
+            if obj is None or id(obj) in seen or (inspect.isclass(obj) and name.endswith("Params")):
+                continue
+            seen.add(id(obj))
+            if inspect.isclass(obj):
+                params = getattr(obj, "__dataclass_params__", None)
+                if name.endswith("Result") or (params and params.frozen and not name.endswith(("Options", "Problem"))):
+                    continue  # a result
+                if issubclass(obj, BaseException) or getattr(obj, "_is_protocol", False):
+                    continue  # an error, or a typing.Protocol (an interface, not a constructor)
+                target = obj.__init__
+            elif inspect.isfunction(obj):
+                target = obj
+            else:
+                continue
+            plan = getattr(target, "__pendulab_inputs__", {})
+            for param in inspect.signature(target).parameters.values():
+                if param.kind is param.VAR_KEYWORD:
+                    if param.name != "params":  # ``**params`` are model parameters (the parameter table)
+                        # Forwarded keywords are checked by name when the entry point is decorated.
+                        forwarded = getattr(target, "__pendulab_forwards__", False)
+                        found.append((f"{package}.{name}", param.name, {param.name: "*"} if forwarded else {}))
+                elif param.name != "self" and scalar_number(param.annotation):
+                    found.append((f"{package}.{name}", param.name, plan))
+    return found
+
+
+def test_every_numeric_keyword_of_the_public_api_is_declared():
+    surface = public_numeric_parameters()
+    undeclared = [f"{qual}({param})" for qual, param, plan in surface if param not in plan]
+    assert not undeclared, f"declare these in pendulab._inputs and decorate with @checked: {undeclared}"
+    assert len(surface) > 200, len(surface)  # the walk found the surface (304 parameters when written)
+
+
+def test_an_undeclared_public_number_fails_the_walk(monkeypatch):
+    def new_entry(model: Any, *, gain: float = 1.0) -> None:
+        """A public function added without a declaration."""
+
+    module = importlib.import_module("pendulab.control")
+    monkeypatch.setattr(module, "new_entry", new_entry, raising=False)
+    monkeypatch.setattr(module, "__all__", [*module.__all__, "new_entry"])
+    assert ("pendulab.control.new_entry", "gain", {}) in public_numeric_parameters()
+
+
+def test_values_are_checked_once_where_they_enter(monkeypatch):
+    """One public call checks each input once: the layers it calls trust it (the model check included)."""
+    import pendulab as pl
+    import pendulab._checks as checks
+    from pendulab.evaluate.scorecard import score
+
+    model_checks = []
+    real_is_model = checks._is_model
+    monkeypatch.setattr(checks, "_is_model", lambda obj: model_checks.append(obj) or real_is_model(obj))
+    score("lqr", "pendubot", runs=1, categories=["mass"], workers=1)
+    assert model_checks == []  # score builds its models: nobody re-checks them on the way down (was 19 checks)
+    model = pl.rigid()
+    pl.simulate(model, [0.1, 0.0, 0.0, 0.0], 0.1, dt=0.05)
+    assert model_checks == [model]  # checked where it entered, once
+    with pytest.raises(TypeError, match="model must be a pendulab Model, got str"):
+        pl.simulate("rigid", [0.1, 0.0, 0.0, 0.0], 0.1)
+
+    calls = []
+
+    @checked()
+    def inner(t_final: float) -> float:
+        return t_final
+
+    @checked()
+    def outer(t_final: float) -> float:
+        calls.append(inner(t_final))
+        return inner(-1.0)  # an inner layer trusts what the outer one passes
+
+    assert outer(2) == -1.0 and calls == [2.0]
+    with pytest.raises(InputError, match="t_final = -1"):
+        inner(-1.0)  # called from outside, the same entry point checks
+
+
 def test_api_battery(record_property):
     """Every checked keyword of every entry point x the object battery: rejected values raise before the body runs."""
     refused = 0
@@ -357,12 +455,54 @@ def test_checked_converts_and_names_its_inputs():
         checked(x="no_such_input")(lambda x: x)
 
 
+def test_forwarded_keywords_are_checked_as_their_target_declares_them():
+    @checked(horizon="horizon_intervals")
+    def target(*, horizon: int = 20, t_final: float = 1.0) -> tuple[Any, Any]:
+        return horizon, t_final
+
+    @checked(target)
+    def forwarder(**options: Any) -> tuple[Any, Any]:
+        return target(**options)
+
+    @checked()
+    def by_name(**options: Any) -> Any:
+        return options
+
+    assert forwarder(horizon=100) == (100, 1.0)  # 100 intervals: the target's meaning, not 100 s
+    with pytest.raises(InputError, match=r"horizon = 501: out of range; expected an integer in \[1, 500\]"):
+        forwarder(horizon=501)
+    with pytest.raises(InputError, match=r"t_final = -1.0: out of range"):
+        forwarder(t_final=-1.0)  # checked by the forwarder: the target, called from inside, trusts it
+    with pytest.raises(InputError, match=r"t_final = nan: not finite"):
+        by_name(t_final=math.nan)  # no target: a forwarded keyword is checked by its name
+    assert by_name(t_final=2, other="x") == {"t_final": 2.0, "other": "x"}
+    with pytest.raises(TypeError, match="forward needs"):
+        checked(target)(lambda x: x)
+
+
+def test_the_vector_env_checks_what_it_forwards_to_each_env():
+    pytest.importorskip("gymnasium")
+    from pendulab.gym import DoublePendulumVectorEnv
+
+    with pytest.raises(InputError, match=r"torque_limit = 1e\+300: out of range; expected a finite number in \(0, 10000\] N.m"):
+        DoublePendulumVectorEnv(2, torque_limit=1e300)
+
+
 def test_declared_limits_equal_the_constants_of_the_layers_above():
     from pendulab.control.swingup.problem import MAX_INTERVALS
     from pendulab.evaluate.scorecard import MAX_RUNS
 
     assert INPUTS["N"].high == INPUTS["intervals"].high == MAX_INTERVALS
     assert INPUTS["runs_per_level"].high == MAX_RUNS
+    from pendulab.control.nmpc.controller import MAX_HORIZON
+    from pendulab.ensemble.batch import MAX_BATCH_SIZE
+    from pendulab.ensemble.engine_checks import MAX_RUNS as MAX_ENSEMBLE_RUNS
+    from pendulab.evaluate.realai.v3_hardware import PASSIVE_ALLOWANCE
+
+    assert INPUTS["horizon_intervals"].high == MAX_HORIZON
+    assert INPUTS["batch_size"].high == MAX_BATCH_SIZE
+    assert INPUTS["chunk_size"].high == MAX_ENSEMBLE_RUNS
+    assert INPUTS["passive_allowance"].high == PASSIVE_ALLOWANCE
 
 
 def test_the_inputs_page_is_generated_from_the_declarations():

@@ -48,13 +48,14 @@ def test_gym_env_accepts_exactly_the_admissible_settings(request):
             and dt <= 10.0  # the default 10 s episode: at least one step ...
             and 10.0 / dt <= 1e9 + 0.5  # ... and at most MAX_EPISODE_STEPS = 1e9 steps
             and _positive_ok(torque)
-            and torque <= 1e6  # MAX_TORQUE_LIMIT
+            and torque <= 1e4  # the u_max declaration: beyond it the reward's squared torque nears overflow
             and _positive_ok(tol)
             and MIN_TOL <= tol < 1.0  # heyoka (the default integrator) refuses tolerances below double epsilon
             and isinstance(noise, (int, float))
             and not isinstance(noise, bool)
             and math.isfinite(noise)
-            and 0 <= noise <= 100.0  # MAX_RESET_NOISE
+            and 0 <= noise <= 10.0  # the reset_noise declaration
+            and all(v == 0 or 1e-100 <= abs(v) <= 1e100 for v in (dt, torque, tol, noise))  # magnitude bounds
         )
         note(f"ok={ok} exc={exc!r}")
         if not ok:

@@ -28,7 +28,7 @@ from .prediction import LENGTH_PARAMS, SlowStateMap, choose_prediction, predicti
 __all__ = ["nmpc_controller"]
 
 
-@checked()
+@checked(NMPCOptions)
 def nmpc_controller(
     model: Model,
     *,

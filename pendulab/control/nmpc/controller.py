@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import bounded_int, positive_float, relative_tolerance
+from ..._inputs import checked
 from ...model.counterpart import rigid_state
 from ...model.model import Model
 from ..lqr import wrap_state_error
@@ -55,6 +55,15 @@ MAX_HORIZON = 500
 _USABLE = {"sqp": {"Maximum_Iterations_Exceeded"}, "ipopt": {"Solved_To_Acceptable_Level"}, "fatrop": set()}
 
 
+@checked(
+    horizon="horizon_intervals",
+    q_angle="weight",
+    q_rate="weight",
+    r="weight",
+    slack_weight="weight",
+    torque_rate="weight",
+    prediction_tolerance="tolerance",
+)
 @dataclass(frozen=True)
 class NMPCOptions:
     """Settings of the NMPC problem and its solver.
@@ -119,7 +128,7 @@ class NMPCOptions:
     >>> NMPCOptions(horizon=0)
     Traceback (most recent call last):
         ...
-    ValueError: horizon must be an integer >= 1, got 0
+    pendulab._inputs.InputError: horizon = 0: out of range; expected an integer in [1, 500]
     """
 
     horizon: int = 20
@@ -140,36 +149,16 @@ class NMPCOptions:
     torque_rate: float | None = None
 
     def __post_init__(self) -> None:
-        # Every numeric field is checked and stored as the number it stands for (a string "1" is not a weight).
-        for name, high, why in (
-            ("horizon", MAX_HORIZON, "each interval adds a block of the NLP, built symbolically and solved every sample"),
-            ("substeps", 1000, "RK4 steps per interval are unrolled into the NLP's expression graph"),
-            ("max_iter", 10_000, "iterations per sample of a real-time controller"),
-        ):
-            v = getattr(self, name)
-            if v is None and name != "horizon":
-                continue
-            object.__setattr__(self, name, bounded_int(name, v, low=1, high=high, why=why))
+        # The numeric fields were checked against their declarations where they entered (@checked above);
+        # the names are checked here, where their choices live.
+        if self.horizon is None:
+            raise ValueError("horizon must be an integer >= 1 (shooting intervals), got None")
         if self.planning not in PLANNING:
             raise ValueError(f"planning must be one of {list(PLANNING)}, got {self.planning!r}")
         if self.state_map not in STATE_MAPS:
             raise ValueError(f"state_map must be one of {list(STATE_MAPS)}, got {self.state_map!r}")
-        object.__setattr__(self, "prediction_tolerance", relative_tolerance("prediction_tolerance", self.prediction_tolerance))
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {list(SOLVERS)}, got {self.solver!r}")
-        object.__setattr__(self, "sample_time", positive_float("sample_time", self.sample_time, "[s]"))
-        for name in ("q_angle", "slack_weight", "slack_tol"):
-            object.__setattr__(self, name, positive_float(name, getattr(self, name)))
-        if self.q_rate is not None:
-            object.__setattr__(self, "q_rate", positive_float("q_rate", self.q_rate))
-        if self.r is not None:
-            object.__setattr__(self, "r", positive_float("r", self.r))
-        if self.velocity_limit is not None:
-            object.__setattr__(self, "velocity_limit", positive_float("velocity_limit", self.velocity_limit, "[rad/s]"))
-        if self.max_solve_time is not None:
-            object.__setattr__(self, "max_solve_time", positive_float("max_solve_time", self.max_solve_time, "[s]"))
-        if self.torque_rate is not None:
-            object.__setattr__(self, "torque_rate", positive_float("torque_rate", self.torque_rate, "[1/(N.m)^2]"))
 
     @property
     def iterations_cap(self) -> int:
@@ -177,6 +166,7 @@ class NMPCOptions:
         return self.max_iter if self.max_iter is not None else (1 if self.solver == "sqp" else 50)
 
 
+@checked()
 @dataclass
 class NMPCController:
     """Receding-horizon tracking of a reference, then regulation about its end (build with :func:`nmpc_controller`).
@@ -249,10 +239,11 @@ class NMPCController:
     goal: np.ndarray
     ocp: ShootingOCP
     K_lqr: np.ndarray
-    solve_times: list[float] = field(default_factory=list)
-    iterations: list[int] = field(default_factory=list)
-    failures: int = 0
-    infeasible: int = 0
+    # Counters of the controller's own life, not inputs.
+    solve_times: list[float] = field(default_factory=list, init=False)
+    iterations: list[int] = field(default_factory=list, init=False)
+    failures: int = field(default=0, init=False)
+    infeasible: int = field(default=0, init=False)
     last_status: str = ""
     prediction: PredictionChoice | None = None
     state_map: SlowStateMap | None = None

@@ -94,7 +94,7 @@ def plan_swingup(problem: SwingUpProblem, *, method: str = "radau", N: int | Non
     return res
 
 
-@checked()
+@checked(NMPCOptions)
 def nmpc_for_task(
     task: Task, *, sample_time: float = 0.02, solver: str = "sqp", **options: Any
 ) -> tuple[NMPCController, np.ndarray]:

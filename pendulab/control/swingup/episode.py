@@ -362,7 +362,7 @@ class SuccessRate:
         return self.successes / self.starts
 
 
-@checked()
+@checked(angle_spread="spread", rate_spread="spread")
 def closed_loop_success_rate(
     task: Task | str,
     starts: int = 20,

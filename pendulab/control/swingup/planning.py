@@ -193,7 +193,7 @@ def solve_objective(
     )
 
 
-@checked()
+@checked(max_intervals="intervals")
 def plan(
     problem: SwingUpProblem,
     *,

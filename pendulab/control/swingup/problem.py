@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..._checks import bounded_int, positive_float
+from ..._inputs import checked
 from ...model.model import ACTUATIONS, Model
 from ..feedback import upright_state
 
@@ -33,6 +34,7 @@ DEFAULT_MARGINS: dict[str, float] = {"effort": 1.0, "time": 0.9, "mix": 0.9}
 OBJECTIVES: tuple[str, ...] = ("effort", "time", "mix")
 
 
+@checked(torque_limit="u_max", time_weight="weight", torque_margin="torque_margin")
 @dataclass(frozen=True)
 class SwingUpProblem:
     """Swing the double pendulum from ``x0`` to ``goal`` under torque limits.

@@ -141,7 +141,7 @@ def _run_check(plan: Sequence[RunSpec]) -> Callable[[str, Any], None]:
     return check
 
 
-@checked()
+@checked(seed="legacy_seed", perturbation_repetitions="repetitions", u_noise_repetitions="repetitions")
 def robustness_v2(
     task: str,
     controller: str | SampledController | Callable[[str], Any] = "best",

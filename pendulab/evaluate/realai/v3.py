@@ -87,7 +87,7 @@ __all__ = [
 ]
 
 
-#: Episode length [s].
+@checked(passive_limit="passive_allowance")
 class ProtocolController:
     """A pendulab sampled controller as an upstream entry: ``get_control_output_(x_rel, t) -> (tau1, tau2)``.
 
@@ -179,7 +179,7 @@ def _gravity_compensation(model: Model) -> Callable[[np.ndarray], np.ndarray]:
     return comp
 
 
-@checked()
+@checked(seed="legacy_seed")
 def run_v3(
     task: str,
     entry: Any,
@@ -315,7 +315,7 @@ def run_v3(
     )
 
 
-@checked()
+@checked(seed="legacy_seed")
 def v3_score(
     task: str,
     controller: str | SampledController = "global",

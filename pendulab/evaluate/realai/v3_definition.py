@@ -40,7 +40,7 @@ PUBLISHED_V3: dict[str, dict[str, float]] = {"pendubot": {"vimppi": 0.799}, "acr
 SWINGUP_DEADTIME: float = 1.0
 
 
-@checked()
+@checked(seed="legacy_seed")
 def reset_schedule(seed: int, n_resets: int = N_RESETS, t_max: float = T_FINAL_V3) -> tuple[np.ndarray, np.ndarray]:
     """The random reset configurations and times, drawn as ``GlobalPolicyTestingControllerV2.__init__`` draws them.
 
@@ -90,6 +90,7 @@ def _end_height(model: Model, x: np.ndarray) -> np.ndarray:
     return -p.L1 * np.cos(x[:, 0]) - p.L2 * np.cos(x[:, 1])
 
 
+@checked()
 def uptime(t: np.ndarray, height: np.ndarray, threshold: float) -> float:
     """``get_uptime``: the sum of ``diff(t, prepend=0)`` over the samples whose end effector is above ``threshold``.
 
@@ -111,6 +112,7 @@ def uptime(t: np.ndarray, height: np.ndarray, threshold: float) -> float:
     return float(np.sum(dt[np.asarray(height) > threshold]))
 
 
+@checked()
 def count_swingups(t: np.ndarray, height: np.ndarray, threshold: float, deadtime: float = SWINGUP_DEADTIME) -> int:
     """``get_number_of_swingups`` (method "height"): rising edges above ``threshold``, at least ``deadtime`` apart.
 
