@@ -333,7 +333,7 @@ def balance_controller(
     continuous 1.47
     discrete 0.62
     """
-    h = positive_float("sample_time", sample_time)
+    h = float(sample_time)
     if design not in ("continuous", "discrete"):
         raise ValueError(f"design must be 'continuous' or 'discrete', got {design!r}")
     names = actuated_inputs(actuation)
@@ -578,12 +578,12 @@ def energy_swingup(
     >>> np.round(np.cos(traj.x[-1, :2]), 3)  # both links upright
     array([-1., -1.])
     """
-    h = positive_float("sample_time", sample_time)
-    limit = positive_float("u_max", u_max)
+    h = float(sample_time)
+    limit = float(u_max)
     names = actuated_inputs(actuation)
     k_default, catch_default = ENERGY_SWINGUP_DEFAULTS[actuation_name(names)]
-    k = k_default if k_energy is None else positive_float("k_energy", k_energy)
-    catch = catch_default if catch_cost is None else positive_float("catch_cost", catch_cost)
+    k = k_default if k_energy is None else float(k_energy)
+    catch = catch_default if catch_cost is None else float(catch_cost)
     balance = balance_controller(model, h, u_max=limit, actuation=names)
     release = None if names == INPUT_NAMES else _RELEASE_FACTOR
     return EnergySwingUp(model, balance, h, k, u_max=limit, catch_cost=catch, input_names=names, release_factor=release)

@@ -258,8 +258,8 @@ def global_swingup(
     check_model(model)
     if actuation not in GLOBAL_DEFAULTS:
         raise ValueError(f"actuation must be one of {list(GLOBAL_DEFAULTS)}, got {actuation!r}")
-    h = positive_float("sample_time", sample_time, "[s]")
-    limit = positive_float("u_max", u_max, "[N.m]")
+    h = float(sample_time)
+    limit = float(u_max)
     d = GLOBAL_DEFAULTS[actuation]
     vals = [d[i] if v is None else float(v) for i, v in enumerate((k_energy, kp, kd, alpha, catch_level, release_level))]
     for name, v in zip(("k_energy", "kp", "kd", "alpha"), vals[:4], strict=True):

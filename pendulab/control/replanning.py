@@ -8,7 +8,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._checks import positive_float
 from .._inputs import checked
 from ..model.model import INPUT_NAMES
 from .global_swingup import GlobalSwingUp, global_controller
@@ -336,6 +335,6 @@ def replanning_controller(
     if not (math.isfinite(delay) and delay >= 0.0):
         raise ValueError(f"plan_delay must be a finite non-negative time [s], got {plan_delay!r}")
     h_default, n_int, mt_default = REPLAN_DEFAULTS[task]
-    h = h_default if horizon is None else positive_float("horizon", horizon, "[s]")
+    h = h_default if horizon is None else float(horizon)
     mt = mt_default if min_time is None else bool(min_time)
     return ReplanningSwingUp(fb, task, horizon=h, n_intervals=n_int, plan_delay=delay, min_time=mt)

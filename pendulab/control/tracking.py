@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._checks import positive_float
 from .._inputs import checked
 from ..model.model import INPUT_NAMES, Model
 from .feedback import LinearStateFeedback, actuated_inputs, as_feedback, energy_swingup, upright_state
@@ -173,7 +172,7 @@ def default_weights(model: Model, torque_limit: float | None = None) -> tuple[np
     """
     q = {"theta": 10.0, "omega": 1.0, "r": 100.0, "v": 0.1}
     Q = np.diag([q[n.rstrip("0123456789")] for n in model.state_names])
-    r = 1.0 if torque_limit is None else 1.0 / positive_float("torque_limit", torque_limit) ** 2
+    r = 1.0 if torque_limit is None else 1.0 / float(torque_limit) ** 2
     return Q, np.array(r)
 
 
@@ -337,7 +336,7 @@ def tvlqr_tracker(
     >>> np.round(np.cos(traj.x[-1, :2]), 3)  # tracked, then balanced upright
     array([-1., -1.])
     """
-    h = positive_float("sample_time", sample_time)
+    h = float(sample_time)
     ts, xs, us = resample_reference(t, x, u, h, model)
     xs = model.check_state(xs, "x_ref")
     names = actuated_inputs(actuation)
@@ -447,7 +446,7 @@ def resample_reference(
     (101, 4) angle error 8e-03 rad
     (101, 4) angle error 7e-05 rad
     """
-    h = positive_float("sample_time", sample_time)
+    h = float(sample_time)
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     u = np.asarray(u, dtype=float)

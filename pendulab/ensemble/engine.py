@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import bounded_int, check_model, positive_float, relative_tolerance
+from .._checks import bounded_int, check_model
 from .._inputs import checked
 from ..integrate import METHODS, simulate
 from ..integrate.taylor.availability import check_tolerance_floor, heyoka_module
@@ -154,27 +154,23 @@ def ensemble(
     True
     """
     check_model(model)
-    tf = positive_float("t_final", t_final, "[s]")
+    tf = float(t_final)
     P = check_params(model, params)
     X0 = check_x0(model, x0, None if P is None else len(P))
     n = len(X0)
     if P is None:
         P = np.tile(model.p, (n, 1))
-    rt, at = relative_tolerance("rtol", rtol), positive_float("atol", atol)
+    rt, at = float(rtol), float(atol)
     te = _check_t_eval(t_eval, tf)
     if te is not None:
         bounded_int("len(x0) * len(t_eval)", n * len(te), high=MAX_DENSE, why="memory of the dense output x (8 bytes per value)")
     plan = resolve_events(model, events)
-    cs = bounded_int("chunk_size", chunk_size, high=MAX_RUNS, why="runs per chunk")
-    nthreads = (
-        (os.cpu_count() or 1)
-        if threads is None
-        else bounded_int("threads", threads, high=MAX_WORKERS, why="local workers; each may be a forked process")
-    )
+    cs = int(chunk_size)
+    nthreads = (os.cpu_count() or 1) if threads is None else int(threads)
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method must be 'taylor' or a key of pendulab.METHODS {sorted(METHODS)}, got {method!r}")
-    steps = bounded_int("max_steps", max_steps, low=1, high=2**31 - 1, why="the step budget of each run")
-    wall = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time, "[s]")
+    steps = int(max_steps)
+    wall = None if max_wall_time is None else float(max_wall_time)
     S = None if batch_size is None else check_batch_size(batch_size)
     report = _progress(progress, n)
     start = time.perf_counter()

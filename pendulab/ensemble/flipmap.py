@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import bounded_int, check_model, relative_tolerance
+from .._checks import bounded_int, check_model
 from .._inputs import checked
 from .._io import check_writable
 from .flipmap_plot import plot_flip_map, plot_flip_map_compare
@@ -174,8 +174,8 @@ def flip_map(
     bounded_int("n_grid total points n1 * n2", n1 * n2, high=MAX_GRID_POINTS, why="memory of the states and flip times")
     if not (isinstance(t_max, (int, float, np.floating, np.integer)) and math.isfinite(t_max) and t_max > 0):
         raise ValueError(f"t_max must be a finite number > 0 [s], got {t_max!r}")
-    tol = relative_tolerance("rtol", rtol)
-    block = bounded_int("block_size", block_size, high=10**8, why="runs per recorded block")
+    tol = float(rtol)
+    block = int(block_size)
     S = default_batch_size() if batch_size is None else batch_size
     th1 = flip_map_grid(n1, theta_range)
     th2 = flip_map_grid(n2, theta_range if theta2_range is None else theta2_range)

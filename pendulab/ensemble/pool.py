@@ -28,7 +28,6 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
-from .._checks import bounded_int
 from .._inputs import checked
 
 __all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed"]
@@ -219,12 +218,8 @@ def map_runs(
     """
     todo = list(items)
     total = len(todo)
-    n_workers = (
-        default_workers()
-        if workers is None
-        else bounded_int("workers", workers, high=MAX_WORKERS, why="each worker is a forked process")
-    )
-    chunks_per_worker = bounded_int("chunks_per_worker", chunks_per_worker, high=10_000, why="chunks are sent one by one")
+    n_workers = default_workers() if workers is None else int(workers)
+    chunks_per_worker = int(chunks_per_worker)
     n_workers = min(n_workers, max(total, 1))
     if n_workers == 1 or total <= 1 or "fork" not in multiprocessing.get_all_start_methods():
         out: list[R] = []

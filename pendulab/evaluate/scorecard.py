@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._checks import bounded_int, positive_float
+from .._checks import bounded_int
 from .._inputs import checked
 from ..control.controllers import controller_for_task
 from ..control.feedback import SampledController
@@ -238,10 +238,10 @@ def score(
     | friction | N.m | 0: 100%, 0.2: 0% | 0.50 |
     | **overall** | | | **0.50** |
     """
-    runs = bounded_int("runs", runs, low=1, high=MAX_RUNS, why="runs per level of each stochastic category")
-    seed = bounded_int("seed", seed, low=0, high=2**63 - 1, why="a seed of numpy's SeedSequence")
+    runs = int(runs)
+    seed = int(seed)
     if max_wall_time is not None:
-        max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
+        max_wall_time = float(max_wall_time)
     if categories is not None and (isinstance(categories, str) or not isinstance(categories, Sequence)):
         raise TypeError(f"categories must be a sequence of category names, got {type(categories).__name__}")
     t0 = time.perf_counter()

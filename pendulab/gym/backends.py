@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import relative_tolerance
 from .._inputs import checked
 from ..integrate.taylor import compiled_integrator, structure_key
 from ..integrate.taylor.availability import heyoka_module, taylor_unavailable_reason
@@ -127,7 +126,7 @@ class NativePlant:
     def __init__(self, model: Model, actuation: str, *, integrator: str = "auto", tol: float = 1e-10) -> None:
         if actuation not in ACTUATIONS:
             raise ValueError(f"actuation must be one of {list(ACTUATIONS)}, got {actuation!r}")
-        tol = relative_tolerance("tol", tol)
+        tol = float(tol)
         self.model = model
         self.actuation = actuation
         self.tol = tol
@@ -350,7 +349,7 @@ class FmuBackend:
 
         if solver not in ("dopri5", "rodas4"):
             raise ValueError(f"solver must be 'dopri5' or 'rodas4', got {solver!r}")
-        tol = relative_tolerance("tol", tol)
+        tol = float(tol)
         self.model = model
         self._fmu_path = fmu_path
         self._cached = fmu_path is None

@@ -170,8 +170,15 @@ def choose_method(model: Model, x0: np.ndarray, u0: np.ndarray, rtol: float, ato
     -------
     AutoChoice
         The method and the numbers behind the choice.
+
+    Raises
+    ------
+    ValueError
+        The linearization at ``x0`` is not finite (a spring length or stiffness next to zero).
     """
     A = np.asarray(model.functions["jac_rhs"](x0, u0, model.p)[0], dtype=float)
+    if not np.all(np.isfinite(A)):  # finite dynamics can still have an overflowing linearization (r1 = 1e-300)
+        raise model.not_finite_error(np.asarray(x0, dtype=float), "x0", "the linearized equations of motion are")
     omega_max = float(np.max(np.abs(np.linalg.eigvals(A))))
     p = model.params
     # The pendular time scale; without gravity (g = 0) the motion's own rates set it, and a model at rest

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import BUDGETS, bounded_int, check_model, positive_float, relative_tolerance, within_budget
+from .._checks import BUDGETS, bounded_int, check_model, positive_float, within_budget
 from .._inputs import checked
 from ..model.model import Model
 from .auto import choose_method
@@ -375,12 +375,12 @@ def simulate(
     x0 = model.check_start(x0, "x0")
     if x0.ndim != 1:
         raise ValueError(f"x0 must have shape ({model.nx},), got {x0.shape}")
-    t_final = positive_float("t_final", t_final)
-    dt = positive_float("dt", dt)
-    rtol = relative_tolerance("rtol", rtol)
-    atol = positive_float("atol", atol)
+    t_final = float(t_final)
+    dt = float(dt)
+    rtol = float(rtol)
+    atol = float(atol)
     if max_step is not None:
-        max_step = positive_float("max_step", max_step)
+        max_step = float(max_step)
     t = time_grid(t_final, dt)
     # A TimeInput is held on its own input grid (the output grid refined); every other input on the output grid.
     t_run = u.hold_grid(t) if isinstance(u, TimeInput) else t

@@ -13,6 +13,7 @@ so the torques do virtual work tau1 d(theta1) + tau2 d(theta2 - theta1).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 
@@ -134,6 +135,7 @@ def _assemble(
     state_names: tuple[str, ...],
     extra_kinetic: ca.SX | float = 0.0,
     extra_dissipation: ca.SX | float = 0.0,
+    chain: Sequence[Sequence[int]] | None = None,
 ) -> SymbolicModel:
     # Velocities are derived, not typed: v = (d pos / dq) q'.
     T = extra_kinetic
@@ -144,7 +146,12 @@ def _assemble(
         V += mass * g * pos[1]
     for inertia, rate in point_inertias:
         T += 0.5 * inertia * rate**2
-    eom = lagrange_equations(q, qd, T, V, D, Q)
+    # Point masses alone on a chain (``chain``: the coordinates each body adds): the mass matrix factors through
+    # the positions' Jacobian (pendulab.model.lagrange), a third of the expression of the generic solve.
+    if chain is not None and (point_inertias or not isinstance(extra_kinetic, float) or extra_kinetic != 0.0):
+        raise ValueError(f"{kind}: a chain of point masses carries no other kinetic energy")
+    bodies = None if chain is None else [(m, pos, c) for (m, pos), c in zip(com_positions, chain, strict=True)]
+    eom = lagrange_equations(q, qd, T, V, D, Q, bodies=bodies)
     x = ca.vertcat(q, qd)
     xdot = ca.vertcat(qd, eom.qdd)
     return SymbolicModel(
@@ -235,4 +242,5 @@ def build_elastic() -> SymbolicModel:
         positions=ca.vertcat(bob1, bob2),
         stretch=stretch,
         state_names=STATE_NAMES["elastic"],
+        chain=[(0, 2), (1, 3)],  # bob 1 adds (theta1, r1), bob 2 (theta2, r2)
     )

@@ -11,15 +11,27 @@ with M = d^2 T / dq'^2, so
 
 Everything is obtained by symbolic differentiation in CasADi; no equation of
 motion is ever written by hand.
+
+A system of point masses on a chain (the elastic pendulum) has more structure:
+with T = 1/2 sum m_i |J_i q'|^2 the mass matrix is M = J^T W J and the
+Coriolis/centrifugal terms are J^T W (J' q'), so Lagrange's equations
+M q'' + bias = G read J q'' = W^-1 J^-T G - J' q' (J' q' the positions' second
+derivative along q'). On a chain, each body moves only with its own
+coordinates and those of the bodies before it: J is block lower triangular with
+2 x 2 diagonal blocks, and q'' follows from two block substitutions instead of
+a symbolic solve with M. The same accelerations, a third of the expression
+(elastic pendulum: 192 SX instructions instead of 623; see
+:func:`point_mass_accelerations`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import casadi as ca
 
-__all__ = ["LagrangeSystem", "lagrange_equations"]
+__all__ = ["LagrangeSystem", "lagrange_equations", "point_mass_accelerations"]
 
 
 @dataclass(frozen=True)
@@ -45,7 +57,15 @@ class LagrangeSystem:
     bias: ca.SX
 
 
-def lagrange_equations(q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.SX) -> LagrangeSystem:
+def lagrange_equations(
+    q: ca.SX,
+    qd: ca.SX,
+    T: ca.SX,
+    V: ca.SX,
+    D: ca.SX,
+    Q: ca.SX,
+    bodies: Sequence[tuple[ca.SX, ca.SX, Sequence[int]]] | None = None,
+) -> LagrangeSystem:
     """Derive the equations of motion from energies and generalized forces.
 
     Parameters
@@ -61,6 +81,10 @@ def lagrange_equations(q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.
         quadratic D [W].
     Q : casadi.SX, shape (n, 1)
         Generalized non-conservative forces (from inputs).
+    bodies : sequence of (mass, position, coordinates), optional
+        When ``T`` is exactly the kinetic energy of these point masses on a chain (see
+        :func:`point_mass_accelerations`), ``qdd`` is computed by the factored form; ``M``, ``rhs`` and
+        ``bias`` are the generic ones either way.
 
     Returns
     -------
@@ -80,6 +104,72 @@ def lagrange_equations(q: ca.SX, qd: ca.SX, T: ca.SX, V: ca.SX, D: ca.SX, Q: ca.
     dT_dqd = ca.gradient(T, qd)
     M = ca.jacobian(dT_dqd, qd)
     bias = ca.jtimes(dT_dqd, q, qd) - ca.gradient(T, q)
-    rhs = Q - bias - ca.gradient(V, q) - ca.gradient(D, qd)
-    qdd = ca.solve(M, rhs)
+    applied = Q - ca.gradient(V, q) - ca.gradient(D, qd)
+    rhs = applied - bias
+    qdd = ca.solve(M, rhs) if bodies is None else point_mass_accelerations(q, qd, bodies, applied)
     return LagrangeSystem(M=M, rhs=rhs, qdd=qdd, bias=bias)
+
+
+def point_mass_accelerations(q: ca.SX, qd: ca.SX, bodies: Sequence[tuple[ca.SX, ca.SX, Sequence[int]]], applied: ca.SX) -> ca.SX:
+    """Accelerations of point masses on a chain: ``J q'' = W^-1 J^-T G - J' q'`` by block substitution.
+
+    Lagrange's equations for ``T = 1/2 sum_i m_i |d p_i/dt|^2`` (exactly, no other kinetic energy), with
+    the mass matrix ``M = J^T W J`` and the bias ``J^T W J' q'`` factored through the Jacobian ``J`` of the
+    positions (module docstring).
+
+    Parameters
+    ----------
+    q, qd : casadi.SX, shape (n, 1)
+        Generalized coordinates and velocities.
+    bodies : sequence of (mass, position, coordinates)
+        Point masses in chain order: mass (scalar SX) [kg], planar position (SX, shape (2, 1)) [m] and the
+        indices of the two coordinates of ``q`` the body adds to the chain. Together the coordinates cover
+        ``q`` once; a body's position may depend on its own and earlier bodies' coordinates only.
+    applied : casadi.SX, shape (n, 1)
+        Generalized applied forces ``G = Q - dV/dq - dD/dq'``.
+
+    Returns
+    -------
+    casadi.SX, shape (n, 1)
+        ``q''``.
+
+    Raises
+    ------
+    ValueError
+        The coordinates do not cover ``q`` once in pairs, or a body depends on a later body's coordinates
+        (the Jacobian is not block lower triangular).
+    """
+    order = [i for _, _, coords in bodies for i in coords]
+    if sorted(order) != list(range(q.numel())) or any(len(coords) != 2 for _, _, coords in bodies):
+        raise ValueError(f"bodies must add two coordinates each and cover q once, got coordinates {order}")
+    blocks, couplings, rates = [], [], []
+    for k, (_, pos, coords) in enumerate(bodies):
+        jac = ca.jacobian(pos, q)
+        later = [i for _, _, c in bodies[k + 1 :] for i in c]
+        if later and jac[:, later].nnz() > 0:
+            raise ValueError(f"body {k} depends on a later body's coordinates {later}: not a chain")
+        blocks.append(_inverse_2x2(jac[:, list(coords)]))
+        couplings.append([jac[:, list(c)] for _, _, c in bodies[:k]])
+        rates.append(ca.jtimes(ca.jtimes(pos, q, qd), q, qd))  # J' q': the position's second derivative along q'
+    # J^T y = G, from the last body back (J^T is block upper triangular).
+    y: list[ca.SX] = [ca.SX()] * len(bodies)
+    for k in reversed(range(len(bodies))):
+        g = applied[list(bodies[k][2])]
+        for j in range(k + 1, len(bodies)):
+            g -= couplings[j][k].T @ y[j]
+        y[k] = blocks[k].T @ g
+    # J q'' = y / m - J' q', from the first body on.
+    qdd = ca.SX.zeros(q.numel(), 1)
+    for k, (mass, _, coords) in enumerate(bodies):
+        z = y[k] * (1 / mass) - rates[k]
+        for j in range(k):
+            z -= couplings[k][j] @ qdd[list(bodies[j][2])]
+        qdd[list(coords)] = blocks[k] @ z
+    return qdd
+
+
+def _inverse_2x2(a: ca.SX) -> ca.SX:
+    """Inverse of a symbolic 2 x 2 matrix by its adjugate (a generic solve expands to more operations)."""
+    # One division, then products: a division costs a Taylor integrator far more than a product.
+    inv_det = 1 / (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0])
+    return ca.vertcat(ca.horzcat(a[1, 1], -a[0, 1]), ca.horzcat(-a[1, 0], a[0, 0])) * inv_det

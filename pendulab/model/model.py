@@ -247,12 +247,31 @@ class Model:
         if np.any(bad):
             row = X if X.ndim == 1 else X[int(np.argmax(bad))]
             where = "" if X.ndim == 1 else f"[{int(np.argmax(bad))}]"
-            state = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.state_names, row, strict=True))
-            raise ValueError(
-                f"{name}{where}: the equations of motion are not finite at this state ({state}) with the model's "
-                "parameters; expected spring lengths and stiffnesses well away from zero"
-            )
+            raise self.not_finite_error(row, f"{name}{where}")
         return X
+
+    def not_finite_error(self, x: np.ndarray, name: str, what: str = "the equations of motion are") -> ValueError:
+        """The error of a state where the dynamics (or their linearization) overflow, naming the state.
+
+        Parameters
+        ----------
+        x : ndarray, shape (nx,)
+            The state.
+        name : str
+            How the caller names it (``"x0"``, ``"x0[3]"``).
+        what : str
+            What is not finite there.
+
+        Returns
+        -------
+        ValueError
+            To raise.
+        """
+        state = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.state_names, x, strict=True))
+        return ValueError(
+            f"{name}: {what} not finite at this state ({state}) with the model's parameters; expected spring lengths "
+            "and stiffnesses well away from zero"
+        )
 
     def check_input(self, u: Any, name: str = "u") -> np.ndarray:
         """Validate an input or a batch of inputs.

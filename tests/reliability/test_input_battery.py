@@ -423,6 +423,43 @@ def test_values_are_checked_once_where_they_enter(monkeypatch):
         inner(-1.0)  # called from outside, the same entry point checks
 
 
+#: Body checks of a declared parameter that are narrower than its declaration, with the reason.
+NARROWER_BODY_CHECKS = {
+    ("pendulab/evaluate/realai/v3.py", "n_steps"): "a v3 run is at most the protocol's 30000 steps",
+}
+
+
+def test_no_entry_point_checks_a_declared_parameter_again():
+    """An entry point's body does not re-check what ``@checked`` checked where it entered (checked once)."""
+    import ast
+
+    root = Path(__file__).parents[2]
+    again = []
+    for path in sorted((root / "pendulab").rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.FunctionDef):
+                continue
+            decorators = [d for d in node.decorator_list if isinstance(d, ast.Call) and getattr(d.func, "id", "") == "checked"]
+            if not decorators:
+                continue
+            aliases = {k.arg for k in decorators[0].keywords}
+            params = {a.arg for a in node.args.args + node.args.kwonlyargs}
+            declared = {p for p in params if p in aliases or (p in INPUTS and INPUTS[p].kind in ("real", "integer"))}
+            for call in ast.walk(node):
+                if (
+                    isinstance(call, ast.Call)
+                    and getattr(call.func, "id", "") in ("positive_float", "bounded_int", "relative_tolerance")
+                    and len(call.args) > 1
+                    and isinstance(call.args[1], ast.Name)
+                    and call.args[1].id in declared
+                ):
+                    where = (path.relative_to(root).as_posix(), call.args[1].id)
+                    if where not in NARROWER_BODY_CHECKS:
+                        again.append(f"{where[0]}:{call.lineno} {node.name}({where[1]})")
+    assert not again, f"checked twice (the declaration already checks these): {again}"
+
+
 def test_api_battery(record_property):
     """Every checked keyword of every entry point x the object battery: rejected values raise before the body runs."""
     refused = 0

@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import positive_float
 from ..._inputs import checked
 from ...model.model import INPUT_NAMES, Model
 from .ekf import ExtendedKalmanFilter, delay_steps
@@ -95,7 +94,7 @@ class MultipleModelEstimator:
         if not all(np.isfinite(k) and 0.0 < k <= 2.0 for k in ks):
             raise ValueError(f"responses must be torque responses k in (0, 2], got {list(responses)!r}")
         self.responses = np.array(ks)
-        self.window_steps = max(1, int(round(positive_float("window", window, "[s]") / h)))
+        self.window_steps = max(1, int(round(float(window) / h)))
         a = float(accel_std)
         if not (np.isfinite(a) and a >= 0.0):
             raise ValueError(f"accel_std must be a finite model-error allowance >= 0 [rad/s^2], got {accel_std!r}")

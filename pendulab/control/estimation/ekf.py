@@ -9,7 +9,7 @@ from typing import Any, Protocol, runtime_checkable
 import casadi as ca
 import numpy as np
 
-from ..._checks import bounded_int, check_model, positive_float
+from ..._checks import bounded_int, check_model
 from ..._inputs import MAGNITUDE, checked
 from ...analysis.linearize import linearize
 from ...model.model import INPUT_NAMES, Model
@@ -235,7 +235,7 @@ class ExtendedKalmanFilter:
         x0_std: Any = 1e-3,
     ) -> None:
         self.model = check_model(model)
-        self.sample_time = positive_float("sample_time", sample_time, "[s]")
+        self.sample_time = float(sample_time)
         names = model.state_names
         if measured is None:
             measured = names

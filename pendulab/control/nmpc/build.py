@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import positive_float
 from ..._inputs import checked
 from ...model.counterpart import rigid_state
 from ...model.model import INPUT_NAMES, Model
@@ -92,7 +91,7 @@ def nmpc_controller(
     if unknown:
         raise TypeError(f"unknown NMPC option(s) {unknown}; expected some of {sorted(NMPCOptions.__dataclass_fields__)}")
     opts = NMPCOptions(**{**opts.__dict__, **option_changes})
-    u_max = positive_float("u_max", u_max, "[N.m]")
+    u_max = float(u_max)
     names = actuated_inputs(actuation)
     choice = choose_prediction(model, opts.planning, opts.prediction_tolerance)
     plan = prediction_model(model, choice.level)

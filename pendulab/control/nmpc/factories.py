@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..._checks import positive_float
 from ..._inputs import checked
 from ...model.counterpart import rigid_counterpart
 from ...model.model import Model
@@ -204,7 +203,7 @@ def nmpc_swingup(
 
     check_options(sample_time=sample_time, solver=solver, **options)  # before the (costly) plan
     if reference is None:
-        horizon = positive_float("horizon", horizon, "[s]")
+        horizon = float(horizon)
         if round(horizon / 0.03) > MAX_INTERVALS:
             raise ValueError(
                 f"horizon must be at most {MAX_INTERVALS * 0.03:g} s (the plan has one interval per 30 ms, "

@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import bounded_int, positive_float
 from ..._inputs import checked
 from .errors import SCALES, ErrorEstimate, estimate_error
 from .guess import Guess, energy_guess, lift_to_elastic, linear_guess, rigid_counterpart_problem
@@ -40,7 +39,7 @@ from .iterations import SigintWatch, wall_time_budget, watch_sigint
 from .mesh import collocation_states, parent_intervals, refine_mesh
 from .problem import SwingUpProblem
 from .result import SwingUpResult
-from .transcription import COLLOCATION, INTERVALS_WHY, MAX_INTERVALS, Transcription, _build, get_transcription
+from .transcription import COLLOCATION, Transcription, _build, get_transcription
 
 __all__ = ["SwingUpResult", "solve_transcription", "GUESSES"]
 
@@ -168,8 +167,8 @@ def solve_transcription(
     if error_scale not in SCALES:
         raise ValueError(f"error_scale must be one of {list(SCALES)}, got {error_scale!r}")
     if max_wall_time is not None:
-        max_wall_time = positive_float("max_wall_time", max_wall_time, "[s]")
-    bounded_int("max_intervals", max_intervals, low=2, high=MAX_INTERVALS, why=INTERVALS_WHY)
+        max_wall_time = float(max_wall_time)
+    int(max_intervals)
     settings = _Settings(method, problem.intervals if N is None else N, degree, integrator, ipopt_options)
     with watch_sigint() as interrupt, wall_time_budget(max_wall_time) as budget:
         res = _solve_transcription(problem, settings, guess, mesh, interrupt, tolerance, refine, max_refinements, max_intervals,

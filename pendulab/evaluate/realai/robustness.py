@@ -48,7 +48,6 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..._checks import bounded_int
 from ..._inputs import checked
 from ..._journal import Journal
 from ...control.feedback import SampledController
@@ -219,7 +218,7 @@ def robustness_v2(
     if not isinstance(task, str):
         raise TypeError(f"task must be 'pendubot' or 'acrobot', got {type(task).__name__}")
     task = check_task(short_name(task))
-    seed = bounded_int("seed", seed, low=0, high=2**32 - 1, why="a seed of numpy's legacy RandomState")
+    seed = int(seed)
     if resume and journal is None:
         raise ValueError("resume=True needs a journal path")
     w0 = time.perf_counter()
@@ -257,7 +256,7 @@ def robustness_v2(
         return run_protocol_episode(task, ctrl, plan[i], states[i], every_step=every_step, plant=plant)
 
     todo = [s.index for s in plan if s.index not in done]
-    n_work = default_workers() if workers is None else bounded_int("workers", workers, high=256, why="worker processes")
+    n_work = default_workers() if workers is None else int(workers)
     per = max(8, 4 * n_work)
     for b in range(0, len(todo), per):
         batch = todo[b : b + per]

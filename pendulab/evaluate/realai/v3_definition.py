@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._checks import bounded_int
 from ..._inputs import checked
 from ...control.realai.spec import DT
 from ...model.model import Model
@@ -68,8 +67,8 @@ def reset_schedule(seed: int, n_resets: int = N_RESETS, t_max: float = T_FINAL_V
     TypeError
         ``seed`` or ``n_resets`` not an integer.
     """
-    seed = bounded_int("seed", seed, low=0, high=2**32 - 1, why="a numpy RandomState seed")
-    n = bounded_int("n_resets", n_resets, low=1, high=1000, why="upstream draws 10 n + 1 states")
+    seed = int(seed)
+    n = int(n_resets)
     rs = np.random.RandomState(seed)
     states = rs.uniform(0.0, 2 * np.pi, (10 * n + 1, 4))
     states -= np.pi
