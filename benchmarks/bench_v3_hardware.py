@@ -2,12 +2,15 @@
 
 Run: ``python benchmarks/bench_v3_hardware.py [--tasks pendubot acrobot] [--controllers best global replan library]
 [--seeds-pendubot 333] [--seeds-acrobot 777] [--allowance 0 0.5] [--md benchmarks/results/v3_hardware.md]
-[--sensing]``. One Markdown row per (task, controller, passive allowance): the score per seed, the mean, swing-ups,
-limit resets and safety stops, the controller's per-call time (median / max over all calls; the loop's period is
-2 ms) and the wall time. With the 0.5 N.m allowance pendulab's controllers run wrapped in
-:class:`~pendulab.evaluate.realai.v3_hardware.FrictionCompensated` (the identified C.1 friction, compensated on both
-joints from the measured rates), as the hardware teams used the allowance. ``--sensing`` prints the measured sensing
-and timing table (``docs/realai_v3.md``). With ``--md`` the rows are appended to that file as a dated section.
+[--sensing] [--velocity-limit 16]``. One Markdown row per (task, controller, passive allowance): the score per seed,
+the mean, swing-ups, limit resets and safety stops, the largest measured joint rate, the controller's per-call
+time (median / max over all calls; the loop's period is 2 ms) and the wall time. With the 0.5 N.m allowance
+pendulab's controllers run wrapped in :class:`~pendulab.evaluate.realai.v3_hardware.FrictionCompensated` (the
+identified C.1 friction, compensated on both joints from the measured rates), as the hardware teams used the
+allowance. The planning controllers (``RATE_BOUNDED``: ``library``, ``replan``) plan with their link rates bounded
+by ``--velocity-limit`` (default ``PLAN_VELOCITY_LIMIT_HW``, 16 rad/s; 0: unbounded), as ``v3_hardware_score``
+does. ``--sensing`` prints the measured sensing and timing table (``docs/realai_v3.md``). With ``--md`` the rows
+are appended to that file as a dated section.
 """
 
 from __future__ import annotations
@@ -20,8 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from pendulab.evaluate.realai.controllers import resolve_controller
-from pendulab.evaluate.realai.v3_hardware import PUBLISHED_HARDWARE, FrictionCompensated, run_v3_hardware
+from pendulab.evaluate.realai.controllers import RATE_BOUNDED, resolve_controller
+from pendulab.evaluate.realai.v3_hardware import (
+    PLAN_VELOCITY_LIMIT_HW,
+    PUBLISHED_HARDWARE,
+    FrictionCompensated,
+    run_v3_hardware,
+)
 from pendulab.identify.sensing import c1_sensing
 from pendulab.model.plant_file import load_plant
 
@@ -48,8 +56,8 @@ def sensing_table() -> list[str]:
     ]
 
 
-def _run(task: str, name: str, seed: int, allowance: float) -> dict[str, object]:
-    label, ctrl = resolve_controller(task, name)
+def _run(task: str, name: str, seed: int, allowance: float, velocity_limit: float | None) -> dict[str, object]:
+    label, ctrl = resolve_controller(task, name, velocity_limit=velocity_limit if name in RATE_BOUNDED else None)
     if allowance > 0.0:
         ctrl = FrictionCompensated(ctrl, load_plant("c1"))
     res = run_v3_hardware(task, ctrl, label, seed=seed, passive_allowance=allowance)
@@ -58,6 +66,7 @@ def _run(task: str, name: str, seed: int, allowance: float) -> dict[str, object]
         "swingups": res.n_swingups,
         "limit_resets": res.limit_resets,
         "stopped_at": res.stopped_at,
+        "max_rate": res.to_dict()["max_joint_rate"],
         "calls": np.asarray(res.call_times, dtype=float),
         "wall": res.wall_time,
     }
@@ -72,14 +81,18 @@ def main() -> None:
     ap.add_argument("--allowance", nargs="+", type=float, default=[0.0, 0.5], help="passive allowances [N m]")
     ap.add_argument("--md", type=Path, default=None, help="append the rows to this Markdown file")
     ap.add_argument("--sensing", action="store_true", help="print the measured sensing table first")
+    ap.add_argument(
+        "--velocity-limit", type=float, default=PLAN_VELOCITY_LIMIT_HW, help="plans' rate bound [rad/s] (0: unbounded)"
+    )
     args = ap.parse_args()
+    vmax = args.velocity_limit or None
     lines: list[str] = []
     if args.sensing:
         lines += ["### Sensing and timing measured on the C.1 excitation records", "", *sensing_table(), ""]
         print("\n".join(lines), flush=True)
     head = (
         "| task | controller | passive allowance [N m] | scores (seeds) | mean | hardware winner | gap | swing-ups | "
-        "limit resets | safety stop [s] | call median / max [ms] | wall [s] |"
+        "limit resets | safety stop [s] | max rate [rad/s] | call median / max [ms] | wall [s] |"
     )
     rows = [head, "|" + "---|" * (head.count("|") - 1)]
     print("\n".join(rows), flush=True)
@@ -90,9 +103,9 @@ def main() -> None:
             for allowance in args.allowance:
                 w0 = time.perf_counter()
                 try:
-                    runs = [_run(task, name, s, allowance) for s in seeds]
+                    runs = [_run(task, name, s, allowance, vmax) for s in seeds]
                 except Exception as exc:  # noqa: BLE001 - a benchmark row records why a controller failed
-                    row = f"| {task} | {name} | {allowance:g} | failed: {type(exc).__name__}: {str(exc)[:80]} | | | | | | | | |"
+                    row = f"| {task} | {name} | {allowance:g} | failed: {type(exc).__name__}: {str(exc)[:80]} | | | | | | | | | |"
                     rows.append(row)
                     print(row, flush=True)
                     continue
@@ -104,6 +117,7 @@ def main() -> None:
                     f"| {task} | {name} | {allowance:g} | {' '.join(f'{s:.3f}' for s in scores)} | **{mean:.3f}** | "
                     f"{winner} {target:.3f} | {mean - target:+.3f} | {np.mean([r['swingups'] for r in runs]):.1f} | "
                     f"{sum(int(r['limit_resets']) for r in runs)} | {' '.join(stops) or '—'} | "
+                    f"{max(float(r['max_rate']) for r in runs):.1f} | "
                     f"{1e3 * np.median(calls):.3f} / {1e3 * calls.max():.1f} | {time.perf_counter() - w0:.0f} |"
                 )
                 rows.append(row)

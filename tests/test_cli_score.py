@@ -106,3 +106,32 @@ def test_v3_hardware_protocol_is_a_cli_protocol_and_refuses_options_it_does_not_
     assert main(argv) == 2
     assert seen["task"] == "acrobot" and seen["controller"] == "best" and seen["seed"] == 777
     assert "--protocol v3-hardware (--controller 'best'): stop here" in capsys.readouterr().err
+
+
+def test_v3_hardware_passive_allowance_is_passed_recorded_and_refused_elsewhere(capsys, monkeypatch, tmp_path):
+    import functools
+
+    import pendulab.evaluate.realai.v3_hardware as hw
+
+    monkeypatch.chdir(tmp_path)
+    base = ["score", "--controller", "lqr", "--task", "pendubot", "--no-progress"]
+    # Only the hardware protocol takes it; out of its declared range it is refused before any work.
+    for other in (["--protocol", "v3"], ["--protocol", "robustness-v2"], ["--realai"], []):
+        assert main([*base, *other, "--passive-allowance", "0.5"]) == 2
+        assert "--passive-allowance applies to --protocol v3-hardware only" in capsys.readouterr().err
+    assert main([*base, "--protocol", "v3-hardware", "--passive-allowance", "0.7"]) == 2
+    assert "--passive-allowance = '0.7': out of range; expected a finite number in [0, 0.5] N.m" in capsys.readouterr().err
+    # The real runner, on a 0.2 s episode instead of 60 s (the CLI's wiring is under test, not the score).
+    monkeypatch.setattr(hw, "run_v3_hardware", functools.partial(hw.run_v3_hardware, duration=0.2))
+    assert main([*base, "--protocol", "v3-hardware", "--passive-allowance", "0.5", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    written = json.loads((tmp_path / "pendulab-out/score/v3-hardware-lqr-pendubot-allowance0.5/v3_hardware.json").read_text())
+    assert printed["passive_allowance"] == written["passive_allowance"] == 0.5
+    assert written["simulation"]["entry_torque_limit"] == [6.0, 0.5]
+    assert written["entry"] == {"velocity_limit": None, "friction_compensated": True}  # lqr plans nothing to bound
+    # Without the option: no allowance, no compensation, its own default directory.
+    assert main([*base, "--protocol", "v3-hardware"]) == 0
+    plain = json.loads((tmp_path / "pendulab-out/score/v3-hardware-lqr-pendubot/v3_hardware.json").read_text())
+    assert plain["passive_allowance"] == 0.0 and plain["simulation"]["entry_torque_limit"] == [6.0, 0.0]
+    assert plain["entry"]["friction_compensated"] is False
+    assert "max measured joint rate" in capsys.readouterr().out

@@ -59,6 +59,7 @@ OPTION_INPUTS: Mapping[str, str] = {
             "workers",
             "seed",
             "fmi_version",
+            "passive_allowance",
         )
     },
     **{

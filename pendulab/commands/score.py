@@ -95,6 +95,14 @@ def register(subparsers: Any) -> None:
         help="--leaderboard: RealAIGym controllers for all three protocols (default: v2 best,tvlqr,robust,global,replan; "
         "robustness-v2 best,tvlqr,robust; v3 best,global,replan)",
     )
+    p.add_argument(
+        "--passive-allowance",
+        default=None,
+        metavar="N.M",
+        help="--protocol v3-hardware: torque the controller may put on the passive joint [N.m] (the hardware rules "
+        "grant 0.5 to compensate motor friction; default 0); pendulab's controllers use it to compensate the "
+        "identified friction",
+    )
     add_plant_option(p, "the scorecard of a rigid task, --realai and every --protocol; the controller keeps its design model")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     mode = p.add_mutually_exclusive_group()
@@ -164,6 +172,8 @@ def run_score(args: argparse.Namespace) -> int:
         raise CLIError("--protocol does not apply to --leaderboard (it scores every controller on every task)")
     if args.quick and args.protocol != "robustness-v2" and not args.leaderboard:
         raise CLIError("--quick applies to --protocol robustness-v2 and --leaderboard only")
+    if args.passive_allowance is not None and args.protocol != "v3-hardware":
+        raise CLIError("--passive-allowance applies to --protocol v3-hardware only")
     if args.controllers is not None and not args.leaderboard:
         raise CLIError("--controllers applies to --leaderboard only (use --controller NAME otherwise)")
     if args.plant is not None and args.leaderboard:
@@ -395,27 +405,34 @@ def _run_v3(args: argparse.Namespace, plant: Any) -> int:
     task = _protocol_task(args)
     seed = _int("--seed", args.seed, 0, 2**32 - 1, "a seed of the v3 protocol's resets", 0)
     protocol = args.protocol
+    hardware = protocol == "v3-hardware"
+    # Only the v3-hardware runner takes the allowance (refused with the others in run_score); in its settings and
+    # in the default output directory, so runs of two allowances never overwrite each other.
+    options = {"passive_allowance": args.passive_allowance or 0.0} if hardware else {}
+    allowance = f"-allowance{args.passive_allowance:g}" if hardware and args.passive_allowance else ""
     out = output_directory(
-        args.out or Path("pendulab-out") / "score" / f"{protocol}-{args.controller}-{task}{_plant_suffix(plant)}"
+        args.out or Path("pendulab-out") / "score" / f"{protocol}-{args.controller}-{task}{allowance}{_plant_suffix(plant)}"
     )
     try:
         from ..evaluate.realai.v3 import v3_score
-        from ..evaluate.realai.v3_hardware import v3_hardware_score
+        from ..evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, v3_hardware_score
     except ImportError as exc:
         raise CLIError(f"--protocol {protocol} is not available in this installation ({exc})") from None
     # The hardware protocol's plant is the identified C.1 robot unless --plant names another.
-    run = v3_hardware_score if protocol == "v3-hardware" else v3_score
+    run = v3_hardware_score if hardware else v3_score
     if args.controller == "library":  # the plan library is solved once and cached: build it with its own bar
         from ..control.plan_library import DEFAULT_LIBRARY_DIR, library_controller
 
+        # On the hardware protocol the plans are rate-bounded (v3_hardware_score's default), cached apart.
+        bound = PLAN_VELOCITY_LIMIT_HW if hardware else None
         plans = ProgressBar(f"plan library for {task} (IPOPT; cached in ./{DEFAULT_LIBRARY_DIR})", not args.no_progress)
         try:
-            library_controller(task, progress=plans)
+            library_controller(task, progress=plans, velocity_limit=bound)
         finally:
             plans.close()
     bar = ProgressBar(f"{protocol} {args.controller} on {task}", not args.no_progress)
     try:
-        res = run(task, args.controller, seed=seed, progress=bar, out=out, plant=plant)
+        res = run(task, args.controller, seed=seed, progress=bar, out=out, plant=plant, **options)
     except ValueError as exc:
         raise CLIError(f"--protocol {protocol} (--controller {args.controller!r}): {exc}") from None
     finally:
@@ -430,6 +447,16 @@ def _run_v3(args: argparse.Namespace, plant: Any) -> int:
     else:
         where = "hardware protocol, simulated C.1 robot" if protocol == "v3-hardware" else "simulation"
         print(f"RealAIGym {protocol.split('-')[0]} ({where}), {task} / {args.controller}: score {res.score:.3f}")
+        ct = summary["controller_time"]
+        if ct["calls"]:
+            print(f"controller call median {1e3 * ct['median_s']:.3f} ms, max {1e3 * ct['max_s']:.2f} ms ({ct['calls']} calls)")
+        if hardware:
+            stop = "none" if summary["stopped_at"] is None else f"{summary['stopped_at']:.1f} s"
+            print(
+                f"passive allowance {res.passive_allowance:g} N.m, plan rate bound {summary['entry']['velocity_limit']} "
+                f"rad/s; max measured joint rate {summary['max_joint_rate']:.1f} rad/s, {summary['limit_resets']} limit "
+                f"resets, safety stop {stop}"
+            )
     return 0
 
 

@@ -32,6 +32,7 @@ def band_entry_plan(
     n1: int = 30,
     n2: int = 12,
     max_iter: int = 300,
+    velocity_limit: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
     """Solve the band-entry swing-up warm-started from a plan ``(x_guess, u_guess)`` on the ``sample_time`` grid.
 
@@ -57,6 +58,9 @@ def band_entry_plan(
         Shooting intervals of the two phases.
     max_iter : int
         IPOPT iteration cap.
+    velocity_limit : float, optional
+        Bound on both link rates at every knot [rad/s] (None: unbounded); raised to the start's and goal's rates
+        when they exceed it (the plan must still start where it starts).
 
     Returns
     -------
@@ -112,6 +116,10 @@ def band_entry_plan(
     opti.subject_to(X2[:, n2] == xg[-1])
     for i in range(n2 + 1):
         opti.subject_to(height(X2[:, i]) >= band + margin)
+    if velocity_limit is not None:
+        vmax = max(float(velocity_limit), float(np.max(np.abs(xg[[0, -1], 2:]))))
+        opti.subject_to(opti.bounded(-vmax, X1[2:, :], vmax))
+        opti.subject_to(opti.bounded(-vmax, X2[2:, :], vmax))
     opti.subject_to(opti.bounded(0.1, t1, 2.0))
     opti.subject_to(opti.bounded(0.04, t2, 1.0))
     opti.minimize(t1 + 0.05 * t2 + 1e-3 * effort)
@@ -173,7 +181,14 @@ def _closed_loop_entry(model: Model, j: int, x_ref: np.ndarray, u_ref: np.ndarra
 
 
 def band_entry_refine(
-    model: Model, actuation: str, entry: dict[str, np.ndarray], *, band: float, u_max: float, sample_time: float = 0.002
+    model: Model,
+    actuation: str,
+    entry: dict[str, np.ndarray],
+    *,
+    band: float,
+    u_max: float,
+    sample_time: float = 0.002,
+    velocity_limit: float | None = None,
 ) -> dict[str, np.ndarray] | None:
     """A library entry re-planned for band entry, with TVLQR gains, kept only if its closed loop enters the band sooner.
 
@@ -191,6 +206,8 @@ def band_entry_refine(
         Actuator limit [N.m] (the plan uses 90 % of it).
     sample_time : float
         [s].
+    velocity_limit : float, optional
+        Bound on both link rates of the re-planned plan [rad/s] (:func:`band_entry_plan`); None: unbounded.
 
     Returns
     -------
@@ -202,7 +219,9 @@ def band_entry_refine(
 
     j = INPUT_NAMES.index("tau1" if actuation == "pendubot" else "tau2")
     base = _closed_loop_entry(model, j, entry["x_ref"], entry["u_ref"], entry["K"], band, u_max)
-    res = band_entry_plan(model, actuation, entry["x_ref"], entry["u_ref"], sample_time, band=band, u_max=0.9 * u_max)
+    res = band_entry_plan(
+        model, actuation, entry["x_ref"], entry["u_ref"], sample_time, band=band, u_max=0.9 * u_max, velocity_limit=velocity_limit
+    )
     if res is None:
         return None
     t, x, u, _ = res

@@ -41,12 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import positive_float
+from .._checks import bounded_int, positive_float
+from .._inputs import checked
 from ..model.model import INPUT_NAMES
 from ..native.cache import cache_lock, cached_artifact, digest_path, publish, read_sealed, warn_rebuild
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
-from .plan_starts import DEFAULT_BRANCHES, library_starts, reset_handover
+from .plan_starts import DEFAULT_BRANCHES, library_starts, reset_handover, rest_starts
 
 __all__ = [
     "LIBRARY_VERSION",
@@ -56,6 +57,7 @@ __all__ = [
     "LibrarySwingUp",
     "reset_handover",
     "library_starts",
+    "rest_starts",
     "build_library",
     "library_controller",
 ]
@@ -359,6 +361,7 @@ def build_library(
     solve: bool = True,
     band: float | None = None,
     band_cache: PlanCache | None = None,
+    velocity_limit: float | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> PlanLibrary:
     """Solve (or load) the plan from each start and assemble the library; each solved plan is cached as it finishes.
@@ -382,6 +385,9 @@ def build_library(
         kept where its closed loop enters the band sooner; needs ``band_cache``.
     band_cache : PlanCache, optional
         Where the band-entry entries are stored (the time-optimal plans they start from stay in ``cache``).
+    velocity_limit : float, optional
+        Bound on both link rates of every plan and band-entry re-plan [rad/s]; None: unbounded. It must be part
+        of the caches' designs (:func:`library_controller` puts it there), so bounded and unbounded plans never mix.
     progress : callable, optional
         ``progress(done, total)`` after each start.
 
@@ -414,7 +420,10 @@ def build_library(
     j = INPUT_NAMES.index(fallback.input_names[0])
 
     def solve_plan(s: np.ndarray) -> dict[str, np.ndarray]:
-        tr = plan_swingup(fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter)
+        tr = plan_swingup(
+            fallback, actuation, s, horizon=horizon, n_intervals=n_intervals, min_time=min_time, max_iter=max_iter,
+            velocity_limit=velocity_limit,
+        )  # fmt: skip
         if tr is None:
             return {"ok": np.array(False)}
         m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
@@ -424,7 +433,9 @@ def build_library(
         entry = cache.get(s, lambda: solve_plan(s))  # the band entry's lock is held: lock order band -> plan
         refined = None
         if bool(entry["ok"]):
-            refined = band_entry_refine(fallback.model, actuation, entry, band=band, u_max=fallback.u_max)
+            refined = band_entry_refine(
+                fallback.model, actuation, entry, band=band, u_max=fallback.u_max, velocity_limit=velocity_limit
+            )
         return dict(entry, refined=np.array(False)) if refined is None else dict(refined, refined=np.array(True))
 
     kept, xs, us, ks, failed, n_refined = [], [], [], [], 0, 0
@@ -542,9 +553,13 @@ LIBRARY_BAND: dict[str, bool] = {"pendubot": True, "acrobot": False}
 #: Grown starts (observed hand-overs the grid did not cover), an (S, 4) array in the task's cache directory,
 #: appended to the grid's starts when present (written by ``benchmarks/bench_v3.py --grow-seeds``).
 EXTRA_STARTS_FILE: str = "extra_starts.npy"
+#: Configurations at rest per angle that a rate-bounded library also plans from (:func:`rest_starts`: where the
+#: hardware protocol's 1 s PID resets hand over; a bound is given for that protocol).
+LIBRARY_REST_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
 DEFAULT_LIBRARY_DIR: str = "pendulab-out/plan_library"
 
 
+@checked()
 def library_controller(
     task: str,
     *,
@@ -554,6 +569,8 @@ def library_controller(
     accept: float = 1.0,
     band: bool | None = None,
     build: bool = True,
+    velocity_limit: float | None = None,
+    rest_grid: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> LibrarySwingUp:
     """The plan-library swing-up on a RealAIGym leaderboard task's plant; builds (or completes) the cached library first.
@@ -575,6 +592,13 @@ def library_controller(
         Re-plan for band entry (faster into the scored band); default :data:`LIBRARY_BAND`.
     build : bool
         Solve missing plans (False: use the cached ones only).
+    velocity_limit : float, optional
+        Bound on both link rates of every plan [rad/s] (the hardware protocol resets the robot above 20 rad/s,
+        :data:`~pendulab.evaluate.realai.v3_hardware.PLAN_VELOCITY_LIMIT_HW`); None: unbounded. Part of every
+        entry's key: bounded plans are cached apart from unbounded ones and from those of another bound.
+    rest_grid : int, optional
+        Also plan from rest at ``rest_grid`` x ``rest_grid`` configurations (:func:`rest_starts`, the hardware
+        protocol's hand-overs; 0: none); default :data:`LIBRARY_REST_GRID` with a ``velocity_limit``, else 0.
     progress : callable, optional
         ``progress(done, total)`` over the starts while building.
 
@@ -585,7 +609,9 @@ def library_controller(
     Raises
     ------
     ValueError
-        Unknown task, bad ``n_grid``, non-positive ``accept``, or no plan solved.
+        Unknown task, bad ``n_grid`` or ``rest_grid``, non-positive ``accept``, or no plan solved.
+    InputError
+        ``velocity_limit`` not a finite positive rate (its declaration in :data:`pendulab._inputs.INPUTS`).
     """
     from .realai.spec import HEIGHT_FRACTION, check_task
     from .replanning import REPLAN_DEFAULTS
@@ -602,6 +628,8 @@ def library_controller(
         "sample_time": fb.sample_time,
         "u_max": fb.u_max,
     }
+    if velocity_limit is not None:  # only then: the unbounded library's keys (and its cache) stay as they were
+        design["velocity_limit"] = float(velocity_limit)
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, LIBRARY_BRANCHES[task] if branches is None else branches)
@@ -613,6 +641,12 @@ def library_controller(
             more = np.zeros((0, 4))  # a damaged list only loses the grown starts; the grid stands
         if more.ndim == 2 and more.shape[1] == 4 and np.all(np.isfinite(more)):
             starts = np.vstack([starts, more])
+    if rest_grid is None:
+        n_rest = LIBRARY_REST_GRID[task] if velocity_limit is not None else 0
+    else:
+        n_rest = bounded_int("rest_grid", rest_grid, low=0, high=64, why="plans per angle of the library's rest grid")
+    if n_rest > 0:
+        starts = np.vstack([starts, rest_starts(n_rest)])
     use_band = LIBRARY_BAND[task] if band is None else bool(band)
     prm = fb.model.params
     height = HEIGHT_FRACTION * (prm.L1 + prm.L2) if use_band else None
@@ -628,6 +662,7 @@ def library_controller(
         solve=build,
         band=height,
         band_cache=band_cache,
+        velocity_limit=design.get("velocity_limit"),
         progress=progress,
     )
     return LibrarySwingUp(fb, lib, accept=accept)

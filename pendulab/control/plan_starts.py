@@ -17,7 +17,7 @@ from .._checks import bounded_int
 from ..model.model import Model
 from ..model.pycode import to_python
 
-__all__ = ["DEFAULT_BRANCHES", "reset_handover", "library_starts"]
+__all__ = ["DEFAULT_BRANCHES", "reset_handover", "library_starts", "rest_starts"]
 
 #: Upright branches the resets leave from, as (k1, k2): absolute angles ``(pi + 2 pi k1, pi + 2 pi k2)``.
 DEFAULT_BRANCHES: tuple[tuple[int, int], ...] = ((0, 0), (-1, -1), (0, -1), (-1, 0))
@@ -108,3 +108,30 @@ def library_starts(model: Model, n_grid: int, branches: Sequence[tuple[int, int]
             for q2 in g:
                 starts.append(reset_handover(model, up, np.array([q1, q2])))
     return np.array(starts)
+
+
+def rest_starts(n_grid: int) -> np.ndarray:
+    """Plan starts at rest on an ``n_grid`` x ``n_grid`` grid of configurations: the hardware protocol's hand-overs.
+
+    The ICRA 2025 hardware final's reset (``pendulab.evaluate.realai.v3_hardware``: PID kp 2, kd 0.3 at a 1 ms
+    step, for at least 1 s) brings the robot near a configuration drawn uniformly in ``[-pi, pi)^2`` and
+    nearly to rest, whatever state it started from: the hand-over is the drawn configuration at rest.
+
+    Parameters
+    ----------
+    n_grid : int
+        Grid points per relative angle (cell centres of ``[-pi, pi)``).
+
+    Returns
+    -------
+    ndarray, shape (n_grid^2, 4)
+        Start states (absolute angles ``theta1 = q1``, ``theta2 = q1 + q2``) [rad], rates 0 [rad/s].
+
+    Raises
+    ------
+    ValueError
+        ``n_grid`` outside [1, 64].
+    """
+    n = bounded_int("n_grid", n_grid, low=1, high=64, why="plans per angle of the library grid")
+    g = -math.pi + (np.arange(n) + 0.5) * 2.0 * math.pi / n
+    return np.array([[q1, q1 + q2, 0.0, 0.0] for q1 in g for q2 in g])

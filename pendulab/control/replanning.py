@@ -66,6 +66,9 @@ class ReplanningSwingUp:
         IPOPT iteration cap of one solve (deterministic, unlike a wall-time budget); a capped solve counts as failed.
     max_solve_time : float
         Safety wall-time budget of one solve [s] (only a stuck solve should hit it: results then depend on load).
+    velocity_limit : float or None
+        Bound on both link rates of every plan [rad/s] (:func:`plan_swingup`); None: unbounded. The
+        hardware protocol resets the robot at 20 rad/s (:mod:`pendulab.evaluate.realai.v3_hardware`).
     plan_times : list of float
         Wall time of each solve [s] (diagnostics).
     n_failed : int
@@ -94,6 +97,7 @@ class ReplanningSwingUp:
     max_iter: int = 150
     min_time: bool = False
     max_solve_time: float = 60.0
+    velocity_limit: float | None = None
     # Counters of the controller's own life, not inputs.
     plan_times: list[float] = field(default_factory=list, init=False)
     n_failed: int = field(default=0, init=False)
@@ -148,6 +152,7 @@ class ReplanningSwingUp:
             min_time=self.min_time,
             max_iter=self.max_iter,
             max_solve_time=self.max_solve_time,
+            velocity_limit=self.velocity_limit,
         )
         if self._tracker is not None:
             self._t_plan = t + self.plan_delay
@@ -224,6 +229,7 @@ def plan_swingup(
     min_time: bool,
     max_iter: int = 150,
     max_solve_time: float = 60.0,
+    velocity_limit: float | None = None,
 ) -> TVLQRTracker | None:
     """The re-planner's plan: a swing-up from ``start`` to the nearest upright branch, with its TVLQR gains.
 
@@ -249,6 +255,9 @@ def plan_swingup(
         IPOPT iteration cap per solve.
     max_solve_time : float
         Wall-time safety budget per solve [s].
+    velocity_limit : float, optional
+        Bound on both link rates over the plan [rad/s] (``SwingUpProblem.velocity_limit``); raised to the start's
+        rates when they exceed it (the start must stay feasible). None: unbounded.
 
     Returns
     -------
@@ -260,12 +269,13 @@ def plan_swingup(
 
     x0 = tuple(float(v) for v in start)
     goal = nearest_upright(np.asarray(x0))
+    vmax = None if velocity_limit is None else max(float(velocity_limit), abs(x0[2]), abs(x0[3]))
     attempts: list[dict[str, object]] = []
     if min_time:  # time-optimal first (bang-bang within 90 % of the limit), free horizon up to ``horizon``
         attempts.append(dict(horizon=0.8 * horizon, free_horizon=True, horizon_bounds=(0.3, horizon), objective="time"))
     attempts.append(dict(horizon=horizon))
     for kw in attempts:
-        pb = SwingUpProblem(fallback.model, actuation, fallback.u_max, x0=x0, goal=goal, **kw)
+        pb = SwingUpProblem(fallback.model, actuation, fallback.u_max, x0=x0, goal=goal, velocity_limit=vmax, **kw)
         try:
             res = solve_transcription(
                 pb,
@@ -294,7 +304,13 @@ REPLAN_DEFAULTS: dict[str, tuple[float, int, bool]] = {"pendubot": (1.2, 40, Tru
 
 @checked(global_controller)
 def replanning_controller(
-    task: str, *, plan_delay: float = 0.0, horizon: float | None = None, min_time: bool | None = None, **options: float
+    task: str,
+    *,
+    plan_delay: float = 0.0,
+    horizon: float | None = None,
+    min_time: bool | None = None,
+    velocity_limit: float | None = None,
+    **options: float,
 ) -> ReplanningSwingUp:
     """The re-planning global swing-up on a RealAIGym leaderboard task's plant (2 ms, 6 N.m).
 
@@ -308,6 +324,8 @@ def replanning_controller(
         Plan horizon [s]; default :data:`REPLAN_DEFAULTS`.
     min_time : bool, optional
         Try a time-optimal plan first (see :class:`ReplanningSwingUp`); default :data:`REPLAN_DEFAULTS`.
+    velocity_limit : float, optional
+        Bound on both link rates of every plan [rad/s]; None: unbounded.
     **options : float
         Overrides of the fallback (:func:`global_swingup`).
 
@@ -337,4 +355,4 @@ def replanning_controller(
     h_default, n_int, mt_default = REPLAN_DEFAULTS[task]
     h = h_default if horizon is None else float(horizon)
     mt = mt_default if min_time is None else bool(min_time)
-    return ReplanningSwingUp(fb, task, horizon=h, n_intervals=n_int, plan_delay=delay, min_time=mt)
+    return ReplanningSwingUp(fb, task, horizon=h, n_intervals=n_int, plan_delay=delay, min_time=mt, velocity_limit=velocity_limit)

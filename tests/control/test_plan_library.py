@@ -17,6 +17,7 @@ from pendulab.control.plan_library import (
     library_controller,
     library_starts,
     reset_handover,
+    rest_starts,
 )
 from pendulab.control.realai.spec import HEIGHT_FRACTION
 from pendulab.model.pycode import to_python
@@ -160,3 +161,32 @@ def test_bad_input_raises(tmp_path) -> None:
         library_controller("cartpole", directory=tmp_path)
     with pytest.raises(ValueError, match="at least one"):
         PlanLibrary(np.zeros((0, 4)), [], [], [])
+
+
+def test_velocity_limit_bounds_every_plan_and_is_cached_apart(tiny) -> None:
+    ctrl, d = tiny
+    limit = 12.0  # rad/s: below what the unbounded plans reach, so the bound must act
+    free = max(float(np.abs(x[:, 2:]).max()) for x in ctrl.library.x_ref)
+    assert free > limit + 1.0
+    before = {p.name for p in (d / "pendubot").glob("plan-*.npz")}
+    kw = {"n_grid": 1, "branches": ((0, 0),), "directory": d, "velocity_limit": limit, "rest_grid": 0}
+    bounded = library_controller("pendubot", **kw)
+    assert len(bounded.library) == len(ctrl.library) and bounded.library.n_failed == 0
+    # The 2 ms reference is re-sampled from the collocation polynomials: the bound holds at their points only,
+    # so the samples between them may pass it slightly (0.5 rad/s).
+    assert max(float(np.abs(x[:, 2:]).max()) for x in bounded.library.x_ref) < limit + 0.5
+    after = {p.name for p in (d / "pendubot").glob("plan-*.npz")}
+    assert before < after  # bounded plans got entries of their own, the unbounded ones are still there
+    again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d, build=False)
+    assert max(float(np.abs(x[:, 2:]).max()) for x in again.library.x_ref) > limit + 1.0  # unbounded plans again
+    with pytest.raises(ValueError, match=r"velocity_limit = 0.0: out of range"):
+        library_controller("pendubot", n_grid=1, directory=d, velocity_limit=0.0)
+
+
+def test_rest_starts_are_the_grid_configurations_at_rest() -> None:
+    starts = rest_starts(2)
+    q = np.array([-math.pi / 2, math.pi / 2])  # cell centres of [-pi, pi) with 2 points
+    assert starts.shape == (4, 4) and np.all(starts[:, 2:] == 0.0)
+    assert np.allclose(starts[:, 0], np.repeat(q, 2)) and np.allclose(starts[:, 1] - starts[:, 0], np.tile(q, 2))
+    with pytest.raises(ValueError, match="n_grid"):
+        rest_starts(0)

@@ -127,12 +127,13 @@ def test_friction_compensation_matches_the_plant() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "exc", "match"),
     [
-        ({"passive_allowance": 0.6}, ValueError, "passive_allowance"),
-        ({"passive_allowance": -0.1}, ValueError, "passive_allowance"),
-        ({"passive_allowance": True}, ValueError, "passive_allowance"),
+        ({"passive_allowance": 0.6}, ValueError, r"passive_allowance = 0.6: out of range; .* \[0, 0.5\] N.m"),
+        ({"passive_allowance": -0.1}, ValueError, r"passive_allowance = -0.1: out of range"),
+        ({"passive_allowance": True}, ValueError, r"passive_allowance = True: a bool, not a number"),
         ({"duration": 0.0}, ValueError, "duration"),
         ({"duration": 61.0}, ValueError, "duration"),
-        ({"seed": -1}, ValueError, "seed"),
+        ({"seed": -1}, ValueError, r"seed = -1: out of range"),
+        ({"seed": 2**32}, ValueError, r"seed = 4294967296: out of range; expected an integer in \[0, 4294967295\]"),
         ({"sensing": "c1"}, TypeError, "sensing"),
     ],
 )
@@ -156,3 +157,36 @@ def test_leaderboard_runs_and_journals_v3_hardware(tmp_path) -> None:
         run_protocols({"v3-hardware": ["lqr"]}, passive_allowance=0.0, resume=True, **kw)
     with pytest.raises(ValueError, match="passive_allowance"):
         run_protocols({"v3-hardware": ["lqr"]}, passive_allowance=0.7, **kw)
+
+
+def test_score_bounds_the_plans_of_planning_controllers_and_compensates_friction(monkeypatch) -> None:
+    import functools
+
+    import pendulab.evaluate.realai.v3_hardware as hw
+    from pendulab.evaluate.realai.controllers import CONTROLLERS
+
+    seen: dict[str, object] = {}
+
+    def planner(task: str, velocity_limit: float | None = None) -> _Both:
+        seen["velocity_limit"] = velocity_limit
+        return _Both((0.0, 0.0))
+
+    monkeypatch.setitem(CONTROLLERS, "replan", planner)
+    short = functools.partial(hw.run_v3_hardware, duration=0.1)  # the wiring is under test, not the score
+
+    def run(task, entry, name, **kw):
+        seen["entry"] = entry
+        return short(task, entry, name, **kw)
+
+    monkeypatch.setattr(hw, "run_v3_hardware", run)
+    res = hw.v3_hardware_score("pendubot", "replan", seed=1)
+    assert seen["velocity_limit"] == hw.PLAN_VELOCITY_LIMIT_HW and res.velocity_limit == hw.PLAN_VELOCITY_LIMIT_HW
+    assert res.to_dict()["entry"] == {"velocity_limit": 16.0, "friction_compensated": False}
+    assert isinstance(seen["entry"], _Both)  # no allowance: nothing to compensate with
+    res = hw.v3_hardware_score("pendubot", "replan", seed=1, velocity_limit=None, passive_allowance=0.5)
+    assert seen["velocity_limit"] is None and res.velocity_limit is None and res.friction_compensated
+    assert isinstance(seen["entry"], hw.FrictionCompensated) and seen["entry"].cf[1] == load_plant("c1").params["cf2"]
+    hw.v3_hardware_score("pendubot", "replan", seed=1, passive_allowance=0.5, friction_compensation=False)
+    assert isinstance(seen["entry"], _Both)
+    with pytest.raises(ValueError, match=r"velocity_limit = -1.0: out of range"):
+        hw.v3_hardware_score("pendubot", "replan", velocity_limit=-1.0)

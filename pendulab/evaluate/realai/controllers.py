@@ -11,13 +11,14 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from ..._inputs import checked
 from ...control.controllers import controller_for_task
 from ...control.feedback import SampledController
 from ...control.realai.adapter import REALAI_METHODS, check_realai_controller, from_realai, is_realai_controller
 from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
-__all__ = ["CONTROLLERS", "REPLAN_DELAY", "controller_name", "resolve_controller"]
+__all__ = ["CONTROLLERS", "RATE_BOUNDED", "REPLAN_DELAY", "controller_name", "resolve_controller"]
 
 #: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
 REPLAN_DELAY: float = 0.5
@@ -38,10 +39,10 @@ def _global(task: str) -> SampledController:
     return global_controller(task)
 
 
-def _replan(task: str) -> SampledController:
+def _replan(task: str, velocity_limit: float | None = None) -> SampledController:
     from ...control.replanning import replanning_controller
 
-    return replanning_controller(task)
+    return replanning_controller(task, velocity_limit=velocity_limit)
 
 
 def _rti(task: str) -> SampledController:
@@ -50,16 +51,16 @@ def _rti(task: str) -> SampledController:
     return rti_for_task(leaderboard_task(task))[0]
 
 
-def _replan_delayed(task: str) -> SampledController:
+def _replan_delayed(task: str, velocity_limit: float | None = None) -> SampledController:
     from ...control.replanning import replanning_controller
 
-    return replanning_controller(task, plan_delay=REPLAN_DELAY)
+    return replanning_controller(task, plan_delay=REPLAN_DELAY, velocity_limit=velocity_limit)
 
 
-def _library(task: str) -> SampledController:
+def _library(task: str, velocity_limit: float | None = None) -> SampledController:
     from ...control.plan_library import library_controller  # builds (or completes) ./pendulab-out/plan_library first
 
-    return library_controller(task)
+    return library_controller(task, velocity_limit=velocity_limit)
 
 
 #: Controller names -> factory ``task -> SampledController`` (add an entry to plug a new name in).
@@ -78,11 +79,19 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
 }
 
 
+#: Names whose factory plans swing-ups and takes ``velocity_limit`` (a bound on both link rates of every plan
+#: [rad/s]); the others (state feedback, pumping, fixed trajectories) have no plan to bound.
+RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library"})
+
+
 def _is_controller(obj: Any) -> bool:
     return callable(obj) and hasattr(obj, "sample_time") and hasattr(obj, "input_names") and hasattr(obj, "reset")
 
 
-def resolve_controller(task: str, controller: str | SampledController | Callable[[str], Any]) -> tuple[str, SampledController]:
+@checked()
+def resolve_controller(
+    task: str, controller: str | SampledController | Callable[[str], Any], *, velocity_limit: float | None = None
+) -> tuple[str, SampledController]:
     """A controller for a leaderboard task from a name, an object or a factory.
 
     Parameters
@@ -95,6 +104,9 @@ def resolve_controller(task: str, controller: str | SampledController | Callable
         ``task -> SampledController`` (or ``-> (SampledController, x0)``, as the scorecard's); or a RealAIGym
         controller (``init``, ``get_control_output(x, t)``, ``reset``: upstream's ``AbstractController``), run
         through :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms on the task's driven joint.
+    velocity_limit : float, optional
+        Bound on both link rates of every plan [rad/s], given to the names of :data:`RATE_BOUNDED` (the others,
+        objects and factories are built as they are); None: unbounded.
 
     Returns
     -------
@@ -107,11 +119,15 @@ def resolve_controller(task: str, controller: str | SampledController | Callable
     ------
     ValueError
         Unknown name.
+    InputError
+        ``velocity_limit`` not a finite positive rate (its declaration in :data:`pendulab._inputs.INPUTS`).
     TypeError
         Neither a name, a controller nor a factory, or a factory returning something else.
     """
     name = controller_name(controller)
     if isinstance(controller, str):
+        if velocity_limit is not None and controller in RATE_BOUNDED:
+            return name, CONTROLLERS[controller](task, velocity_limit=velocity_limit)  # type: ignore[call-arg]
         return name, CONTROLLERS[controller](task)
     if _is_controller(controller):
         return name, controller  # type: ignore[return-value]

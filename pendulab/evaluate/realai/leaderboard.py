@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..._checks import bounded_int, positive_float
+from ..._inputs import checked
 from ..._io import check_writable
 from ..._journal import trusted_records
 from .controllers import CONTROLLERS
@@ -94,6 +94,10 @@ class ProtocolSettings:
         RK4 steps per v3 episode (30000: the protocol's 60 s); v3-hardware runs ``v3_steps * 2 ms`` of loop time.
     passive_allowance : float
         v3-hardware: torque the entry may put on the passive joint [N.m] (0, or up to the rules' 0.5).
+    hardware_plans : str
+        v3-hardware: how the entries are designed (``hardware_entry`` of :mod:`.v3_hardware`: plans bounded to
+        16 rad/s, friction compensation with an allowance). Part of the settings so that a journal of episodes
+        designed otherwise is not resumed as these.
     """
 
     name: str
@@ -101,6 +105,7 @@ class ProtocolSettings:
     v3_seeds: tuple[int, ...]
     v3_steps: int
     passive_allowance: float = 0.0
+    hardware_plans: str = "bounded 16 rad/s, friction-compensated"
 
     @property
     def comparable(self) -> bool:
@@ -280,6 +285,7 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".replace("|", "/")[:160]
 
 
+@checked()
 def run_protocols(
     controllers: Mapping[str, Sequence[str]] | Sequence[str] | None = None,
     *,
@@ -347,15 +353,13 @@ def run_protocols(
         bad = [v for v in given if v not in allowed]
         if bad or not given:
             raise ValueError(f"{what}: got {list(given)!r}; expected a non-empty subset of {list(allowed)}")
-    workers = bounded_int("workers", workers, low=1, high=256, why="worker processes of the robustness-v2 runs")
-    budget = None if max_wall_time is None else positive_float("max_wall_time", max_wall_time)
+    workers = int(workers)  # workers, max_wall_time and passive_allowance: checked where they entered (@checked)
+    budget = None if max_wall_time is None else float(max_wall_time)
     settings = QUICK if quick else FULL
     if passive_allowance != 0.0:
         from dataclasses import replace
 
-        from .v3_hardware import _check_allowance
-
-        settings = replace(settings, passive_allowance=_check_allowance(passive_allowance))
+        settings = replace(settings, passive_allowance=float(passive_allowance))
     base = DEFAULT_ROOT if root is None else Path(root)
     jroot = base / "quick" if quick else base
     check_writable(jroot)  # before the first case, not at its first save
@@ -464,6 +468,7 @@ def _run_case(
             hardware = case.protocol in HARDWARE
             if hardware:
                 keys["passive_allowance"] = settings.passive_allowance
+                keys["hardware_plans"] = settings.hardware_plans
             summary = _read(path, keys) if resume else None
             if summary is None:
                 summary = _run_v3(

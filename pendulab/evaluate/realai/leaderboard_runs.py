@@ -123,13 +123,16 @@ def _run_v3(
 ) -> dict[str, Any]:  # fmt: skip
     """One v3 episode; with ``passive_allowance`` (not None) the v3-hardware episode of ``steps * 2 ms``."""
     w0 = time.perf_counter()
-    _, ctrl = resolve_controller(task, name)
     if passive_allowance is None:
         from .v3 import run_v3
 
+        _, ctrl = resolve_controller(task, name)
         res = run_v3(task, ctrl, name, seed=seed, n_steps=steps, progress=progress, plant=plant)
     else:
-        from .v3_hardware import run_v3_hardware
+        from .v3_hardware import hardware_entry, run_v3_hardware
+
+        # The same entry as ``score --protocol v3-hardware``: bounded plans, friction compensation with an allowance.
+        _, ctrl, _, _ = hardware_entry(task, name, passive_allowance, plant)
 
         res = run_v3_hardware(
             task, ctrl, name, seed=seed, passive_allowance=passive_allowance, duration=steps * DT, progress=progress,

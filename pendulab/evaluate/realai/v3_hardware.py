@@ -21,6 +21,10 @@ most 500 Hz). What this module keeps of it:
 * the score: ``uptime / 60`` over the *measured* angles at the loop's time stamps, as upstream scores the
   recorded CSV.
 
+:func:`v3_hardware_score` runs pendulab's planning controllers with their plans' rates bounded
+(:data:`PLAN_VELOCITY_LIMIT_HW`, below the limit reset) and, with an allowance, compensating the identified friction
+(:class:`FrictionCompensated`).
+
 The simulated robot (:func:`run_v3_hardware`): the identified design C.1 (``pendulab/model/plants/c1.json``:
 links, viscous and Coulomb friction, rotor inertia) and the sensing and timing measured on its excitation
 records (:func:`pendulab.identify.sensing.c1_sensing`, ``docs/realai_v3.md``):
@@ -51,7 +55,7 @@ from typing import Any
 
 import numpy as np
 
-from ..._checks import bounded_int
+from ..._inputs import checked
 from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
 from ...control.realai.adapter import from_realai, is_realai_controller
@@ -61,7 +65,7 @@ from ...model.model import INPUT_NAMES
 from ...model.plant_file import IdentifiedPlant, load_plant
 from ...model.pycode import to_python
 from ...model.robot import COULOMB_SHARPNESS
-from .controllers import resolve_controller
+from .controllers import RATE_BOUNDED, resolve_controller
 from .plant import plant_label, protocol_model
 from .v3 import ProtocolController, _gravity_compensation, v3_score
 from .v3_definition import count_swingups, reset_schedule, uptime
@@ -73,6 +77,7 @@ __all__ = [
     "RESET_LENGTH_HW",
     "PID_GAINS_HW",
     "PASSIVE_ALLOWANCE",
+    "PLAN_VELOCITY_LIMIT_HW",
     "PUBLISHED_HARDWARE",
     "V3HardwareResult",
     "FrictionCompensated",
@@ -103,6 +108,9 @@ SAFETY_POS_LIMIT: float = 4.0 * math.pi
 SAFETY_VEL_LIMIT: float = 25.0
 #: The passive joint's allowance under the hardware rules (motor friction compensation) [N.m].
 PASSIVE_ALLOWANCE: float = 0.5
+#: Bound on both link rates of the plans of pendulab's planning controllers on this protocol [rad/s]
+#: (:data:`~.controllers.RATE_BOUNDED`): below the 20 rad/s limit reset, as the hardware winner's MPC (``vmax = 16``).
+PLAN_VELOCITY_LIMIT_HW: float = 16.0
 #: Longest RK4 sub-step inside a loop interval [s].
 SUBSTEP: float = 0.001
 #: ICRA 2025 hardware final, v3 score on the real robot (issue 30; upstream ``leaderboards/icra2025/*_real_system_results.csv``).
@@ -131,6 +139,10 @@ class V3HardwareResult(V3Result):
         Resets started by a limit violation (angle beyond 3.5 pi or rate beyond 20 rad/s).
     passive_allowance : float
         The passive joint's torque limit of this run [N.m].
+    velocity_limit : float or None
+        Bound on the link rates of the controller's plans [rad/s] (None: unbounded, or a controller without plans).
+    friction_compensated : bool
+        The controller ran wrapped in :class:`FrictionCompensated` (what the passive allowance is used for).
     sensing : dict
         :meth:`~pendulab.identify.sensing.SensingModel.to_dict` of the sensing simulated.
     """
@@ -139,6 +151,8 @@ class V3HardwareResult(V3Result):
     stopped_at: float | None = None
     limit_resets: int = 0
     passive_allowance: float = 0.0
+    velocity_limit: float | None = None
+    friction_compensated: bool = False
     sensing: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -154,17 +168,25 @@ class V3HardwareResult(V3Result):
         -------
         dict
             As :meth:`V3Result.to_dict`; ``protocol`` ``"v3-hardware"``, ``published_best`` the hardware winner,
-            ``simulation`` the loop, sensing and reset settings, plus ``stopped_at`` and ``limit_resets``.
+            ``simulation`` the loop, sensing and reset settings, plus ``stopped_at``, ``limit_resets``,
+            ``passive_allowance`` [N.m],
+            ``max_joint_rate`` (largest measured joint rate of the run [rad/s]; the limit reset acts at 20) and
+            ``entry`` (the controller's plan ``velocity_limit`` [rad/s] and ``friction_compensated``).
         """
         d = super().to_dict()
         name, best = max(PUBLISHED_HARDWARE[self.task].items(), key=lambda kv: kv[1])
         iv = np.diff(self.t)
+        m = self.measured
+        rates = np.column_stack([m[:, 2], m[:, 3] - m[:, 2]]) if len(m) else np.zeros((0, 2))  # joint coordinates
         d.update(
             protocol="v3-hardware",
             published_best={"name": name, "score": best},
             beats_published=bool(self.score > best),
             stopped_at=self.stopped_at,
             limit_resets=int(self.limit_resets),
+            passive_allowance=float(self.passive_allowance),
+            max_joint_rate=float(np.abs(rates).max()) if len(rates) else None,
+            entry={"velocity_limit": self.velocity_limit, "friction_compensated": bool(self.friction_compensated)},
         )
         d["controller_time"]["period_s"] = DT
         d["simulation"] = {
@@ -237,19 +259,6 @@ class FrictionCompensated:
         return u + self.b * qd + scale * self.cf * np.arctan(COULOMB_SHARPNESS * qd)
 
 
-def _check_allowance(value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if isinstance(value, bool) or not (0.0 <= v <= PASSIVE_ALLOWANCE):
-        raise ValueError(
-            f"passive_allowance must be a torque in [0, {PASSIVE_ALLOWANCE}] N.m (the hardware rules allow "
-            f"{PASSIVE_ALLOWANCE} N.m on the passive joint), got {value!r}"
-        )
-    return v
-
-
 def _check_duration(value: Any) -> float:
     try:
         v = float(value)
@@ -282,6 +291,7 @@ class _Sensor:
         return rel, np.array([qm[0], qm[0] + qm[1], vm[0], vm[0] + vm[1]])
 
 
+@checked(seed="legacy_seed")
 def run_v3_hardware(
     task: str,
     entry: Any,
@@ -326,15 +336,17 @@ def run_v3_hardware(
 
     Raises
     ------
+    InputError
+        ``seed`` or ``passive_allowance`` outside its declaration (:data:`pendulab._inputs.INPUTS`; a ValueError).
     ValueError
-        Unknown task, bad ``seed``, ``passive_allowance`` or ``duration``, or a non-finite state.
+        Unknown task, bad ``duration``, or a non-finite state.
     TypeError
         ``entry`` is neither a sampled controller nor an upstream-style entry, or ``plant``/``sensing`` of the
         wrong type.
     """
     check_task(task)
-    seed = bounded_int("seed", seed, low=0, high=2**32 - 1, why="a numpy RandomState seed")
-    allowance = _check_allowance(passive_allowance)
+    seed = int(seed)  # seed and allowance: checked where they entered (@checked)
+    allowance = float(passive_allowance)
     t_final = _check_duration(duration)
     if plant is None:
         plant = load_plant("c1")
@@ -469,12 +481,58 @@ def run_v3_hardware(
     )
 
 
+def hardware_entry(
+    task: str,
+    controller: Any,
+    passive_allowance: float,
+    plant: Any = None,
+    *,
+    velocity_limit: float | None = PLAN_VELOCITY_LIMIT_HW,
+    friction_compensation: bool = True,
+) -> tuple[str, SampledController, float | None, bool]:
+    """A controller as the hardware protocol runs it (:func:`v3_hardware_score` and the leaderboard alike).
+
+    A named controller whose plans can be bounded (:data:`~.controllers.RATE_BOUNDED`) plans within
+    ``velocity_limit``; with a positive ``passive_allowance`` a named controller is wrapped in
+    :class:`FrictionCompensated` (the friction of ``plant``, or of the identified C.1).
+
+    Parameters
+    ----------
+    task : str
+        Leaderboard task (checked).
+    controller : str or SampledController or callable
+        As :func:`~.controllers.resolve_controller`.
+    passive_allowance : float
+        Torque the entry may put on the passive joint [N.m].
+    plant : IdentifiedPlant, optional
+        The simulated robot (default the identified C.1).
+    velocity_limit : float or None
+        Bound on both link rates of the plans [rad/s].
+    friction_compensation : bool
+        Wrap a named controller in :class:`FrictionCompensated` when the allowance is positive.
+
+    Returns
+    -------
+    tuple
+        ``(name, controller, velocity bound used or None, compensated)``.
+    """
+    bounded = velocity_limit if isinstance(controller, str) and controller in RATE_BOUNDED else None
+    name, ctrl = resolve_controller(task, controller, velocity_limit=bounded)
+    compensated = bool(friction_compensation) and isinstance(controller, str) and passive_allowance > 0.0
+    if compensated:
+        ctrl = FrictionCompensated(ctrl, plant if isinstance(plant, IdentifiedPlant) else load_plant("c1"))
+    return name, ctrl, None if bounded is None else float(bounded), compensated
+
+
+@checked(seed="legacy_seed")
 def v3_hardware_score(
     task: str,
     controller: str | SampledController = "global",
     *,
     seed: int = 0,
     passive_allowance: float = 0.0,
+    velocity_limit: float | None = PLAN_VELOCITY_LIMIT_HW,
+    friction_compensation: bool = True,
     progress: Callable[[int, int], None] | None = None,
     out: str | Path | None = None,
     plant: IdentifiedPlant | None = None,
@@ -491,6 +549,15 @@ def v3_hardware_score(
         Seed of the schedule, the loop intervals and the noise.
     passive_allowance : float
         Torque the entry may put on the passive joint [N.m], in [0, 0.5].
+    velocity_limit : float or None
+        Bound on both link rates of the plans of a named planning controller (:data:`~.controllers.RATE_BOUNDED`:
+        ``library``, ``replan``, ``replan_delayed``) [rad/s]; default :data:`PLAN_VELOCITY_LIMIT_HW`, below the
+        protocol's 20 rad/s limit reset. None: the simulation protocols' unbounded plans. The plan library caches
+        bounded plans apart (the bound is part of every entry's key).
+    friction_compensation : bool
+        With a positive ``passive_allowance``, run a named controller wrapped in :class:`FrictionCompensated`
+        (the friction of ``plant``, or of the identified C.1 when ``plant`` is not an identified one): the use the
+        hardware rules grant the allowance for. Objects and factories run as given.
     progress : callable, optional
         ``progress(done, total)`` in loop samples.
     out : str or Path, optional
@@ -505,8 +572,11 @@ def v3_hardware_score(
 
     Raises
     ------
+    InputError
+        ``seed``, ``passive_allowance`` or ``velocity_limit`` outside its declaration (:data:`pendulab._inputs.INPUTS`;
+        a ValueError whose message names the option).
     ValueError
-        Unknown task or controller name, bad option values (the message names the option), or a run that blew up.
+        Unknown task or controller name, or a run that blew up.
     TypeError
         ``task`` not a string or ``controller`` neither a name nor a sampled controller.
     """
@@ -515,9 +585,12 @@ def v3_hardware_score(
     if not isinstance(task, str):
         raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")
     task = check_task(short_name(task))
-    _check_allowance(passive_allowance)
-    name, ctrl = resolve_controller(task, controller)
+    name, ctrl, bounded, compensated = hardware_entry(
+        task, controller, passive_allowance, plant, velocity_limit=velocity_limit, friction_compensation=friction_compensation
+    )
     result = run_v3_hardware(task, ctrl, name, seed=seed, passive_allowance=passive_allowance, progress=progress, plant=plant)
+    result.velocity_limit = bounded
+    result.friction_compensated = compensated
     if out is not None:
         from .v3_figure import plot_v3
 
