@@ -523,6 +523,42 @@ def report(out: Path) -> str:
     return "\n".join(lines) + "\n"
 
 
+def figure(out: Path, path: Path) -> Path:
+    """Each hardware-final entry's mean score on pendulab's v3 and v3-hardware against its published hardware score."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scores: dict[tuple[str, str, str], list[float]] = {}
+    published: dict[tuple[str, str], float] = {}
+    for f in sorted(out.glob("hw_*.json")):
+        d = json.loads(f.read_text())
+        if d.get("status") != "ok" or d["protocol"] not in ("v3", "v3-hardware") or d.get("published_hw_best") is None:
+            continue
+        scores.setdefault((d["label"], d["task"], d["protocol"]), []).append(float(d["score"]))
+        published[d["label"], d["task"]] = float(d["published_hw_best"])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5), layout="constrained")
+    for ax, task in zip(axes, ("pendubot", "acrobot"), strict=True):
+        for protocol, marker, color in (("v3", "o", "tab:gray"), ("v3-hardware", "s", "tab:blue")):
+            for (label, t, p), vals in scores.items():
+                if t != task or p != protocol:
+                    continue
+                x, y = published[label, task], float(np.mean(vals))
+                ax.errorbar(x, y, yerr=np.std(vals) if len(vals) > 1 else None, fmt=marker, color=color, capsize=3)
+                ax.annotate(f"{label} ({len(vals)})", (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
+        ax.plot([0, 1], [0, 1], "k:", lw=0.8, label="simulated = published")
+        ax.plot([], [], "o", color="tab:gray", label="pendulab v3 (simulation protocol)")
+        ax.plot([], [], "s", color="tab:blue", label="pendulab v3-hardware (identified C.1, 0.5 N.m allowance)")
+        ax.set(xlim=(0, 1), ylim=(0, 1), title=task, xlabel="published hardware score (ICRA 2025 final, best run) [-]")
+        ax.set_ylabel("pendulab score, mean over seeds (± std) [-]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper left", fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--upstream", type=Path, default=UPSTREAM_DEFAULT, help="upstream work tree (setup_realai_env.sh)")
@@ -538,6 +574,7 @@ def main() -> None:
     ap.add_argument("--allowance", nargs="+", type=float, default=[0.5], help="v3-hardware passive allowance [N.m]")
     ap.add_argument("--force", action="store_true", help="rerun recorded cases")
     ap.add_argument("--report", action="store_true", help="only print the tables of the recorded cases")
+    ap.add_argument("--figure", type=Path, help="only draw simulated against published hardware score (PNG)")
     ap.add_argument("--acados-worker", metavar="CON_FILE", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.acados_worker:
@@ -546,6 +583,9 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     if args.report:
         print(report(args.out))
+        return
+    if args.figure:
+        print(figure(args.out, args.figure))
         return
     from tqdm import tqdm
 
