@@ -503,8 +503,8 @@ def checked(forward: Callable[..., Any] | None = None, /, **aliases: str) -> Cal
             for p in sig.parameters
             if p in aliases or (p in INPUTS and INPUTS[p].kind in ("real", "integer"))
         }
-        # Keywords a ``**options`` parameter forwards are checked by name (or by an alias naming them) too: an
-        # inner layer reached through it trusts them.
+        # Keywords a ``**options`` parameter forwards are checked too (as ``forward`` declares them, else by name or
+        # alias): the inner layer they reach trusts them.
         forwards = any(q.kind is q.VAR_KEYWORD for q in sig.parameters.values())
         target = getattr(forward, "__init__", None) if inspect.isclass(forward) else forward
         target_plan = getattr(target, "__pendulab_inputs__", None)
