@@ -101,6 +101,11 @@ _SCRIPT = textwrap.dedent(
             x0[:, :2] = rng.uniform(-3.0, 3.0, (n, 2))
             pl.ensemble(pl.rigid(), x0, 1e12, threads=1 if mode == "main" else 2, max_steps=2**31 - 1)
     except KeyboardInterrupt:
+        import time
+        # A worker that is exiting (terminated, not yet reaped) is not left behind: one that still runs 2 s later is.
+        deadline = time.monotonic() + 2.0
+        while multiprocessing.active_children() and time.monotonic() < deadline:
+            time.sleep(0.05)
         print("KeyboardInterrupt; workers left:", len(multiprocessing.active_children()), flush=True)
         sys.exit(130)
     print("finished without interrupt", flush=True)
