@@ -9,7 +9,9 @@ pendulab's controllers run wrapped in :class:`~pendulab.evaluate.realai.v3_hardw
 identified C.1 friction, compensated on both joints from the measured rates), as the hardware teams used the
 allowance. The planning controllers (``RATE_BOUNDED``: ``library``, ``replan``) plan with their link rates bounded
 by ``--velocity-limit`` (default ``PLAN_VELOCITY_LIMIT_HW``, 16 rad/s; 0: unbounded), as ``v3_hardware_score``
-does. ``--sensing`` prints the measured sensing and timing table (``docs/realai_v3.md``). With ``--md`` the rows
+does (both through :func:`~pendulab.evaluate.realai.v3_hardware.hardware_entry`, as ``pendulab score``). Each
+finished case is kept in ``./pendulab-out/bench_v3_hardware/`` and a re-run reuses it. ``--sensing`` prints the
+measured sensing and timing table (``docs/realai_v3.md``). With ``--md`` the rows
 are appended to that file as a dated section.
 """
 
@@ -17,21 +19,16 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import os
 import time
 from pathlib import Path
 
 import numpy as np
 
-from pendulab.evaluate.realai.controllers import RATE_BOUNDED, resolve_controller
-from pendulab.evaluate.realai.v3_hardware import (
-    PLAN_VELOCITY_LIMIT_HW,
-    PUBLISHED_HARDWARE,
-    FrictionCompensated,
-    run_v3_hardware,
-)
+from pendulab._io import atomic_write_text
+from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, PUBLISHED_HARDWARE, hardware_entry, run_v3_hardware
 from pendulab.identify.sensing import c1_sensing
-from pendulab.model.plant_file import load_plant
 
 
 def sensing_table() -> list[str]:
@@ -56,20 +53,32 @@ def sensing_table() -> list[str]:
     ]
 
 
+#: One JSON per finished (task, controller, seed, allowance, rate bound) case; a re-run reads it instead of running.
+CASES = Path("pendulab-out/bench_v3_hardware")
+
+
 def _run(task: str, name: str, seed: int, allowance: float, velocity_limit: float | None) -> dict[str, object]:
-    label, ctrl = resolve_controller(task, name, velocity_limit=velocity_limit if name in RATE_BOUNDED else None)
-    if allowance > 0.0:
-        ctrl = FrictionCompensated(ctrl, load_plant("c1"))
+    path = CASES / f"{task}-{name}-seed{seed}-allowance{allowance:g}-vmax{velocity_limit or 0:g}.json"
+    if path.exists():
+        rec = json.loads(path.read_text())
+        rec["calls"] = np.asarray(rec["calls"], dtype=float)
+        return rec
+    label, ctrl, _, _ = hardware_entry(task, name, allowance, velocity_limit=velocity_limit)
     res = run_v3_hardware(task, ctrl, label, seed=seed, passive_allowance=allowance)
-    return {
+    rec = {
         "score": res.score,
         "swingups": res.n_swingups,
         "limit_resets": res.limit_resets,
         "stopped_at": res.stopped_at,
         "max_rate": res.to_dict()["max_joint_rate"],
-        "calls": np.asarray(res.call_times, dtype=float),
+        "calls": np.asarray(res.call_times, dtype=float).tolist(),
         "wall": res.wall_time,
     }
+    CASES.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps(rec) + "\n")
+    print(f"  {task} {name} seed {seed} allowance {allowance:g}: {res.score:.3f}", flush=True)
+    rec["calls"] = np.asarray(rec["calls"], dtype=float)
+    return rec
 
 
 def main() -> None:

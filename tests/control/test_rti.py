@@ -10,7 +10,7 @@ import pytest
 
 from pendulab.control.feedback import upright_state
 from pendulab.control.lqr import lqr_balance
-from pendulab.control.nmpc.rti import RTIOptions, rti_controller, rti_for_task
+from pendulab.control.nmpc.rti import RTIOptions, joint_wrapped_error, rti_controller, rti_for_task
 from pendulab.control.nmpc.rti_build import build_step_library, compiled_step
 from pendulab.control.nmpc.rti_step import rk4_interval, rti_step_function
 from pendulab.control.realai.spec import leaderboard_task
@@ -50,6 +50,12 @@ def _inputs(ctrl, rng, x0):
 
 def _condensed(model, ctrl, dx0):
     """Independent numpy condensing of the LQ problem linearized at upright rest (guess = goal, U = 0)."""
+    H, g, P, _, _ = _condensed_parts(model, ctrl, dx0)
+    return H, g, P
+
+
+def _condensed_parts(model, ctrl, dx0):
+    """:func:`_condensed` and its prediction: ``Gam`` (N, N+1, 4), the state response to each torque, and the free one."""
     o = ctrl.options
     n = model.nx // 2
     Q = np.diag([o.q_angle] * n + [o.q_rate] * n)
@@ -73,7 +79,7 @@ def _condensed(model, ctrl, dx0):
     W = [Q] * N + [P]
     H = R[0, 0] * np.eye(N) + np.einsum("jka,kab,ikb->ij", Gam, np.array(W), Gam)
     g = np.einsum("jka,kab,kb->j", Gam, np.array(W), np.array(free))
-    return H, g, P
+    return H, g, P, Gam, np.array(free)
 
 
 def test_compiled_step_equals_graph(small, model):
@@ -264,3 +270,115 @@ def test_nonuniform_grid_options(model, cache):
         RTIOptions(intervals=0.01)
     with pytest.raises(ValueError, match="terminal_weights"):
         rti_controller(model, actuation="pendubot", u_max=6.0, horizon=4, terminal_weights=(1.0, 2.0), compiled=False)
+
+
+def test_rate_bound_step_is_the_penalized_qp_minimum(small, model):
+    # Linearized at upright rest with a fast start: the soft joint-rate bound w (|v| - v_max)_+^2 makes a convex,
+    # piecewise-quadratic QP; one step must meet its minimum, found here independently by L-BFGS-B on the
+    # numpy condensing (the joint rates are omega1 and omega2 - omega1).
+    import scipy.optimize
+
+    o = small.options
+    N, vmax, w = o.horizon, 0.8, 30.0
+    dx0 = np.array([0.05, -0.03, 1.0, -0.5])
+    H, g, P, Gam, free = _condensed_parts(model, small, dx0)
+    Q, R = np.diag([o.q_angle] * 2 + [o.q_rate] * 2), np.eye(1) / small.u_max**2
+    step = rti_step_function(
+        model, ("tau1",), N=N, interval=o.interval, substeps=o.steps_per_interval, shift=0.2, Q=Q, R=R, P=P,
+        u_max=6.0, qp_iterations=30, rate_limit=vmax, rate_weight=w,
+    )  # fmt: skip
+    X = np.tile(small.goal[:, None], (1, N + 1))
+    out = step(small.goal + dx0, X, np.zeros((1, N)), X, np.zeros((1, N)))
+    J = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, 0.0, -1.0, 1.0]])  # state -> joint rates
+
+    def f(z):
+        v = (free + np.einsum("j,jka->ka", z, Gam)) @ J.T
+        over = np.maximum(np.abs(v) - vmax, 0.0)
+        grad_v = w * over * np.sign(v)
+        return 0.5 * z @ H @ z + g @ z + 0.5 * w * np.sum(over**2), H @ z + g + np.einsum("jka,kb,ba->j", Gam, grad_v, J)
+
+    best = scipy.optimize.minimize(f, np.zeros(N), jac=True, method="L-BFGS-B", bounds=[(-6.0, 6.0)] * N, tol=1e-14)
+    rates = (free + np.einsum("j,jka->ka", best.x, Gam)) @ J.T
+    assert np.abs(rates).max() > vmax  # the bound is active at the optimum (soft: met only approximately)
+    assert float(out[5][0]) == 1.0  # the step reports a KKT point
+    z = np.asarray(out[2]).ravel()
+    # the step's torques do at least as well as L-BFGS-B's (1e-12: round-off of an objective of ~1e1)
+    assert f(z)[0] <= best.fun + 1e-12
+    # 1e-5 [N.m]: L-BFGS-B stops ~1e-6 from the minimum on this problem (curvature ~1e1-1e3)
+    np.testing.assert_allclose(z, best.x, atol=1e-5)
+
+
+def test_rate_bound_pulls_a_swing_up_prediction_to_the_bound(model, cache):
+    # The hanging robot regulated to upright over 0.5 s: unbounded, the first step's prediction asks for joint
+    # rates far past 16 rad/s; with the soft bound the same step's prediction stays near it.
+    grid = (0.004,) * 13 + (0.064,) * 7
+    common = dict(actuation="pendubot", u_max=6.0, intervals=grid, q_angle=2000.0, q_rate=200.0, r=500.0,
+                  terminal_weights=(2e5, 2e5, 2e4, 2e4), cost_per_second=True, compiled=False)  # fmt: skip
+    peaks = {}
+    for vmax in (None, 16.0):
+        ctrl = rti_controller(model, rate_limit=vmax, rate_weight=1e3, **common)
+        ctrl(0.0, np.zeros(4))
+        X = ctrl._out[1]
+        peaks[vmax] = np.abs(np.column_stack([X[:, 2], X[:, 3] - X[:, 2]])).max()
+    assert peaks[None] > 50.0
+    assert peaks[16.0] < 30.0  # soft: a weight of 1e3 leaves some excess, but a fraction of the unbounded one
+
+
+def test_cold_start_is_the_rollout_from_the_measured_state(small, model):
+    # A cold call starts from the states the reference torques lead to from the measurement (no gap between the
+    # shooting nodes), not from the reference states; computed here by an independent loop of RK4 intervals.
+    small.reset()
+    x = small.goal + np.array([2.5, -1.0, 3.0, -2.0])
+    small(0.0, x)
+    X = small._in[1]
+    F = rk4_interval(model, [0], small.options.interval, small.options.steps_per_interval)
+    xk, expected = X[0], [X[0]]
+    for k in range(small.options.horizon):
+        xk = np.asarray(F(xk, small._in[2][k])).ravel()
+        expected.append(xk)
+    np.testing.assert_allclose(X, np.array(expected), atol=1e-12)  # the same RK4 operations: round-off only
+    # the first node is the measurement: its joint angles moved by whole turns, its rates as measured
+    turns = (np.array([X[0][0], X[0][1] - X[0][0]]) - np.array([x[0], x[1] - x[0]])) / (2 * np.pi)
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-12)
+    np.testing.assert_array_equal(X[0][2:], x[2:])
+
+
+@pytest.mark.parametrize(
+    ("q", "limit", "target"),
+    [
+        ((0.001, -0.001), None, (np.pi, 0.0)),  # hanging: the elbow's target is 0, not a whole turn away
+        ((2 * np.pi + 3.0, 0.0), None, (3 * np.pi, 0.0)),  # the nearest upright
+        ((2 * np.pi + 3.0, 0.0), 2 * np.pi, (np.pi, 0.0)),  # wound past the limit: steered back a turn
+        ((-3.0, 0.1), 2 * np.pi, (-np.pi, 0.0)),
+        ((3 * np.pi, 7 * np.pi), 2 * np.pi, (np.pi, 2 * np.pi)),  # elbow targets 0 or +-2 pi within the limit
+        ((3 * np.pi, 7 * np.pi), np.pi, (np.pi, 0.0)),
+    ],
+)
+def test_joint_wrap_targets(q, limit, target):
+    ref = np.array([np.pi, np.pi, 0.0, 0.0])  # upright: joints (pi, 0)
+    x = np.array([q[0], q[0] + q[1], 0.3, -0.2])
+    e = joint_wrapped_error(x - ref, ref, limit)
+    tx = x - e  # the target the controller steers to, absolute angles
+    np.testing.assert_allclose([tx[0], tx[1] - tx[0]], target, atol=1e-12)
+    np.testing.assert_array_equal(e[2:], x[2:] - ref[2:])  # rates are not wrapped
+
+
+def test_joint_wrap_is_a_whole_turn_shift_within_half_a_turn():
+    rng = np.random.default_rng(7)
+    ref = np.array([np.pi, np.pi, 0.0, 0.0])
+    for _ in range(200):
+        x = np.concatenate([rng.uniform(-20, 20, 2), rng.normal(size=2)])
+        e = joint_wrapped_error(x - ref, ref)
+        shift = np.array([(x - e - ref)[0], (x - e - ref)[1] - (x - e - ref)[0]]) / (2 * np.pi)
+        np.testing.assert_allclose(shift, np.round(shift), atol=1e-9)  # the target is the reference a whole turn on
+        assert np.all(np.abs([e[0], e[1] - e[0]]) <= np.pi + 1e-12)  # and the nearest such target
+
+
+@pytest.mark.parametrize(
+    ("option", "value"), [("rate_limit", 0.0), ("rate_limit", float("nan")), ("rate_weight", -1.0), ("angle_limit", float("inf"))]
+)
+def test_bad_rate_and_angle_options_name_the_option(option, value):
+    from pendulab._inputs import InputError
+
+    with pytest.raises(InputError, match=option):
+        RTIOptions(**{option: value})

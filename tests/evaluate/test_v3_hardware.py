@@ -190,3 +190,19 @@ def test_score_bounds_the_plans_of_planning_controllers_and_compensates_friction
     assert isinstance(seen["entry"], _Both)
     with pytest.raises(ValueError, match=r"velocity_limit = -1.0: out of range"):
         hw.v3_hardware_score("pendubot", "replan", velocity_limit=-1.0)
+
+
+def test_goal_mpc_swings_the_simulated_robot_up_within_the_hardware_limits() -> None:
+    # The goal-regulating RTI (``mpc``) on the identified C.1 with the measured sensing, from the hanging start:
+    # it swings up and balances before the first reset, with its joint rates under the 20 rad/s limit reset.
+    from pendulab.evaluate.realai.v3_hardware import hardware_entry
+
+    name, ctrl, _, compensated = hardware_entry("pendubot", "mpc", 0.5)
+    assert compensated and ctrl.controller.model.params.cf1 == 0.0  # frictionless prediction, friction compensated
+    res = run_v3_hardware("pendubot", ctrl, name, seed=0, passive_allowance=0.5, duration=6.0)
+    assert float(reset_schedule(0, N_RESETS_HW, 60.0)[1][0]) > 6.0  # seed 0: no reset inside the 6 s run
+    assert res.limit_resets == 0 and res.stopped_at is None
+    assert res.n_swingups >= 1
+    # up for most of the run: the swing-up from hanging takes ~0.6 s here (0.9 s of margin on top)
+    assert res.uptime >= 6.0 - 1.5
+    assert np.abs(np.column_stack([res.measured[:, 2], res.measured[:, 3] - res.measured[:, 2]])).max() < 20.0

@@ -12,10 +12,10 @@ Design (measured in ``benchmarks/results/rti.md``, explained in ``docs/rti.md``)
 * sampled every 2 ms, predicting over 30 intervals of 10 ms (0.3 s): intervals longer than the
   sample keep the look-ahead of the 50 Hz NMPC at a fifth of its cost per second of horizon; the
   warm start interpolates inside the intervals;
-* no velocity bound (the leaderboard tasks have none): the QP has torque bounds only, so it is a box QP
-  in the condensed torques, solved by a fixed number of primal-dual active-set iterations started from
-  the bounds the warm start sits on; a call whose last iterate is not a KKT point is counted
-  (``qp_unsolved``) and its clipped iterate applied;
+* no hard velocity bound: the QP has torque bounds only, so it is a box QP in the condensed torques (an
+  optional *soft* bound on the joint rates, ``rate_limit``, is a least-squares penalty inside the same QP),
+  solved by a fixed number of primal-dual active-set iterations started from the bounds the warm start sits
+  on; a call whose last iterate is not a KKT point is counted (``qp_unsolved``) and its clipped iterate applied;
 * a step that returns a non-finite value never raises: it is counted in ``failures``, the LQR torque
   about the goal is applied and the next sample starts cold from the reference.
 """
@@ -33,13 +33,14 @@ import casadi as ca
 import numpy as np
 
 from ..._checks import bounded_int, positive_float
+from ..._inputs import check_input
 from ...model.model import Model
 from ..feedback import actuated_inputs, upright_state
 from ..lqr import lqr_balance, wrap_state_error
 from ..tracking import resample_reference
 from .ocp import reference_window
 from .rti_build import compiled_step
-from .rti_step import rti_step_function
+from .rti_step import rollout_function, rti_step_function
 
 if TYPE_CHECKING:
     from ..swingup.tasks import Task
@@ -79,6 +80,14 @@ class RTIOptions:
     cost_per_second : bool
         Weight each stage cost by its interval length [s] (the cost approximates an integral, as acados
         does); default False (every stage weighs the same).
+    rate_limit : float or None
+        Soft bound on both link rates at every node [rad/s] (declared ``velocity_limit``); None: no bound.
+    rate_weight : float
+        Penalty weight of a rate past ``rate_limit`` [s^2/rad^2] per node (declared ``weight``).
+    angle_limit : float or None
+        Largest joint angle the controller steers to [rad]: the measured state is compared with the reference
+        moved by whole turns, at most as many as keep it within this (:func:`joint_wrapped_error`); None: the
+        nearest whole turn, however far the robot has wound.
     compiled : bool
         Run the step as cached C (default) or as the uncompiled CasADi graph (same numbers, slower).
     """
@@ -95,6 +104,9 @@ class RTIOptions:
     intervals: tuple[float, ...] | None = None
     terminal_weights: tuple[float, ...] | None = None
     cost_per_second: bool = False
+    rate_limit: float | None = None
+    rate_weight: float = 1e5
+    angle_limit: float | None = None
 
     def __post_init__(self) -> None:
         if self.intervals is not None:
@@ -121,6 +133,11 @@ class RTIOptions:
             object.__setattr__(self, name, positive_float(name, getattr(self, name), unit))
         if self.r is not None:
             object.__setattr__(self, "r", positive_float("r", self.r))
+        if self.rate_limit is not None:
+            object.__setattr__(self, "rate_limit", check_input("velocity_limit", self.rate_limit, "rate_limit"))
+        object.__setattr__(self, "rate_weight", check_input("weight", self.rate_weight, "rate_weight"))
+        if self.angle_limit is not None:
+            object.__setattr__(self, "angle_limit", check_input("angle_limit", self.angle_limit))
         if self.sample_time > min(self.grid) * (1 + 1e-9):
             raise ValueError(
                 f"sample_time must be at most interval (the shortest, {min(self.grid)!r} s: the warm start shifts "
@@ -151,6 +168,42 @@ class RTIOptions:
         if self.substeps is not None:
             return (self.substeps,) * self.horizon
         return tuple(max(1, math.ceil(h / 0.01 - 1e-9)) for h in self.grid)
+
+
+def joint_wrapped_error(dx: np.ndarray, ref: np.ndarray | None = None, angle_limit: float | None = None) -> np.ndarray:
+    """A rigid state difference (absolute angles) with the *joint* angle differences wrapped into [-pi, pi).
+
+    The shoulder angle and the elbow's relative angle ``theta2 - theta1`` are wrapped, as the robot's joints
+    are. Wrapping the two absolute angles apart would hand a hanging robot a goal a whole turn of the elbow
+    away whenever the two differences sit on opposite sides of pi (both are ~pi there, so noise decides).
+    With ``angle_limit``, the whole turns are limited so that the target joint angle (``ref`` moved by them)
+    stays within ``+-angle_limit``: a robot wound past it is steered back, not on to the next upright
+    (a real robot has a winding limit; RealAIGym's hardware resets at 3.5 pi).
+
+    Parameters
+    ----------
+    dx : ndarray, shape (4,)
+        ``x - ref`` [rad, rad, rad/s, rad/s].
+    ref : ndarray, shape (4,), optional
+        The reference the difference is taken to (needed with ``angle_limit``).
+    angle_limit : float, optional
+        Largest target joint angle [rad]; None: no limit.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        The same difference, joint angles wrapped; rates unchanged.
+    """
+    d = np.array([dx[0], dx[1] - dx[0]])
+    turns = np.round(d / (2 * np.pi))
+    if angle_limit is not None and ref is not None:
+        qr = np.array([ref[0], ref[1] - ref[0]])
+        # the largest number of turns n (towards 0) with |qr + 2 pi n| <= angle_limit
+        hi = np.floor((angle_limit - qr) / (2 * np.pi) + 1e-12)
+        lo = np.ceil((-angle_limit - qr) / (2 * np.pi) - 1e-12)
+        turns = np.clip(turns, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
+    e1, e2 = d - 2 * np.pi * turns
+    return np.array([e1, e1 + e2, dx[2], dx[3]])
 
 
 @dataclass
@@ -213,6 +266,7 @@ class RTIController:
         self._offsets = np.round(self._nodes / self.options.sample_time).astype(int)
         self._k_prev = -1
         self._warm = False
+        self._rollout = rollout_function(self.model, self.input_names, self.options.grid, self.options.grid_steps)
 
     @property
     def sample_time(self) -> float:
@@ -275,7 +329,7 @@ class RTIController:
         k = int(math.floor(t / self.options.sample_time + 1e-6))
         x0, X, U, XR, UR = self._in
         XR[:], UR[:] = self.window(k)
-        x0[:] = XR[0] + wrap_state_error(x - XR[0], self.model.state_names)
+        x0[:] = XR[0] + joint_wrapped_error(x - XR[0], XR[0], self.options.angle_limit)
         self._guess(k)
         self._eval()
         u0, Xn, Un, _, _, info = self._out
@@ -291,12 +345,16 @@ class RTIController:
         return np.clip(u, -self.u_max, self.u_max)
 
     def _guess(self, k: int) -> None:
-        """Write the start guess of the step: the last solution shifted to sample ``k``, or the reference (cold)."""
+        """Write the start guess of the step: the last solution shifted to sample ``k``, or (cold) the reference
+        torques and the states they lead to from ``x0`` (:func:`~.rti_step.rollout_function`)."""
         x0, X, U, XR, UR = self._in
         _, Xn, Un, Xs, Us, _ = self._out
         s = k - self._k_prev
         if not self._warm or s < 0:
-            X[:], U[:] = XR, UR
+            U[:] = UR
+            X[:] = np.asarray(self._rollout(x0, UR.T)).T
+            if not np.all(np.isfinite(X)):
+                X[:] = XR
         elif s == 1:  # the usual case: the step already returned the trajectory one sample later
             X[:], U[:] = Xs, Us
         elif s == 0:
@@ -427,6 +485,8 @@ def rti_controller(
         build.update(interval=list(opts.grid), substeps=list(opts.grid_steps), shift=[opts.sample_time / h for h in opts.grid])
     if opts.cost_per_second:
         build["stage_scale"] = list(opts.grid)
+    if opts.rate_limit is not None:
+        build.update(rate_limit=opts.rate_limit, rate_weight=opts.rate_weight)
     graph = rti_step_function(model, names, **build)
     if opts.compiled:
         meta = {**{k: np.asarray(v).tolist() for k, v in build.items()}, "model_p": np.asarray(model.p).tolist(), "inputs": names}

@@ -2,8 +2,11 @@
 
 The step is the Gauss-Newton SQP iteration of the multiple-shooting problem
 
-``min sum_k c_k (|x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2) + |x_N - xr_N|_P^2``
+``min sum_k c_k (|x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2) + |x_N - xr_N|_P^2 [+ w sum_k sum_i (|v_ki| - v_max)_+^2]``
 ``s.t. x_{k+1} = F_k(x_k, u_k), x_0 = x_meas, |u_k| <= u_max``
+
+(the bracket: an optional soft bound on the link rates ``v`` of every node, a least-squares penalty, so it
+stays inside the Gauss-Newton scheme and the QP keeps box constraints only)
 
 (``c_k``: 1, or the interval length for a cost per second; the intervals may differ, a non-uniform grid)
 
@@ -29,7 +32,7 @@ compact (it compiles in seconds) and its run time does not depend on the state.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import casadi as ca
@@ -38,7 +41,7 @@ import numpy as np
 from ...model.functions import model_functions
 from ...model.model import INPUT_NAMES, Model
 
-__all__ = ["rk4_interval", "rti_step_function", "STEP_INPUTS", "STEP_OUTPUTS"]
+__all__ = ["rk4_interval", "rollout_function", "rti_step_function", "STEP_INPUTS", "STEP_OUTPUTS"]
 
 #: Inputs of the step Function, in order.
 STEP_INPUTS: tuple[str, ...] = ("x0", "X", "U", "XR", "UR")
@@ -83,6 +86,42 @@ def rk4_interval(model: Model, cols: list[int], dt: float, substeps: int) -> ca.
     return ca.Function("rti_rk4", [x, u], [xk], ["x", "u"], ["x_next"])
 
 
+def rollout_function(
+    model: Model, input_names: tuple[str, ...], intervals: Sequence[float], substeps: Sequence[int]
+) -> ca.Function:
+    """The prediction simulated from a state with the torques held per interval: ``(x0, U) -> X``.
+
+    The consistent start guess of a real-time iteration (no gaps between the shooting nodes): a cold start
+    from the reference alone puts every node near the goal while the measured state is elsewhere, and one
+    Gauss-Newton step from such a guess can throw the trajectory far outside the region the RK4 interval
+    is stable in.
+
+    Parameters
+    ----------
+    model : Model
+        Prediction model.
+    input_names : tuple of str
+        Driven torques (m of them).
+    intervals : sequence of float
+        The N interval lengths [s].
+    substeps : sequence of int
+        RK4 steps of each interval.
+
+    Returns
+    -------
+    casadi.Function
+        SX Function ``(x0 (nx,), U (m, N)) -> X (nx, N+1)``.
+    """
+    cols = [INPUT_NAMES.index(n) for n in input_names]
+    N = len(intervals)
+    x0, U = ca.SX.sym("x0", model.nx), ca.SX.sym("U", len(cols), N)
+    steps = {key: rk4_interval(model, cols, *key) for key in set(zip(intervals, substeps, strict=True))}
+    X = [x0]
+    for k, key in enumerate(zip(intervals, substeps, strict=True)):
+        X.append(steps[key](X[k], U[:, k]))
+    return ca.Function("rti_rollout", [x0, U], [ca.horzcat(*X)], ["x0", "U"], ["X"])
+
+
 def _stage_linearization(step: ca.Function, nx: int, m: int) -> ca.Function:
     """SX kernel ``(x, u) -> (F, A, B)`` of one interval."""
     x, u = ca.SX.sym("x", nx), ca.SX.sym("u", m)
@@ -91,15 +130,24 @@ def _stage_linearization(step: ca.Function, nx: int, m: int) -> ca.Function:
 
 
 def _box_qp_pdas(
-    H: ca.MX, g: ca.MX, lb: ca.MX, ub: ca.MX, upper: ca.MX, lower: ca.MX, iterations: int
+    H: ca.MX,
+    g: ca.MX,
+    lb: ca.MX,
+    ub: ca.MX,
+    upper: ca.MX,
+    lower: ca.MX,
+    iterations: int,
+    penalty: Callable[[ca.MX], tuple[ca.MX, ca.MX]] | None = None,
 ) -> tuple[ca.MX, ca.MX, ca.MX]:
-    """``min 0.5 z'Hz + g'z, lb <= z <= ub`` by ``iterations`` primal-dual active-set steps.
+    """``min 0.5 z'Hz + g'z [+ p(z)], lb <= z <= ub`` by ``iterations`` primal-dual active-set steps.
 
     ``upper``, ``lower`` (0/1) are the first guess of the bounds that are active (the warm start's
     saturated torques). Each step solves with the guessed bounds held, then re-guesses them from the
-    multipliers and the bound violations. Returns the last iterate, whether it is a KKT point of the
-    box QP (free entries inside their bounds, multipliers of the held ones of the right sign: 1.0 / 0.0),
-    and the number of bounds held.
+    multipliers and the bound violations. ``penalty(z) -> (dH, dg)``: a piecewise-quadratic term, its
+    Hessian and gradient offset on the piece ``z`` lies in, re-chosen at every step with the bounds (a
+    semismooth Newton step on both). Returns the last iterate, whether it is a KKT point of the box QP
+    (free entries inside their bounds, multipliers of the held ones of the right sign: 1.0 / 0.0), and
+    the number of bounds held.
     """
     n = H.size1()
     ones = ca.DM.ones(n)
@@ -107,16 +155,20 @@ def _box_qp_pdas(
     c = ca.sum1(ca.diag(H)) / n
     tol = 1e-9
     z = lam = ca.MX.zeros(n)
+    Hk, gk = H, g
     for it in range(iterations):
         if it:
             upper = lam + c * (z - ub) > 0
             lower = lam + c * (z - lb) < 0
+        if penalty is not None:
+            dH, dg = penalty(z)
+            Hk, gk = H + dH, g + dg
         act = ca.fmax(upper, lower)
         zb = upper * ub + lower * lb
         free = ones - act
-        M = H * ca.mtimes(free, free.T) + ca.diag(act)
-        z = ca.solve(M, free * (-g - ca.mtimes(H, act * zb)) + act * zb, "ldl")
-        lam = act * (-(ca.mtimes(H, z) + g))
+        M = Hk * ca.mtimes(free, free.T) + ca.diag(act)
+        z = ca.solve(M, free * (-gk - ca.mtimes(Hk, act * zb)) + act * zb, "ldl")
+        lam = act * (-(ca.mtimes(Hk, z) + gk))
     feasible = ca.mmax(ca.vertcat(free * (z - ub), free * (lb - z), -upper * lam, lower * lam)) <= tol
     return z, feasible, ca.sum1(act)
 
@@ -145,6 +197,8 @@ def rti_step_function(
     u_max: float,
     qp_iterations: int,
     stage_scale: Sequence[float] | None = None,
+    rate_limit: float | None = None,
+    rate_weight: float = 1e5,
     name: str = "rti_step",
 ) -> ca.Function:
     """The whole real-time iteration as one MX Function (see the module docstring).
@@ -173,6 +227,11 @@ def rti_step_function(
     stage_scale : sequence of float, optional
         Factor of each stage cost (N of them, e.g. the interval lengths for a cost per second);
         default 1 (the terminal cost is never scaled).
+    rate_limit : float, optional
+        Soft bound on the joint rates (``omega1``, ``omega2 - omega1``) of every node [rad/s]: adds
+        ``rate_weight (|v| - rate_limit)_+^2`` per rate of the linearized prediction. None: no bound.
+    rate_weight : float
+        Weight of the rate bound's penalty [s^2/rad^2].
     name : str
         Function name (the C symbol).
 
@@ -216,10 +275,26 @@ def rti_step_function(
     WG = ca.mtimes(W, Gbar)
     H = ca.mtimes(Gbar.T, WG) + Rbar
     g = ca.mtimes(WG.T, E) + ca.mtimes(Rbar, ca.vec(U - UR))
+    penalty = None
+    if rate_limit is not None:
+        # w (|v| - v_max)_+^2 on every *joint* rate (omega1, omega2 - omega1: the robot's limits are on its joints)
+        # of the linearized prediction v = S (Z + Gbar dU) (Z: at dU = 0), taken on the piece each rate sits on at
+        # the QP's current iterate: (v - sign(v) v_max)^2 where it is past the bound.
+        S = ca.DM.zeros(2 * (N + 1), nx * (N + 1))
+        for k in range(N + 1):
+            S[2 * k, k * nx + 2] = 1.0
+            S[2 * k + 1, k * nx + 3], S[2 * k + 1, k * nx + 2] = 1.0, -1.0
+        SZ, SG = ca.mtimes(S, ca.vec(X) + Xi), ca.mtimes(S, Gbar)
+
+        def penalty(dU: ca.MX) -> tuple[ca.MX, ca.MX]:
+            v = SZ + ca.mtimes(SG, dU)
+            DG = ca.times(ca.repmat(rate_weight * (ca.fabs(v) > rate_limit), 1, N * m), SG)
+            return ca.mtimes(SG.T, DG), ca.mtimes(DG.T, SZ - ca.sign(v) * rate_limit)
+
     Uv = ca.vec(U)
     # Warm active set: the torques of the guess on a bound (the shifted previous solution).
     edge = u_max * (1 - 1e-9)
-    dU, settled, n_active = _box_qp_pdas(H, g, -u_max - Uv, u_max - Uv, Uv >= edge, Uv <= -edge, qp_iterations)
+    dU, settled, n_active = _box_qp_pdas(H, g, -u_max - Uv, u_max - Uv, Uv >= edge, Uv <= -edge, qp_iterations, penalty)
     X_new = X + ca.reshape(ca.mtimes(Gbar, dU) + Xi, nx, N + 1)
     U_new = ca.reshape(ca.fmin(ca.fmax(Uv + dU, -u_max), u_max), m, N)
     # Warm start of the next call: the trajectory a fraction `shift` of an interval later (last interval held).

@@ -18,7 +18,7 @@ from ...control.realai.adapter import REALAI_METHODS, check_realai_controller, f
 from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
-__all__ = ["CONTROLLERS", "RATE_BOUNDED", "REPLAN_DELAY", "controller_name", "resolve_controller"]
+__all__ = ["CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "REPLAN_DELAY", "controller_name", "resolve_controller"]
 
 #: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
 REPLAN_DELAY: float = 0.5
@@ -51,6 +51,12 @@ def _rti(task: str) -> SampledController:
     return rti_for_task(leaderboard_task(task))[0]
 
 
+def _mpc(task: str, plant: Any = None) -> SampledController:
+    from ...control.realai.mpc import goal_mpc  # imported on use: compiles (once, cached) the 500 Hz RTI step
+
+    return goal_mpc(task, plant)
+
+
 def _replan_delayed(task: str, velocity_limit: float | None = None) -> SampledController:
     from ...control.replanning import replanning_controller
 
@@ -71,6 +77,7 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
     "swingup": _task_controller("swingup"),
     "nmpc": _task_controller("nmpc"),
     "rti": _rti,
+    "mpc": _mpc,
     "robust": _task_controller("robust"),
     "global": _global,
     "replan": _replan,
@@ -83,6 +90,10 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
 #: [rad/s]); the others (state feedback, pumping, fixed trajectories) have no plan to bound.
 RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library"})
 
+#: Names whose factory takes ``plant`` (the identified robot a protocol simulates) and designs on it; the others
+#: design on pendulab's leaderboard model whatever the plant.
+PLANT_DESIGNED: frozenset[str] = frozenset({"mpc"})
+
 
 def _is_controller(obj: Any) -> bool:
     return callable(obj) and hasattr(obj, "sample_time") and hasattr(obj, "input_names") and hasattr(obj, "reset")
@@ -90,7 +101,11 @@ def _is_controller(obj: Any) -> bool:
 
 @checked()
 def resolve_controller(
-    task: str, controller: str | SampledController | Callable[[str], Any], *, velocity_limit: float | None = None
+    task: str,
+    controller: str | SampledController | Callable[[str], Any],
+    *,
+    velocity_limit: float | None = None,
+    plant: Any = None,
 ) -> tuple[str, SampledController]:
     """A controller for a leaderboard task from a name, an object or a factory.
 
@@ -107,6 +122,8 @@ def resolve_controller(
     velocity_limit : float, optional
         Bound on both link rates of every plan [rad/s], given to the names of :data:`RATE_BOUNDED` (the others,
         objects and factories are built as they are); None: unbounded.
+    plant : IdentifiedPlant, optional
+        The robot the protocol simulates, given to the names of :data:`PLANT_DESIGNED` (they design on it).
 
     Returns
     -------
@@ -128,6 +145,8 @@ def resolve_controller(
     if isinstance(controller, str):
         if velocity_limit is not None and controller in RATE_BOUNDED:
             return name, CONTROLLERS[controller](task, velocity_limit=velocity_limit)  # type: ignore[call-arg]
+        if plant is not None and controller in PLANT_DESIGNED:
+            return name, CONTROLLERS[controller](task, plant=plant)  # type: ignore[call-arg]
         return name, CONTROLLERS[controller](task)
     if _is_controller(controller):
         return name, controller  # type: ignore[return-value]

@@ -65,14 +65,14 @@ TASKS: tuple[str, ...] = ("pendubot", "acrobot")
 #: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
 #: (one cheap run each, and the compiled 500 Hz ``rti``); robustness v2 the trackers with and without the estimator;
 #: v3 the controllers that can start from any state (``global``, ``replan``, the real-time plan ``library``: its first
-#: use solves and caches the library, minutes per task) beside the v2 best.
+#: use solves and caches the library, minutes per task; the goal-regulating RTI ``mpc``) beside the v2 best.
 DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
     "v2": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "robustness-v2": ("best", "tvlqr", "robust"),
-    "v3": ("best", "global", "replan", "library"),
+    "v3": ("best", "global", "replan", "library", "mpc"),
     "v2-identified": ("best", "tvlqr", "robust", "rti", "global", "replan"),
-    "v3-identified": ("best", "global", "replan", "library"),
-    "v3-hardware": ("best", "global", "replan", "library"),
+    "v3-identified": ("best", "global", "replan", "library", "mpc"),
+    "v3-hardware": ("best", "global", "replan", "library", "mpc"),
 }
 #: Journal directory (relative to the current directory).
 DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"

@@ -493,7 +493,8 @@ def hardware_entry(
     """A controller as the hardware protocol runs it (:func:`v3_hardware_score` and the leaderboard alike).
 
     A named controller whose plans can be bounded (:data:`~.controllers.RATE_BOUNDED`) plans within
-    ``velocity_limit``; with a positive ``passive_allowance`` a named controller is wrapped in
+    ``velocity_limit``; one that designs on the robot (:data:`~.controllers.PLANT_DESIGNED`) designs on ``plant``;
+    with a positive ``passive_allowance`` a named controller is wrapped in
     :class:`FrictionCompensated` (the friction of ``plant``, or of the identified C.1).
 
     Parameters
@@ -517,10 +518,11 @@ def hardware_entry(
         ``(name, controller, velocity bound used or None, compensated)``.
     """
     bounded = velocity_limit if isinstance(controller, str) and controller in RATE_BOUNDED else None
-    name, ctrl = resolve_controller(task, controller, velocity_limit=bounded)
+    robot = plant if isinstance(plant, IdentifiedPlant) else load_plant("c1")
+    name, ctrl = resolve_controller(task, controller, velocity_limit=bounded, plant=robot)
     compensated = bool(friction_compensation) and isinstance(controller, str) and passive_allowance > 0.0
     if compensated:
-        ctrl = FrictionCompensated(ctrl, plant if isinstance(plant, IdentifiedPlant) else load_plant("c1"))
+        ctrl = FrictionCompensated(ctrl, robot)
     return name, ctrl, None if bounded is None else float(bounded), compensated
 
 
