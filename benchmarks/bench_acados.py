@@ -377,7 +377,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tasks", default="pendubot,acrobot")
     ap.add_argument("--rates", default="500,1000")
-    ap.add_argument("--qp-iterations", type=int, default=10, help="pendulab's active-set solves per call")
+    ap.add_argument("--qp-iterations", type=int, default=20, help="pendulab's active-set solves per call")
     ap.add_argument("--code-dir", type=Path, default=Path(tempfile.gettempdir()) / "pendulab-acados-code")
     args = ap.parse_args()
     if not (VENV / "bin" / "python").exists():

@@ -32,7 +32,7 @@ compact (it compiles in seconds) and its run time does not depend on the state.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import casadi as ca
@@ -137,38 +137,70 @@ def _box_qp_pdas(
     upper: ca.MX,
     lower: ca.MX,
     iterations: int,
-    penalty: Callable[[ca.MX], tuple[ca.MX, ca.MX]] | None = None,
+    penalty: tuple[ca.MX, ca.MX, float, float] | None = None,
 ) -> tuple[ca.MX, ca.MX, ca.MX]:
-    """``min 0.5 z'Hz + g'z [+ p(z)], lb <= z <= ub`` by ``iterations`` primal-dual active-set steps.
+    """``min 0.5 z'Hz + g'z [+ p(z)], lb <= z <= ub`` by at most ``iterations`` primal-dual active-set steps.
 
     ``upper``, ``lower`` (0/1) are the first guess of the bounds that are active (the warm start's
     saturated torques). Each step solves with the guessed bounds held, then re-guesses them from the
-    multipliers and the bound violations. ``penalty(z) -> (dH, dg)``: a piecewise-quadratic term, its
-    Hessian and gradient offset on the piece ``z`` lies in, re-chosen at every step with the bounds (a
-    semismooth Newton step on both). Returns the last iterate, whether it is a KKT point of the box QP
-    (free entries inside their bounds, multipliers of the held ones of the right sign: 1.0 / 0.0), and
-    the number of bounds held.
+    multipliers and the bound violations. ``penalty = (SZ, SG, w, v_max)``: the term
+    ``0.5 w sum (|SZ + SG z| - v_max)_+^2``, taken on the piece (``sign(v)`` where ``|v| > v_max``, else 0)
+    each entry sits on, re-chosen at every step with the bounds (a semismooth Newton step on both).
+
+    When a step re-guesses the same bounds and pieces, the next solve would return the same iterate: the
+    remaining steps are skipped at run time (a ``Function.if_else`` switch, short-circuited in the generated
+    C too), so a call costs the steps it needs, at most ``iterations``; the numbers are those of running them all.
+    Returns the last iterate, whether it is a KKT point of the box QP (free entries inside their bounds,
+    multipliers of the held ones of the right sign: 1.0 / 0.0), and the number of bounds held.
     """
     n = H.size1()
     ones = ca.DM.ones(n)
     # The scale c of the complementarity function: any c > 0 works; the mean diagonal of H balances z and lam.
     c = ca.sum1(ca.diag(H)) / n
     tol = 1e-9
+
+    def pieces(z: ca.MX) -> ca.MX:
+        if penalty is None:
+            return ca.MX.zeros(0, 1)
+        SZ, SG, _, vmax = penalty
+        v = SZ + ca.mtimes(SG, z)
+        return ca.sign(v) * (ca.fabs(v) > vmax)
+
+    # One solve as a Function of its data, so that a switch can skip it: (H, g, lb, ub, [SZ, SG], upper, lower,
+    # piece, z, lam) -> (z, lam); "keep" returns the z, lam it is given.
+    data = [H, g, lb, ub] + ([] if penalty is None else [penalty[0], penalty[1]])
+    sym = [ca.MX.sym(f"d{i}", d.sparsity()) for i, d in enumerate(data)]
+    up_s, lo_s, pc_s = ca.MX.sym("upper", n), ca.MX.sym("lower", n), ca.MX.sym("piece", pieces(ca.MX.zeros(n)).size1())
+    z_s, lam_s = ca.MX.sym("z", n), ca.MX.sym("lam", n)
+    Hs, gs, lbs, ubs = sym[:4]
+    if penalty is not None:
+        SZs, SGs = sym[4:]
+        w, vmax = penalty[2], penalty[3]
+        DG = ca.times(ca.repmat(w * ca.fabs(pc_s), 1, n), SGs)
+        Hs, gs = Hs + ca.mtimes(SGs.T, DG), gs + ca.mtimes(DG.T, SZs - pc_s * vmax)
+    act = ca.fmax(up_s, lo_s)
+    zb = up_s * ubs + lo_s * lbs
+    free = ones - act
+    M = Hs * ca.mtimes(free, free.T) + ca.diag(act)
+    z_new = ca.solve(M, free * (-gs - ca.mtimes(Hs, act * zb)) + act * zb, "ldl")
+    lam_new = act * (-(ca.mtimes(Hs, z_new) + gs))
+    args = [*sym, up_s, lo_s, pc_s, z_s, lam_s]
+    solve = ca.Function("rti_pdas_solve", args, [z_new, lam_new])
+    keep = ca.Function("rti_pdas_keep", args, [z_s, lam_s])
+    step = ca.Function.if_else("rti_pdas_step", solve, keep)
+
     z = lam = ca.MX.zeros(n)
-    Hk, gk = H, g
-    for it in range(iterations):
-        if it:
-            upper = lam + c * (z - ub) > 0
-            lower = lam + c * (z - lb) < 0
-        if penalty is not None:
-            dH, dg = penalty(z)
-            Hk, gk = H + dH, g + dg
-        act = ca.fmax(upper, lower)
-        zb = upper * ub + lower * lb
-        free = ones - act
-        M = Hk * ca.mtimes(free, free.T) + ca.diag(act)
-        z = ca.solve(M, free * (-gk - ca.mtimes(Hk, act * zb)) + act * zb, "ldl")
-        lam = act * (-(ca.mtimes(Hk, z) + gk))
+    piece = pieces(z)
+    z, lam = solve(*data, upper, lower, piece, z, lam)
+    for _ in range(iterations - 1):
+        new_upper = lam + c * (z - ub) > 0
+        new_lower = lam + c * (z - lb) < 0
+        new_piece = pieces(z)
+        changed = ca.mmax(ca.vertcat(ca.fabs(new_upper - upper), ca.fabs(new_lower - lower), ca.fabs(new_piece - piece), 0))
+        z, lam = step(changed > 0, *data, new_upper, new_lower, new_piece, z, lam)
+        upper, lower, piece = new_upper, new_lower, new_piece
+    act = ca.fmax(upper, lower)
+    free = ones - act
     feasible = ca.mmax(ca.vertcat(free * (z - ub), free * (lb - z), -upper * lam, lower * lam)) <= tol
     return z, feasible, ca.sum1(act)
 
@@ -284,12 +316,7 @@ def rti_step_function(
         for k in range(N + 1):
             S[2 * k, k * nx + 2] = 1.0
             S[2 * k + 1, k * nx + 3], S[2 * k + 1, k * nx + 2] = 1.0, -1.0
-        SZ, SG = ca.mtimes(S, ca.vec(X) + Xi), ca.mtimes(S, Gbar)
-
-        def penalty(dU: ca.MX) -> tuple[ca.MX, ca.MX]:
-            v = SZ + ca.mtimes(SG, dU)
-            DG = ca.times(ca.repmat(rate_weight * (ca.fabs(v) > rate_limit), 1, N * m), SG)
-            return ca.mtimes(SG.T, DG), ca.mtimes(DG.T, SZ - ca.sign(v) * rate_limit)
+        penalty = (ca.mtimes(S, ca.vec(X) + Xi), ca.mtimes(S, Gbar), float(rate_weight), float(rate_limit))
 
     Uv = ca.vec(U)
     # Warm active set: the torques of the guess on a bound (the shifted previous solution).
