@@ -171,7 +171,7 @@ class RTIOptions:
 
 
 def joint_wrapped_error(dx: np.ndarray, ref: np.ndarray | None = None, angle_limit: float | None = None) -> np.ndarray:
-    """A rigid state difference (absolute angles) with the *joint* angle differences wrapped into [-pi, pi).
+    """A state difference (absolute angles first) with the *joint* angle differences wrapped into [-pi, pi).
 
     The shoulder angle and the elbow's relative angle ``theta2 - theta1`` are wrapped, as the robot's joints
     are. Wrapping the two absolute angles apart would hand a hanging robot a goal a whole turn of the elbow
@@ -182,17 +182,17 @@ def joint_wrapped_error(dx: np.ndarray, ref: np.ndarray | None = None, angle_lim
 
     Parameters
     ----------
-    dx : ndarray, shape (4,)
-        ``x - ref`` [rad, rad, rad/s, rad/s].
-    ref : ndarray, shape (4,), optional
+    dx : ndarray, shape (nx,)
+        ``x - ref``, ``theta1, theta2`` first (rigid and elastic states alike) [rad, rad, ...].
+    ref : ndarray, shape (nx,), optional
         The reference the difference is taken to (needed with ``angle_limit``).
     angle_limit : float, optional
         Largest target joint angle [rad]; None: no limit.
 
     Returns
     -------
-    ndarray, shape (4,)
-        The same difference, joint angles wrapped; rates unchanged.
+    ndarray, shape (nx,)
+        The same difference, joint angles wrapped; the other entries unchanged.
     """
     d = np.array([dx[0], dx[1] - dx[0]])
     turns = np.round(d / (2 * np.pi))
@@ -203,7 +203,9 @@ def joint_wrapped_error(dx: np.ndarray, ref: np.ndarray | None = None, angle_lim
         lo = np.ceil((-angle_limit - qr) / (2 * np.pi) - 1e-12)
         turns = np.clip(turns, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
     e1, e2 = d - 2 * np.pi * turns
-    return np.array([e1, e1 + e2, dx[2], dx[3]])
+    out = np.array(dx, dtype=float)
+    out[0], out[1] = e1, e1 + e2
+    return out
 
 
 @dataclass
@@ -213,7 +215,7 @@ class RTIController:
     Attributes
     ----------
     model : Model
-        Plant and prediction model (rigid).
+        Plant and prediction model (rigid or elastic).
     options : RTIOptions
         Settings.
     input_names : tuple of str
@@ -416,13 +418,15 @@ def rti_controller(
     Parameters
     ----------
     model : Model
-        Rigid plant and prediction model.
+        Plant and prediction model, rigid or elastic (an elastic one is predicted with all 8 states, RK4 steps
+        of at most 10 ms and at least ``h omega_fast`` per interval).
     actuation : {"full", "pendubot", "acrobot"} or sequence of input names
         Driven torques.
     u_max : float
         Torque bound [N.m].
     reference : (t, x, u), optional
-        Times [s] shape (K,), states shape (K, nx), torques (tau1, tau2) [N.m] shape (K, 2) or (K-1, 2).
+        Times [s] shape (K,), states shape (K, nx) (or (K, 4) rigid states for an elastic model: the spring lengths
+        are taken quasi-static), torques (tau1, tau2) [N.m] shape (K, 2) or (K-1, 2).
         None: regulation about ``goal``.
     goal : ndarray, shape (nx,), optional
         State held after the reference; default upright at rest.
@@ -442,15 +446,15 @@ def rti_controller(
     TypeError
         ``model`` is not a Model, or unknown option names.
     ValueError
-        An elastic model, bad options, torque limit, actuation, goal or reference shapes.
+        Bad options, torque limit, actuation, goal or reference shapes.
     CompilerNotFoundError (RuntimeError)
         ``compiled=True``, the step is not cached and no C compiler is found.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a pendulab Model, got {type(model).__name__}")
-    if model.kind != "rigid":
-        raise ValueError(f"model must be rigid for the RTI controller (use 'nmpc' for elastic plants), got kind {model.kind!r}")
     opts = _check_options(options, option_changes)
+    if model.kind == "elastic" and opts.substeps is None:
+        opts = _check_options(opts, {"substeps": _elastic_substeps(model, opts.grid)})
     u_max = positive_float("u_max", u_max, "[N.m]")
     names = actuated_inputs(actuation)
     cols = [("tau1", "tau2").index(n) for n in names]
@@ -464,13 +468,17 @@ def rti_controller(
         us = np.asarray(us, dtype=float)
         if us.ndim != 2 or us.shape[1] != 2:
             raise ValueError(f"reference torques must have shape (K, 2) (tau1, tau2), got {us.shape}")
+        xs = np.asarray(xs, dtype=float)
+        if model.kind == "elastic" and xs.ndim == 2 and xs.shape[1] == 4:  # a rigid plan: quasi-static spring lengths
+            from .build import _lift_quasi_static
+
+            xs = _lift_quasi_static(model, xs, us)
         xs = model.check_state(xs, "reference states")
         if xs.ndim != 2:
             raise ValueError(f"reference states must have shape (K, {model.nx}), got {xs.shape}")
         _, x_ref, u_full = resample_reference(t, xs, us, opts.sample_time, model)
         u_ref = u_full[:, cols]
-    n = model.nx // 2
-    Q = np.diag([opts.q_angle] * n + [opts.q_rate] * n)
+    Q = _stage_weights(model, opts)
     R = np.eye(len(names)) * (opts.r if opts.r is not None else 1.0 / u_max**2)
     top = lqr_balance(model, names, Q, R, opts.grid[-1], at=goal)
     P = top.P if opts.terminal_weights is None else np.diag(opts.terminal_weights)
@@ -496,13 +504,27 @@ def rti_controller(
     return RTIController(model, opts, names, u_max, x_ref, u_ref, goal, graph, step, top.K)
 
 
+def _stage_weights(model: Model, opts: RTIOptions) -> np.ndarray:
+    """Diagonal stage weight: ``q_angle`` on the angles, ``q_rate`` on the angular rates; an elastic model's spring
+    lengths 100 [1/m^2] and their rates 0.1 [s^2/m^2] (the 8-state NMPC's weights, :mod:`.build`)."""
+    fixed = {"r": 100.0, "v": 0.1, "t": opts.q_angle, "o": opts.q_rate}
+    return np.diag([fixed[name[0]] for name in model.state_names])
+
+
+def _elastic_substeps(model: Model, grid: Sequence[float]) -> int:
+    """RK4 steps per interval for an elastic prediction: one per 10 ms, and at least ``h omega_fast`` (stability)."""
+    from .build import _substeps
+
+    return max(max(1, math.ceil(h / 0.01 - 1e-9), _substeps(model, h, None)) for h in grid)
+
+
 def rti_for_task(task: Task | str, **options: Any) -> tuple[RTIController, np.ndarray]:
     """RTI NMPC that tracks the task's optimized swing-up at 500 Hz and then balances; and the task's start state.
 
     Parameters
     ----------
     task : Task or str
-        Rigid swing-up task, or its name (``pendubot``).
+        Swing-up task (rigid or elastic), or its name (``pendubot``).
     **options
         :class:`RTIOptions` fields (``horizon``, ``interval``, ``sample_time``...) and ``cache_directory``.
 
@@ -516,7 +538,7 @@ def rti_for_task(task: Task | str, **options: Any) -> tuple[RTIController, np.nd
     Raises
     ------
     ValueError
-        The swing-up plan failed, an elastic task, or bad options (checked before planning).
+        The swing-up plan failed, or bad options (checked before planning).
     TypeError
         ``task`` is neither a Task nor a name; unknown option names.
     FileNotFoundError
@@ -528,8 +550,6 @@ def rti_for_task(task: Task | str, **options: Any) -> tuple[RTIController, np.nd
     task = resolve_task(task)
     cache_directory = options.pop("cache_directory", None)
     opts = _check_options(None, options)  # before the (costly) plan
-    if task.model.kind != "rigid":
-        raise ValueError(f"task must be rigid for the RTI controller (use 'nmpc' for elastic tasks), got {task.name!r}")
     pb = task.problem
     res = plan_swingup(pb, method=task.method, N=task.N, degree=task.degree)
     ctrl = rti_controller(

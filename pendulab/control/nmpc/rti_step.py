@@ -312,10 +312,11 @@ def rti_step_function(
         # w (|v| - v_max)_+^2 on every *joint* rate (omega1, omega2 - omega1: the robot's limits are on its joints)
         # of the linearized prediction v = S (Z + Gbar dU) (Z: at dU = 0), taken on the piece each rate sits on at
         # the QP's current iterate: (v - sign(v) v_max)^2 where it is past the bound.
+        w1, w2 = model.state_names.index("omega1"), model.state_names.index("omega2")
         S = ca.DM.zeros(2 * (N + 1), nx * (N + 1))
         for k in range(N + 1):
-            S[2 * k, k * nx + 2] = 1.0
-            S[2 * k + 1, k * nx + 3], S[2 * k + 1, k * nx + 2] = 1.0, -1.0
+            S[2 * k, k * nx + w1] = 1.0
+            S[2 * k + 1, k * nx + w2], S[2 * k + 1, k * nx + w1] = 1.0, -1.0
         penalty = (ca.mtimes(S, ca.vec(X) + Xi), ca.mtimes(S, Gbar), float(rate_weight), float(rate_limit))
 
     Uv = ca.vec(U)
