@@ -198,7 +198,11 @@ def test_goal_mpc_swings_the_simulated_robot_up_within_the_hardware_limits() -> 
     from pendulab.evaluate.realai.v3_hardware import hardware_entry
 
     name, ctrl, _, compensated = hardware_entry("pendubot", "mpc", 0.5)
-    assert compensated and ctrl.controller.model.params.cf1 == 0.0  # frictionless prediction, friction compensated
+    predicted, robot = ctrl.controller.model.params, load_plant("c1")
+    assert compensated and predicted.cf1 == predicted.b1 == 0.0  # frictionless prediction, friction compensated
+    # designed on the identified robot (its links, rotor inertia and gear ratio), not on the leaderboard's model 1.0
+    ident = robot.rigid_kwargs()
+    assert (predicted.m2, predicted.I2, predicted.Ir, predicted.gr) == (ident["m2"], ident["I2"], ident["Ir"], ident["gr"])
     res = run_v3_hardware("pendubot", ctrl, name, seed=0, passive_allowance=0.5, duration=6.0)
     assert float(reset_schedule(0, N_RESETS_HW, 60.0)[1][0]) > 6.0  # seed 0: no reset inside the 6 s run
     assert res.limit_resets == 0 and res.stopped_at is None
