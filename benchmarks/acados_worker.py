@@ -31,25 +31,15 @@ import json
 import math
 import os
 import sys
-import sysconfig
 import time
 from pathlib import Path
+
+from acados_env import acados_env
 
 REQUEST, ANSWER = 6, 8
 
 
-def _acados_env() -> None:
-    """Point acados_template at the wheel's install tree (lib/, include/, bin/t_renderer) and its templates."""
-    site = Path(sysconfig.get_paths()["purelib"]) / "acados"
-    install = site / "install"
-    os.environ.setdefault("ACADOS_SOURCE_DIR", str(install))
-    os.environ.setdefault("TERA_PATH", str(install / "bin" / "t_renderer"))
-    os.environ.setdefault("ACADOS_PYTHON_INTERFACE_PATH", str(site / "acados_template"))
-    if str(site) not in sys.path:
-        sys.path.insert(0, str(site))
-
-
-_acados_env()
+acados_env()  # before the wheel's CasADi and acados_template are imported
 
 import casadi as ca  # noqa: E402  (the wheel's CasADi)
 import numpy as np  # noqa: E402

@@ -159,15 +159,9 @@ _REQ, _ANS = 6, 3  # float64 words: request [cmd, t, x1..x4] (cmd 0 call, 2 quit
 def acados_worker(con_file: str) -> None:
     """``--acados-worker CON_FILE``: build upstream's AcadosMpc entry from its ``con_`` file (in the acados venv) and
     answer ``get_control_output_`` requests on stdin/stdout (binary float64). Imports nothing of pendulab."""
-    import sysconfig
+    from acados_env import acados_env  # benchmarks/acados_env.py (this script's folder is on the path)
 
-    site = Path(sysconfig.get_paths()["purelib"]) / "acados"
-    install = site / "install"
-    os.environ.setdefault("ACADOS_SOURCE_DIR", str(install))
-    os.environ.setdefault("TERA_PATH", str(install / "bin" / "t_renderer"))
-    os.environ.setdefault("ACADOS_PYTHON_INTERFACE_PATH", str(site / "acados_template"))
-    if str(site) not in sys.path:
-        sys.path.insert(0, str(site))
+    acados_env()
     proto_out = os.fdopen(os.dup(1), "wb", buffering=0)
     os.dup2(2, 1)  # everything the entry (Python or C) prints goes to stderr; the protocol keeps the real stdout
     sys.stdout = sys.stderr

@@ -17,7 +17,7 @@ Design (measured in ``benchmarks/results/rti.md``, explained in ``docs/rti.md``)
   solved by a fixed number of primal-dual active-set iterations started from the bounds the warm start sits
   on; a call whose last iterate is not a KKT point is counted (``qp_unsolved``) and its clipped iterate applied;
 * a step that returns a non-finite value never raises: it is counted in ``failures``, the LQR torque
-  about the goal is applied and the next sample starts cold from the reference.
+  about the goal is applied and the next sample starts cold (from a rollout of the measured state).
 """
 
 from __future__ import annotations
@@ -81,9 +81,11 @@ class RTIOptions:
         Weight each stage cost by its interval length [s] (the cost approximates an integral, as acados
         does); default False (every stage weighs the same).
     rate_limit : float or None
-        Soft bound on both link rates at every node [rad/s] (declared ``velocity_limit``); None: no bound.
+        Soft bound on both joint rates (``omega1``, ``omega2 - omega1``) at every node [rad/s] (declared
+        ``velocity_limit``); None: no bound.
     rate_weight : float
-        Penalty weight of a rate past ``rate_limit`` [s^2/rad^2] per node (declared ``weight``).
+        Penalty weight of a rate past ``rate_limit`` [s^2/rad^2] per node (declared ``weight``). Default 1e3:
+        at 1e4 and above the active-set steps cycled on a swing-up from hanging (measured; docs/rti.md).
     angle_limit : float or None
         Largest joint angle the controller steers to [rad]: the measured state is compared with the reference
         moved by whole turns, at most as many as keep it within this (:func:`joint_wrapped_error`); None: the
@@ -105,7 +107,7 @@ class RTIOptions:
     terminal_weights: tuple[float, ...] | None = None
     cost_per_second: bool = False
     rate_limit: float | None = None
-    rate_weight: float = 1e5
+    rate_weight: float = 1e3
     angle_limit: float | None = None
 
     def __post_init__(self) -> None:

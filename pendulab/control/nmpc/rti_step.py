@@ -5,8 +5,8 @@ The step is the Gauss-Newton SQP iteration of the multiple-shooting problem
 ``min sum_k c_k (|x_k - xr_k|_Q^2 + |u_k - ur_k|_R^2) + |x_N - xr_N|_P^2 [+ w sum_k sum_i (|v_ki| - v_max)_+^2]``
 ``s.t. x_{k+1} = F_k(x_k, u_k), x_0 = x_meas, |u_k| <= u_max``
 
-(the bracket: an optional soft bound on the link rates ``v`` of every node, a least-squares penalty, so it
-stays inside the Gauss-Newton scheme and the QP keeps box constraints only)
+(the bracket: an optional soft bound on the joint rates ``v`` (``omega1``, ``omega2 - omega1``) of every node, a
+least-squares penalty, so it stays inside the Gauss-Newton scheme and the QP keeps box constraints only)
 
 (``c_k``: 1, or the interval length for a cost per second; the intervals may differ, a non-uniform grid)
 
@@ -170,7 +170,8 @@ def _box_qp_pdas(
     # piece, z, lam) -> (z, lam); "keep" returns the z, lam it is given.
     data = [H, g, lb, ub] + ([] if penalty is None else [penalty[0], penalty[1]])
     sym = [ca.MX.sym(f"d{i}", d.sparsity()) for i, d in enumerate(data)]
-    up_s, lo_s, pc_s = ca.MX.sym("upper", n), ca.MX.sym("lower", n), ca.MX.sym("piece", pieces(ca.MX.zeros(n)).size1())
+    up_s, lo_s = ca.MX.sym("upper", n), ca.MX.sym("lower", n)
+    pc_s = ca.MX.sym("piece", 0 if penalty is None else penalty[0].size1())
     z_s, lam_s = ca.MX.sym("z", n), ca.MX.sym("lam", n)
     Hs, gs, lbs, ubs = sym[:4]
     if penalty is not None:
@@ -230,7 +231,7 @@ def rti_step_function(
     qp_iterations: int,
     stage_scale: Sequence[float] | None = None,
     rate_limit: float | None = None,
-    rate_weight: float = 1e5,
+    rate_weight: float = 1e3,
     name: str = "rti_step",
 ) -> ca.Function:
     """The whole real-time iteration as one MX Function (see the module docstring).

@@ -9,7 +9,7 @@ grid (13 intervals of 4 ms, then 7 of 64 ms), weights ``Q = 2 diag(1000, 1000, 1
 measured on the simulated hardware protocol (``benchmarks/results/v3_hardware.md``, "Goal-regulating MPC"):
 
 * the joint-rate bound is a soft quadratic penalty inside the box QP (:data:`RATE_LIMITS`: 16 rad/s pendubot,
-  14 acrobot; without it the regulation swings past the hardware's 20 rad/s limit reset: pendubot 0.65 against
+  14 acrobot; weight 1e3 per (rad/s)^2, the RTI's default; without it the regulation swings past the hardware's 20 rad/s limit reset: pendubot 0.65 against
   0.73 with it, seed 0);
 * the measured angles are compared with the goal moved by whole turns, at most as many as keep the target joint
   angle within :data:`ANGLE_LIMITS` (2 pi pendubot, pi acrobot): the nearest upright of a robot wound several
@@ -42,8 +42,6 @@ RATE_LIMITS: dict[str, float] = {"pendubot": 16.0, "acrobot": 14.0}
 ANGLE_LIMITS: dict[str, float] = {"pendubot": 2.0 * math.pi, "acrobot": math.pi}
 #: Weight of the driven torque per task [1/(N.m)^2 per second].
 TORQUE_WEIGHTS: dict[str, float] = {"pendubot": 500.0, "acrobot": 400.0}
-#: Weight of a rate past its bound [s^2/rad^2] per node.
-RATE_WEIGHT: float = 1e3
 
 
 def goal_mpc(task: str, plant: IdentifiedPlant | None = None) -> RTIController:
@@ -85,6 +83,5 @@ def goal_mpc(task: str, plant: IdentifiedPlant | None = None) -> RTIController:
         terminal_weights=(2e5, 2e5, 2e4, 2e4),
         cost_per_second=True,
         rate_limit=RATE_LIMITS[task],
-        rate_weight=RATE_WEIGHT,
         angle_limit=ANGLE_LIMITS[task],
     )
