@@ -368,8 +368,14 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     term_ev = np.full(m, -1, dtype=np.int64)
     t_eval = task.t_eval
     X = np.full((m, len(t_eval), nx), np.nan) if t_eval is not None else None
-    lane_run = np.full(S, -1, dtype=np.int64)
-    lane_steps = np.zeros(S, dtype=np.int64)
+    # The bookkeeping between two event stops is per-lane Python and, on the flip map, cost as much as
+    # the integration itself (one stop per finished run): it works on plain lists and on the
+    # integrator's own state and parameter buffers (heyoka returns them as writable views), and only
+    # the lanes whose outcome ends their run take the slow branch.
+    state, pars = ta.state, ta.pars
+    lane_run = np.full(S, -1, dtype=np.int64)  # read by the nt-event recorders
+    runs: list[int] = [-1] * S  # lane_run as plain ints
+    lane_steps = [0] * S
     ptr = np.zeros(S, dtype=np.int64)
     for ev in ta.nt_events if built.nt_index else ():
         cb = ev.callback
@@ -380,29 +386,31 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     t_index = built.t_index
     outcome_names = hy.taylor_outcome
     time_limit, nf, step_limit = outcome_names.time_limit, outcome_names.err_nf_state, outcome_names.step_limit
+    going_on = (outcome_names.success, step_limit)
     n_steps = 0
     has_events = bool(built.nt_index or built.t_index)
     max_steps, deadline = int(task.max_steps), task.deadline
+    t_final, x0 = float(task.t_final), task.x0
 
     def fill(lane: int) -> None:
         nonlocal next_run
         if next_run < m:
             r = next_run
             next_run += 1
-            lane_run[lane] = r
+            runs[lane] = lane_run[lane] = r
             lane_steps[lane] = 0
             times[lane] = 0.0
-            target[lane] = task.t_final
-            ta.state[:, lane] = task.x0[r]
-            ta.pars[:, lane] = pars_all[:, r]
+            target[lane] = t_final
+            state[:, lane] = x0[r]
+            pars[:, lane] = pars_all[:, r]
             if has_events:
                 ta.reset_cooldowns(lane)
             ptr[lane] = 0
         else:  # idle: a benign finite state and parameters, no time to go
-            lane_run[lane] = -1
+            runs[lane] = lane_run[lane] = -1
             target[lane] = times[lane]
-            ta.state[:, lane] = task.x0[0]
-            ta.pars[:, lane] = pars_all[:, 0]
+            state[:, lane] = x0[0]
+            pars[:, lane] = pars_all[:, 0]
 
     def fail(r: int, t: float, why: str) -> None:
         status[r] = STATUS_FAILED
@@ -411,28 +419,33 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     for lane in range(S):
         fill(lane)
     ta.set_time(times)
-    while np.any(lane_run >= 0):
+    while any(r >= 0 for r in runs):
         if stop is not None and stop():
             raise ChunkStoppedError(f"ensemble chunk {task.index} stopped")
-        active = lane_run >= 0
         # A slice ends at the first step budget of a lane, so a budget is exact, not rounded up to a slice.
-        budget_left = int(np.min(max_steps - lane_steps[active])) if active.any() else SLICE_STEPS
-        res = ta.propagate_until(target.copy(), max_steps=max(1, min(SLICE_STEPS, budget_left)), c_output=X is not None)
+        budget_left = max_steps - max(n for n, r in zip(lane_steps, runs, strict=True) if r >= 0)
+        res = ta.propagate_until(target, max_steps=max(1, min(SLICE_STEPS, budget_left)), c_output=X is not None)
         times[:] = ta.time
         if X is not None:
             _record_grid(res[0], t_eval, times, lane_run, ptr, X)
         late = deadline is not None and time.time() > deadline
         refill = []
         for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
-            n_steps += int(steps)
-            r = lane_run[lane]
+            n_steps += steps
+            r = runs[lane]
             if r < 0:
                 continue
-            lane_steps[lane] += int(steps)
-            o = int(outcome)
-            if outcome == time_limit:
+            lane_steps[lane] += steps
+            if outcome in going_on:
+                if lane_steps[lane] >= max_steps:
+                    fail(r, float(times[lane]), f"step budget exhausted (max_steps = {max_steps} steps)")
+                elif late:
+                    fail(r, float(times[lane]), "wall-time budget exhausted (max_wall_time)")
+                else:
+                    continue
+            elif outcome == time_limit:
                 status[r] = STATUS_OK
-            elif _TERMINAL_MIN < o < 0:
+            elif _TERMINAL_MIN < (o := int(outcome)) < 0:
                 k = t_index[-o - 1]
                 if k in _SPRING_EVENTS:
                     j = _SPRING_EVENTS[k]
@@ -443,32 +456,31 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
                     ev_times[k, r] = times[lane]
             elif o >= 0:  # a terminal event whose callback let the run go on (not used here)
                 continue
-            elif outcome in (outcome_names.success, step_limit):
-                if lane_steps[lane] >= max_steps:
-                    fail(r, float(times[lane]), f"step budget exhausted (max_steps = {max_steps} steps)")
-                elif late:
-                    fail(r, float(times[lane]), "wall-time budget exhausted (max_wall_time)")
-                else:
-                    continue
             else:
                 why = "the state became non-finite (err_nf_state)" if outcome == nf else f"heyoka outcome {outcome}"
                 fail(r, float(times[lane]), why)
-            state = np.array(ta.state[:, lane])
-            if status[r] != STATUS_FAILED and not np.all(np.isfinite(state)):
+            end_state = state[:, lane]
+            if status[r] != STATUS_FAILED and not np.isfinite(end_state).all():
                 fail(r, float(times[lane]), "the state became non-finite")
-            x_final[r] = state
+            x_final[r] = end_state
             t_end[r] = times[lane]
             refill.append(lane)
         if late:  # runs not started yet fail at once: the budget is spent
             while next_run < m:
                 fail(next_run, 0.0, "wall-time budget exhausted (max_wall_time) before the run started")
                 t_end[next_run] = 0.0
-                x_final[next_run] = task.x0[next_run]
+                x_final[next_run] = x0[next_run]
                 next_run += 1
         for lane in refill:
             fill(lane)
         if refill:
-            ta.set_time(times)
+            # heyoka keeps each lane's time in double length (hi + lo). Resetting only the refilled lanes
+            # keeps the others' exactly: set_time() on all lanes dropped their low parts at moments that
+            # depend on which runs share the batch, so a run's result changed at the last bit with the
+            # chunking (a resumed flip map differed from an uninterrupted one by 1 ulp).
+            hi, lo = (np.array(a) for a in ta.dtime)
+            hi[refill], lo[refill] = times[refill], 0.0
+            ta.set_dtime(hi, lo)
     return ChunkOut(task.index, x_final, t_end, status, messages, ev_times, term_ev, X, n_steps)
 
 

@@ -4,10 +4,12 @@ worker processes, Ctrl-C handled) and joining the chunks' outputs into per-run a
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import multiprocessing
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
@@ -15,15 +17,15 @@ import numpy as np
 from .batch import BatchKey, ChunkOut, ChunkStoppedError, ChunkTask, build, run_chunk
 from .pool import _sigint_blocked, completed, ignore_sigint, shutdown_now
 
-__all__ = ["local_chunk_size"]
+__all__ = ["local_chunk_size", "shared_workers"]
 
 
 # -- execution ---------------------------------------------------------------------
 def local_chunk_size(n: int, chunk_size: int, batch_size: int, threads: int) -> int:
     """Runs per local chunk: at most ``chunk_size``, small enough to keep ``threads`` workers busy.
 
-    A pure function of its arguments (never of the host): the same arguments give the same
-    chunking, hence bitwise-identical results.
+    A pure function of its arguments (never of the host), reported in the ensemble's stats. The results
+    do not depend on it (each lane's arithmetic and time are its own).
 
     Parameters
     ----------
@@ -60,7 +62,7 @@ def _tasks(
     ]
 
 
-def _executor(threads: int, n_tasks: int, n_runs: int) -> Executor:
+def _forked_processes(n_runs: int) -> bool:
     """Worker processes (fork) for big ensembles, threads for small ones.
 
     heyoka releases the GIL while it integrates, but the per-lane bookkeeping between event
@@ -68,16 +70,49 @@ def _executor(threads: int, n_tasks: int, n_runs: int) -> Executor:
     processes ran 1.5-1.9x faster. Forked workers inherit the compiled integrator (:func:`_run_local`
     builds it before the fork), so they start in milliseconds; below _PROCESS_MIN_RUNS runs, or where fork
     is unavailable, threads are used.
-    Worker processes ignore SIGINT: Ctrl-C reaches the parent, which cancels the queue and ends them.
     """
-    workers = min(threads, n_tasks)
-    if n_runs >= _PROCESS_MIN_RUNS and "fork" in multiprocessing.get_all_start_methods():
-        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"), initializer=ignore_sigint)
-    return ThreadPoolExecutor(max_workers=workers)
+    return n_runs >= _PROCESS_MIN_RUNS and "fork" in multiprocessing.get_all_start_methods()
 
 
-#: Ensembles of at least this many runs use worker processes (see :func:`_executor`).
+def _process_pool(workers: int) -> ProcessPoolExecutor:
+    """Forked workers that ignore SIGINT: Ctrl-C reaches the parent, which cancels the queue and ends them."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"), initializer=ignore_sigint)
+
+
+#: Ensembles of at least this many runs use worker processes (see :func:`_forked_processes`).
 _PROCESS_MIN_RUNS = 5000
+
+
+class _Shared:
+    """The worker processes kept by :func:`shared_workers` (None until the first ensemble forks them)."""
+
+    def __init__(self) -> None:
+        self.pool: ProcessPoolExecutor | None = None
+        self.workers = 0
+
+
+_SHARED: contextvars.ContextVar[_Shared | None] = contextvars.ContextVar("pendulab_shared_workers", default=None)
+
+
+@contextlib.contextmanager
+def shared_workers() -> Iterator[None]:
+    """Let the local ensembles run inside this block share one set of forked worker processes.
+
+    A caller that splits one job into several ensembles (the flip map records its runs in blocks)
+    otherwise forks a new pool per ensemble and waits for each pool to drain: measured on the
+    400 x 400 flip map in blocks of 5000 runs, 0.5-0.9 s more wall time (2.9-3.3 s against 2.1-2.4 s)
+    than one ensemble of all runs. The pool is forked by the first ensemble that needs processes (after
+    it built its integrator, which the workers inherit) and ended when the block exits; an error or
+    Ctrl-C ends it at once, as for an ensemble's own pool.
+    """
+    shared = _Shared()
+    token = _SHARED.set(shared)
+    try:
+        yield
+    finally:
+        _SHARED.reset(token)
+        if shared.pool is not None:
+            shared.pool.shutdown(wait=True)
 
 
 def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | None], None]) -> list[ChunkOut]:
@@ -101,7 +136,21 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
     outs_by: dict[int, ChunkOut] = {}
     failed: list[tuple[int, BaseException]] = []
     stop = threading.Event()
-    pool = _executor(threads, len(tasks), sum(len(t.x0) for t in tasks))
+    shared = _SHARED.get()
+    pool: Executor
+    if shared is not None and shared.pool is not None and shared.workers == threads:
+        pool = shared.pool  # already forked: also the right place for a small ensemble of the block
+    elif not _forked_processes(sum(len(t.x0) for t in tasks)):
+        pool = ThreadPoolExecutor(max_workers=min(threads, len(tasks)))
+    elif shared is None:
+        pool = _process_pool(min(threads, len(tasks)))
+    else:
+        if shared.pool is not None:  # forked for another worker count: no more use
+            shared.pool.shutdown(wait=True)
+        # One worker per thread asked for, not per task: later ensembles of the block may have more tasks.
+        shared.pool, shared.workers = _process_pool(threads), threads
+        pool = shared.pool
+    kept = shared is not None and pool is shared.pool
     try:
         if isinstance(pool, ThreadPoolExecutor):
             futures = {pool.submit(run_chunk, t, stop.is_set): t for t in tasks}
@@ -121,8 +170,11 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
         # cancelled, worker processes are ended; nothing waits for the rest of the ensemble.
         stop.set()
         shutdown_now(pool)
+        if kept:
+            shared.pool = None
         raise
-    pool.shutdown(wait=True)
+    if not kept:
+        pool.shutdown(wait=True)
     if failed:
         failed.sort(key=lambda e: e[0])
         idx = [i for i, _ in failed]

@@ -106,8 +106,8 @@ def ensemble(
         SIMD lanes of the batch integrator, in [1, 64]. Default
         :func:`~pendulab.ensemble.batch.default_batch_size`: the environment variable
         ``PENDULAB_SIMD_SIZE`` when set, else ``heyoka.recommended_simd_size()`` (2, 4 or 8
-        depending on the host). Results are identical (bitwise) for the same chunking and
-        ``batch_size``; another width or chunking changes them at the rounding level only.
+        depending on the host). Results are identical (bitwise) for any chunking at one
+        ``batch_size``; another width may change them at the rounding level.
     max_steps : int, default 1 000 000
         Step budget of each run (batch steps of its lane, checked every
         :data:`~pendulab.ensemble.batch.SLICE_STEPS` steps); a run over it ends with status

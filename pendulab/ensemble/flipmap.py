@@ -164,6 +164,7 @@ def flip_map(
         Ctrl-C; with ``checkpoint`` the finished blocks are kept.
     """
     from .batch import default_batch_size
+    from .chunks import shared_workers
     from .engine import ensemble
 
     t0 = time.perf_counter()
@@ -229,33 +230,34 @@ def flip_map(
     report = _overall_progress(progress, idx.size, n_resumed)
     deadline = None if max_wall_time is None else time.perf_counter() + float(max_wall_time)
     try:
-        for a, b in blocks:
-            if b <= a or done[a:b].all():
-                continue
-            left = None if deadline is None else max(deadline - time.perf_counter(), 1e-9)
-            base = int(done.sum())
-            res = ensemble(
-                model,
-                x_all[idx[a:b]],
-                float(t_max),
-                events=["flip"],
-                method="taylor",
-                client=client,
-                threads=threads,
-                chunk_size=chunk_size,
-                rtol=tol,
-                atol=tol,
-                progress=lambda d, _n, base=base: report(base + d),
-                batch_size=S,
-                max_steps=max_steps,
-                max_wall_time=left,
-            )
-            _check_status(res, x_all[idx[a:b]])
-            values[a:b] = np.asarray(res.event_times["flip"], dtype=float)
-            done[a:b] = True
-            if checkpoint is not None:
-                digests[f"{a}-{b}"] = _block_digest(identity, a, b, values)
-                _save_checkpoint(Path(checkpoint), identity, values, done, digests)
+        with shared_workers():  # one set of worker processes for every block
+            for a, b in blocks:
+                if b <= a or done[a:b].all():
+                    continue
+                left = None if deadline is None else max(deadline - time.perf_counter(), 1e-9)
+                base = int(done.sum())
+                res = ensemble(
+                    model,
+                    x_all[idx[a:b]],
+                    float(t_max),
+                    events=["flip"],
+                    method="taylor",
+                    client=client,
+                    threads=threads,
+                    chunk_size=chunk_size,
+                    rtol=tol,
+                    atol=tol,
+                    progress=lambda d, _n, base=base: report(base + d),
+                    batch_size=S,
+                    max_steps=max_steps,
+                    max_wall_time=left,
+                )
+                _check_status(res, x_all[idx[a:b]])
+                values[a:b] = np.asarray(res.event_times["flip"], dtype=float)
+                done[a:b] = True
+                if checkpoint is not None:
+                    digests[f"{a}-{b}"] = _block_digest(identity, a, b, values)
+                    _save_checkpoint(Path(checkpoint), identity, values, done, digests)
     finally:
         report(None)
     t_flip = np.full((n1, n2), np.nan)

@@ -65,6 +65,10 @@ def flip_map_grid(n: int, theta_range: Sequence[float] = (-math.pi, math.pi)) ->
     return centre + (np.arange(n) - (n - 1) / 2.0) * h
 
 
+#: IPOPT outcomes of a converged minimisation ("search direction too small": no step left at rounding level).
+_CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level", "Search_Direction_Becomes_Too_Small")
+
+
 @checked()
 def flip_energy_threshold(model: Any) -> float:
     """Least potential energy of a configuration in which a link has flipped.
@@ -72,7 +76,7 @@ def flip_energy_threshold(model: Any) -> float:
     ``V_flip = min { V(q) : |theta1| = pi or |theta2| = pi }``, minimised
     numerically over the free coordinates (the other angle, and the spring
     lengths of the elastic model) with the model's own potential-energy
-    function and its exact CasADi gradient, from several starts. A point
+    function and its exact CasADi derivatives (IPOPT), from several starts. A point
     released at rest with ``V0 < V_flip`` can never flip (energy never grows
     without torques). Rigid model: ``V_flip = -|a - b|`` with
     ``a = (m1 lc1 + m2 L1) g``, ``b = m2 lc2 g`` (``-g`` for unit parameters).
@@ -93,11 +97,15 @@ def flip_energy_threshold(model: Any) -> float:
         The minimisation did not converge.
     """
     import casadi as ca
-    from scipy.optimize import minimize
 
     check_model(model)
     nq, nx = model.nq, model.nx
     pot = model.functions["potential"]
+    rest = model.rest_state()
+    # IPOPT through CasADi (already loaded, exact Hessian), not SciPy's L-BFGS-B: importing scipy.optimize
+    # alone was 0.5 s of the flip-map command, whose whole budget is 2 s. The threshold must not be
+    # too high (points above the true one would be skipped), so the solve goes to 1e-14.
+    options = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes", "tol": 1e-14, "max_iter": 1000}}
     best = math.inf
     for flipped in (0, 1):
         free = [i for i in range(nq) if i != flipped]
@@ -107,23 +115,15 @@ def flip_energy_threshold(model: Any) -> float:
         for k, i in enumerate(free):
             q[i] = z[k]
         x = ca.vertcat(*q, ca.SX.zeros(nx - nq))
-        v = pot(x, model.p)
-        f = ca.Function("v_flip", [z], [v, ca.gradient(v, z)])
-        bounds = [(None, None) if i < 2 else (1e-6 * model.rest_state()[i], None) for i in free]
-        rest = model.rest_state()
+        solver = ca.nlpsol("v_flip", "ipopt", {"x": z, "f": pot(x, model.p)}, options)
+        lower = [-math.inf if i < 2 else 1e-6 * rest[i] for i in free]
         for other in (0.0, 0.5 * math.pi, math.pi, -0.5 * math.pi):
-            z0 = np.array([other if i < 2 else rest[i] for i in free])
-            res = minimize(
-                lambda zz, f=f: tuple(np.asarray(a, float).ravel() for a in f(zz)),
-                z0,
-                jac=True,
-                method="L-BFGS-B",
-                bounds=bounds,
-                options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 1000},
-            )
-            if not np.isfinite(res.fun):
-                raise RuntimeError(f"flip energy threshold: minimisation failed for link {flipped + 1}: {res.message}")
-            best = min(best, float(res.fun))
+            z0 = [other if i < 2 else rest[i] for i in free]
+            value = float(solver(x0=z0, lbx=lower)["f"])
+            status = solver.stats()["return_status"]
+            if not (math.isfinite(value) and status in _CONVERGED):
+                raise RuntimeError(f"flip energy threshold: minimisation failed for link {flipped + 1}: {status}")
+            best = min(best, value)
     return best
 
 

@@ -19,19 +19,31 @@ import inspect
 import time
 from collections.abc import Callable
 from functools import cache, lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK45, OdeSolver, Radau, solve_ivp
 
 from ..model.model import model_functions
 from ..model.pycode import to_python
 from .registry import MethodSpec, RunRequest, RunResult
 
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolver
+
 __all__ = ["METHOD_SPECS", "run_scipy", "python_rhs", "solver_options"]
 
 _IMPLICIT = {"Radau", "BDF", "LSODA"}
-_SOLVERS: dict[str, type[OdeSolver]] = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
+
+
+def _solver_class(name: str) -> type[OdeSolver]:
+    """SciPy's solver class ``name``; scipy.integrate is imported here, on first use, because the method
+    registry imports this module and everything that only looks a method up (e.g. the flip-map CLI's
+    ensemble) paid 0.4-0.8 s for it."""
+    import scipy.integrate
+
+    return getattr(scipy.integrate, name)
+
+
 #: Solver keywords the runner sets itself (or that would change the meaning of its exact Jacobian).
 _MANAGED = ("self", "fun", "t0", "y0", "t_bound", "rtol", "atol", "vectorized", "jac", "jac_sparsity", "lband", "uband")
 
@@ -50,7 +62,7 @@ def solver_options(name: str) -> tuple[str, ...]:
     tuple of str
         E.g. ``("first_step", "max_step")`` (LSODA adds ``min_step``).
     """
-    params = inspect.signature(_SOLVERS[name].__init__).parameters.values()
+    params = inspect.signature(_solver_class(name).__init__).parameters.values()
     keep = (p.name for p in params if p.kind is p.POSITIONAL_OR_KEYWORD or p.kind is p.KEYWORD_ONLY)
     return tuple(sorted(n for n in keep if n not in _MANAGED))
 
@@ -152,7 +164,9 @@ def run_scipy(req: RunRequest) -> RunResult:
     if req.max_step is not None:
         kwargs["max_step"] = req.max_step
     kwargs.update(req.options)
-    solver = _counting(_SOLVERS[plugin], req, counter)
+    from scipy.integrate import solve_ivp
+
+    solver = _counting(_solver_class(plugin), req, counter)
     budget = req.budget
 
     def solve(x_start: np.ndarray, u_const: np.ndarray, t_eval: np.ndarray) -> np.ndarray:

@@ -122,9 +122,12 @@ def test_threads_and_chunks_do_not_change_results(model):
     a = pl.ensemble(model, x0, 2.0, events=["flip"], threads=1)
     seen = []
     b = pl.ensemble(model, x0, 2.0, events=["flip"], threads=2, chunk_size=8, progress=lambda d, t: seen.append((d, t)))
-    # Another chunking puts runs in other SIMD lanes: rounding-level differences only.
-    np.testing.assert_allclose(a.x_final, b.x_final, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(a.event_times["flip"], b.event_times["flip"], rtol=0, atol=1e-12)
+    # Another chunking puts runs in other SIMD lanes, next to other runs: each lane's arithmetic (and its
+    # double-length time) is its own, so the results are the same to the last bit, at any batch width.
+    c = pl.ensemble(model, x0, 2.0, events=["flip"], threads=1, chunk_size=5, batch_size=2)
+    for other in (b, c):
+        np.testing.assert_array_equal(a.x_final, other.x_final)
+        np.testing.assert_array_equal(a.event_times["flip"], other.event_times["flip"])
     # The chunking is a pure function of (n, chunk_size, batch_size, threads), never of the host.
     assert b.stats["chunk_size"] == local_chunk_size(40, 8, b.stats["batch_size"], 2)
     assert seen[-1] == (40, 40) and b.stats["n_chunks"] == math.ceil(40 / b.stats["chunk_size"])
@@ -187,3 +190,27 @@ def test_fallback_method_without_events(model):
     np.testing.assert_allclose(a.x_final, b.x_final, atol=1e-7)  # CVODES at 1e-10 over 1 s
     with pytest.raises(ValueError, match="events need method='taylor'"):
         pl.ensemble(model, x0, 1.0, method="cvodes", events=["flip"])
+
+
+def test_shared_workers_run_ensembles_in_one_set_of_processes(model, monkeypatch):
+    from pendulab.ensemble import chunks
+
+    monkeypatch.setattr(chunks, "_PROCESS_MIN_RUNS", 8)  # worker processes for a test-sized ensemble
+    rng = np.random.default_rng(5)
+    x0 = np.zeros((40, 4))
+    x0[:, :2] = rng.uniform(-3, 3, (40, 2))
+    alone = pl.ensemble(model, x0, 2.0, events=["flip"], threads=2, chunk_size=8)
+    workers = []
+    with chunks.shared_workers():
+        first = pl.ensemble(model, x0, 2.0, events=["flip"], threads=2, chunk_size=8)
+        pool = chunks._SHARED.get().pool
+        workers.append(dict(pool._processes))
+        second = pl.ensemble(model, x0[::-1], 2.0, events=["flip"], threads=2, chunk_size=8)
+        workers.append(dict(chunks._SHARED.get().pool._processes))
+    assert len(workers[0]) == 2 and workers[0].keys() == workers[1].keys()  # the same two processes ran both
+    assert not any(p.is_alive() for p in workers[0].values())  # and ended with the block
+    assert chunks._SHARED.get() is None
+    # Same chunks in the same lanes: bitwise the results of an ensemble with its own pool.
+    np.testing.assert_array_equal(first.event_times["flip"], alone.event_times["flip"])
+    np.testing.assert_array_equal(second.event_times["flip"], alone.event_times["flip"][::-1])  # other lanes, same bits
+    assert np.isfinite(alone.event_times["flip"]).sum() >= 10  # the runs flip: the comparison has content

@@ -31,7 +31,7 @@ def small_map() -> FlipMap:
 
 def test_threshold_rigid_is_the_analytic_value() -> None:
     # V = -a cos(theta1) - b cos(theta2): V_flip = -|a - b|; unit parameters: a = 2g, b = g.
-    assert flip_energy_threshold(pl.rigid()) == pytest.approx(-G, abs=1e-9)  # L-BFGS-B to ~1e-12 J
+    assert flip_energy_threshold(pl.rigid()) == pytest.approx(-G, abs=1e-9)  # IPOPT to 1e-14: exact to rounding
     m = pl.rigid(m2=2.0, lc1=0.5)
     a, b = (1.0 * 0.5 + 2.0 * 1.0) * G, 2.0 * 1.0 * G
     assert flip_energy_threshold(m) == pytest.approx(-abs(a - b), abs=1e-9)

@@ -9,8 +9,8 @@ grid (13 intervals of 4 ms, then 7 of 64 ms), weights ``Q = 2 diag(1000, 1000, 1
 measured on the simulated hardware protocol (``benchmarks/results/v3_hardware.md``, "Goal-regulating MPC"):
 
 * the joint-rate bound is a soft quadratic penalty inside the box QP (:data:`RATE_LIMITS`: 16 rad/s pendubot,
-  14 acrobot; weight 1e3 per (rad/s)^2, the RTI's default; without it the regulation swings past the hardware's 20 rad/s limit reset: pendubot 0.65 against
-  0.73 with it, seed 0);
+  14 acrobot; weight 1e3 per (rad/s)^2, the RTI's default; without it the regulation swings past the hardware's
+  20 rad/s limit reset: pendubot 0.65 against 0.73 with it, seed 0);
 * the measured angles are compared with the goal moved by whole turns, at most as many as keep the target joint
   angle within :data:`ANGLE_LIMITS` (2 pi pendubot, pi acrobot): the nearest upright of a robot wound several
   turns lies past the hardware's 3.5 pi limit reset;
