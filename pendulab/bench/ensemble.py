@@ -382,7 +382,7 @@ def _agree(a: np.ndarray, b: np.ndarray) -> dict[str, Any]:
     }
 
 
-def time_cli(args: Sequence[str], out: str | Path) -> dict[str, Any]:
+def time_cli(args: Sequence[str], out: str | Path, repeats: int = 1) -> dict[str, Any]:
     """Wall time of one ``pendulab`` command in a fresh process (imports and compilation included).
 
     Parameters
@@ -391,14 +391,16 @@ def time_cli(args: Sequence[str], out: str | Path) -> dict[str, Any]:
         Arguments after ``pendulab``; ``--out OUT --no-progress`` is appended.
     out : str or Path
         Output directory.
+    repeats : int
+        Runs of the command with the disk cache on (medians reported, each run in a fresh process).
 
     Returns
     -------
     dict
-        ``command``, ``wall`` [s], ``cpu`` [s] (user + system of the command and its worker processes),
-        ``stdout`` (last line); ``cold_wall``, ``cold_cpu``: the same command with heyoka's on-disk JIT
-        cache disabled (every compilation done from scratch, as on a machine where that cache is missing or
-        not writable).
+        ``command``, ``wall`` [s] and ``cpu`` [s] (user + system of the command and its worker processes;
+        medians over ``repeats``), ``walls`` (every run), ``stdout`` (of the last run); ``cold_wall``,
+        ``cold_cpu``: the same command once with heyoka's on-disk JIT cache disabled (every compilation done
+        from scratch, as on a machine where that cache is missing or not writable).
 
     Raises
     ------
@@ -409,17 +411,23 @@ def time_cli(args: Sequence[str], out: str | Path) -> dict[str, Any]:
     # Disk cache off in the command's process; forked workers inherit the setting.
     no_cache = "import sys, heyoka; heyoka.llvm_state.set_diskcache_enabled(False); from pendulab._entry import run; run()"
     result: dict[str, Any] = {"command": "pendulab " + " ".join(args)}
-    for label, cmd in (("cold_", [sys.executable, "-c", no_cache, *tail]), ("", [sys.executable, "-m", "pendulab", *tail])):
+    runs = [("cold_", [sys.executable, "-c", no_cache, *tail])] + [("", [sys.executable, "-m", "pendulab", *tail])] * int(repeats)
+    walls: dict[str, list[float]] = {"cold_": [], "": []}
+    cpus: dict[str, list[float]] = {"cold_": [], "": []}
+    for label, cmd in runs:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"})
-        wall = time.perf_counter() - t0
+        walls[label].append(time.perf_counter() - t0)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         if proc.returncode:
             raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {proc.stderr.strip()[-300:]}")
-        result[f"{label}wall"] = wall
-        result[f"{label}cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        cpus[label].append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
         result[f"{label}stdout"] = proc.stdout.strip()
+    for label in walls:
+        result[f"{label}wall"] = float(np.median(walls[label]))
+        result[f"{label}cpu"] = float(np.median(cpus[label]))
+    result["walls"] = walls[""]
     return result
 
 
@@ -506,7 +514,14 @@ def ensemble_markdown(bench: EnsembleBench) -> str:
             )
     cli = bench.extra.get("cli")
     if cli:
-        lines += ["", "## Whole CLI command", "", f"`{cli['command']}` in a fresh process: **{cli['wall']:.1f} s** wall"]
+        runs = len(cli.get("walls", [cli["wall"]]))
+        lines += [
+            "",
+            "## Whole CLI command",
+            "",
+            f"`{cli['command']}` in a fresh process, median of {runs}: **{cli['wall']:.2f} s** wall "
+            f"({', '.join(f'{w:.2f}' for w in cli.get('walls', [cli['wall']]))})",
+        ]
         if "cpu" in cli:
             lines[-1] += (
                 f", {cli['cpu']:.1f} s of CPU (command and workers). With heyoka's on-disk JIT cache disabled (every "

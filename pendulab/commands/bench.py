@@ -347,7 +347,7 @@ def _ensemble(args: argparse.Namespace) -> int:
 
         with tempfile.TemporaryDirectory() as tmp:
             cli = ["ensemble", "flipmap", "--model", "rigid", "--grid", str(args.grid), "--t-max", f"{args.t_max:g}"]
-            bench.extra["cli"] = eb.time_cli(cli, tmp)
+            bench.extra["cli"] = eb.time_cli(cli, tmp, repeats=args.repeats)
     if args.elastic_grid:
         bench.extra["elastic"] = eb.elastic_rigid_ratio(args.elastic_grid, args.t_max, args.k or DEFAULT_K)
     text = eb.ensemble_markdown(bench)

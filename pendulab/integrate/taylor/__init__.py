@@ -5,8 +5,10 @@ model's CasADi SX Function ``rhs(x, u, p)`` instruction by instruction
 (``n_instructions``, ``instruction_id/input/output/constant``, ``casadi.OP_*``)
 and rebuilds it as heyoka expressions, simplifying on the way so that the
 compiled Taylor recursions are as short as those of hand-written equations
-(rigid model: 41 elementary operations against 40 for the textbook equations
-typed by hand; see ``benchmarks/results/fastpath.md``):
+(heyoka's decomposition: rigid model 40 elementary operations, as many as the
+textbook equations typed by hand; elastic model 51, as many as Newton's law
+projected on the springs, with as many products, divisions and sine/cosine
+pairs; see ``benchmarks/results/fastpath.md``):
 
 * **Parameter coefficients are hoisted.** Every value is kept as a linear
   combination of monomials (sorted products of state-dependent factors) with
@@ -17,20 +19,37 @@ typed by hand; see ``benchmarks/results/fastpath.md``):
   (:attr:`TaylorSystem.derived`); no value is compiled in, so
   ``model.with_params(...)`` never recompiles.
 * **Folding.** Numeric constants fold; products by 0 or 1 and sums with 0
-  vanish; like terms merge; coefficients that are identical (or opposite, or
-  in a small rational ratio) share one parameter or factor out of a sum.
+  vanish; like terms merge; identical coefficients share one parameter and
+  coefficients in a small rational ratio factor out of a sum. An opposite
+  coefficient is a parameter of its own: heyoka takes ``-par`` for a series,
+  so ``(-par) * x`` would be a product of two series, not a scaling.
   Coefficient identities are tested at three random parameter points (a
   non-zero algebraic function of the parameters does not vanish to 1e-11 at
   three random points), so identically-cancelling terms disappear.
 * **Trigonometric identities** between pairs of terms:
   ``sin(a)**2 + cos(a)**2 = 1`` (the mass matrix is built from it) and
-  ``cos(a)cos(b) + sin(a)sin(b) = cos(a - b)`` and its three siblings.
+  ``cos(a)cos(b) + sin(a)sin(b) = cos(a - b)`` and its three siblings. A
+  sine or cosine is keyed by its angle as a linear combination with a
+  canonical sign, so the angles these identities build (``(a - b) - a + a``)
+  are the atom of ``a - b``, ``cos(0) = 1``, ``sin(0) = 0`` and
+  ``sin(b - a) = -sin(a - b)``: one sine/cosine pair per distinct angle.
+* **Reciprocals cancel.** ``a / b`` is ``a`` times the reciprocal of each
+  factor of ``b``; monomials may hold a factor and its reciprocal, which
+  cancel when they multiply (``r * (x / r) = x``: the elastic model's 2 x 2
+  block inverses multiply and divide by the spring lengths). A monomial is
+  emitted as one quotient and a sum sharing a reciprocal is divided once, so
+  each equation of the elastic model divides once.
+* **Offsets.** ``a + b x`` whose coefficients satisfy ``a / b = r p``
+  identically (``p`` a model parameter, ``r`` a small rational) becomes
+  ``b (x + r p)``: the spring force ``k (r - L)`` keeps its stretch, exact
+  near rest length and one atom shared by every equation, instead of the
+  difference ``k r - k L`` of two large hoisted numbers.
 * **Expansion and re-factoring.** Monomial-times-sum products are expanded so
   that cancellations and identities show up; sums are rebuilt with the common
-  factors pulled out greedily (Horner). Expanding helps the rigid model and
-  hurts the elastic one, so the graph is walked with a few strategies and the
-  one with the lowest estimated Taylor cost (convolutions + a tenth of the
-  linear operations) is kept.
+  factors pulled out greedily (Horner; on a tie a state-dependent factor
+  before an input). Expanding may also duplicate shared sums, so the graph is
+  walked with a few strategies and the one with the lowest estimated Taylor
+  cost (convolutions + a tenth of the linear operations) is kept.
 * **Specialisation on structural zeros.** Parameters whose value is exactly 0
   for this model (dampers ``b1, b2, c1, c2``, inertias ``I1, I2``; any zero
   parameter) and inputs that are identically zero over the run enter as the

@@ -136,8 +136,8 @@ class _Strategy:
         or cosine, none). Expanding exposes cancellations and trigonometric identities;
         it also duplicates shared sums.
     reciprocal : bool
-        ``a / b`` as ``a * (1 / b)`` (one reciprocal shared by every use; expands like a
-        product) rather than one quotient per use.
+        ``a / b`` as ``a`` times the reciprocal of each factor of ``b`` (it expands like a
+        product and cancels against that factor) rather than one quotient atom per use.
     """
 
     expand: str
@@ -150,14 +150,24 @@ _STRATEGIES = (_Strategy("all", True), _Strategy("trig", False), _Strategy("none
 class _Builder:
     """Walks one SX Function; keeps the atoms, hoisted coefficients and a cost estimate."""
 
-    def __init__(self, hy: Any, par_offset: int, strategy: _Strategy) -> None:
+    def __init__(self, hy: Any, par_offset: int, strategy: _Strategy, params: Sequence[_Coef] = ()) -> None:
         self.hy = hy
         self.par_offset = par_offset
         self.strategy = strategy
+        self.params = tuple(params)  # the model parameters as coefficients (offsets recognised by _offsets)
         self.atoms: list[Any] = []  # id -> heyoka expression (a factor that is not a product)
         self.atom_ids: dict[Any, int] = {}
-        self.trig: dict[int, tuple[str, Any]] = {}  # atom id -> ("sin"|"cos", argument)
-        self.trig_ids: dict[tuple[str, Any], int] = {}
+        # Sines and cosines are keyed by their angle as a canonical linear combination (not by the heyoka
+        # expression of the argument): the angle-sum identities build angles such as (a - b) - a + a, which
+        # must be the atom of a - b, and cos(0), sin(-a) must not become atoms of their own.
+        self.trig: dict[int, tuple[str, tuple]] = {}  # atom id -> ("sin"|"cos", angle key)
+        self.trig_ids: dict[tuple[str, tuple], int] = {}
+        self.angles: dict[tuple, _Lin] = {}  # angle key -> angle (normalised sign)
+        self.inputs: set[int] = set()  # ids of the input atoms (runtime parameters par[0:nu])
+        # Reciprocals: atom id <-> id of its reciprocal atom (both ways). A monomial may hold both
+        # (Laurent monomials); the pair cancels when monomials multiply (``r * (x / r) = x``).
+        self.inverse: dict[int, int] = {}
+        self.reciprocals: set[int] = set()  # ids of the reciprocal atoms (never emitted on their own)
         self.coefs: list[_Coef] = []  # hoisted coefficient k -> par[par_offset + k]
         self.mono_cache: dict[tuple[int, ...], Any] = {}
         self.lin_cache: dict[tuple, Any] = {}
@@ -194,29 +204,72 @@ class _Builder:
             self.atoms.append(expr)
         return self.atom_ids[expr]
 
-    def trig_atom(self, name: str, arg: Any) -> int:
-        key = (name, arg)
+    def input_atom(self, i: int) -> int:
+        """The atom of input ``u[i]``, the runtime parameter ``par[i]``."""
+        f = self.atom(self.hy.par[i])
+        self.inputs.add(f)
+        return f
+
+    def trig_atom(self, name: str, angle: _Lin) -> _Lin:
+        """``sin`` or ``cos`` of a state-dependent or zero ``angle``, as a linear combination.
+
+        The angle is brought to a canonical sign (its first monomial's coefficient positive; then
+        ``sin(-a) = -sin(a)``, ``cos(-a) = cos(a)``) and keyed by its monomials and coefficient values,
+        so equal angles built in different ways share one atom (one sine/cosine pair in heyoka).
+        """
+        if self.param_only(angle):
+            sx_fn, np_fn = (ca.sin, np.sin) if name == "sin" else (ca.cos, np.cos)
+            return self.lin(self.value(angle).apply(sx_fn, np_fn))
+        items = _sorted_items(angle)
+        lead = next(c for m, c in items if m)
+        sign = 1.0
+        if lead.v[0] < 0.0:
+            angle = self.scale(angle, _Coef.const(-1.0))
+            items = _sorted_items(angle)
+            sign = -1.0 if name == "sin" else 1.0
+        akey = tuple((m, c.key()) for m, c in items)
+        self.angles.setdefault(akey, angle)
+        key = (name, akey)
         if key not in self.trig_ids:
+            arg = self.materialize(angle)
             i = self.atom(self.node(getattr(self.hy, name)(arg), _CONV, arg))
             self.trig[i] = key
             self.trig_ids[key] = i
-        return self.trig_ids[key]
+        return {(self.trig_ids[key],): _Coef.const(sign)}
 
     def coef_expr(self, c: _Coef) -> Any:
-        """A coefficient as a heyoka leaf: a number, or a hoisted runtime parameter (shared when identical)."""
+        """A coefficient as a heyoka leaf: a number, or a hoisted runtime parameter (shared when identical).
+
+        An opposite coefficient gets a parameter of its own: heyoka takes ``-par`` for a series, so
+        ``(-par) * x`` would be a product of two series (O(order^2) per step) instead of a scaling.
+        """
         if c.sx.is_constant():
             return self.hy.expression(float(c.sx))
         for k, old in enumerate(self.coefs):
-            r = c.ratio(old)
-            if r == 1.0:
+            if c.ratio(old) == 1.0:
                 return self.hy.par[self.par_offset + k]
-            if r == -1.0:
-                return self.node(-self.hy.par[self.par_offset + k], _LINEAR)
         self.coefs.append(c)
         return self.hy.par[self.par_offset + len(self.coefs) - 1]
 
     # -- heyoka expressions of monomials and linear combinations ---------------------
     def monomial(self, mono: tuple[int, ...]) -> Any:
+        """A monomial as one heyoka expression: the product of its atoms over the product of its reciprocals' atoms.
+
+        heyoka rewrites ``x * (1 / y)`` as ``x / y``, so a reciprocal atom costs one division wherever it
+        multiplies; dividing once by the whole denominator costs one division per monomial.
+        """
+        if mono not in self.mono_cache:
+            num = tuple(f for f in mono if f not in self.reciprocals)
+            den = tuple(sorted(self.inverse[f] for f in mono if f in self.reciprocals))
+            if not den:
+                self.mono_cache[mono] = self._product(num)
+            else:
+                top, bottom = self._product(num) if num else self.hy.expression(1.0), self._product(den)
+                self.mono_cache[mono] = self.node(top / bottom, _CONV, top, bottom)
+        return self.mono_cache[mono]
+
+    def _product(self, mono: tuple[int, ...]) -> Any:
+        """A product of (non-reciprocal) atoms, ``mono`` sorted and non-empty."""
         if mono not in self.mono_cache:
             # Left fold in sorted order (heyoka's CSE shares common prefixes); x*x for squares.
             out = None
@@ -236,6 +289,11 @@ class _Builder:
     def term(self, mono: tuple[int, ...], c: _Coef) -> Any:
         if not mono:
             return self.coef_expr(c)
+        if all(f in self.reciprocals for f in mono) and not (c.sx.is_one() or c.sx.is_minus_one()):
+            # c / d rather than c * (1 / d): heyoka would make the latter two operations.
+            den = self._product(tuple(sorted(self.inverse[f] for f in mono)))
+            top = self.coef_expr(c)
+            return self.node(top / den, _CONV, top, den)
         m = self.monomial(mono)
         if c.sx.is_one():
             return m
@@ -256,7 +314,32 @@ class _Builder:
             self.lin_cache[key] = self._factor(items)
         return self.lin_cache[key]
 
+    def _offsets(self, items: list[tuple[tuple[int, ...], _Coef]]) -> list[tuple[tuple[int, ...], _Coef]]:
+        """``a + b x -> b (x + r p)`` when ``a / b`` is identically a small rational ``r`` times a parameter ``p``.
+
+        Hoisting makes a spring force ``k (r - L)`` the sum ``k r - k L`` of two large numbers, whose
+        difference loses digits (and costs two operations); ``x - L`` is exact near rest length and one
+        shared atom. ``x`` is a single atom, ``a`` the constant term, ``b`` not a number (a numeric ``b`` gains nothing).
+        """
+        const = next((c for m, c in items if not m), None)
+        if const is None or const.sx.is_constant() or not self.params:
+            return items
+        for k, (m, b) in enumerate(items):
+            if len(m) != 1 or m[0] in self.reciprocals or b.sx.is_constant():
+                continue
+            q = const / b
+            for par in self.params:
+                r = q.ratio(par)
+                if r is not None:
+                    # The offset's coefficient is r * p itself (exact), not the rounded quotient a / b.
+                    shifted = self.materialize({m: _ONE, (): _Coef.const(r) * par})
+                    out = {mi: c for i, (mi, c) in enumerate(items) if i != k and mi}
+                    self.accumulate(out, (self.atom(shifted),), b)
+                    return _sorted_items(out)
+        return items
+
     def _factor(self, items: list[tuple[tuple[int, ...], _Coef]]) -> Any:
+        items = self._offsets(items)
         # A common coefficient (up to small rational ratios): c * (sum of r_i m_i).
         if len(items) > 1 and not all(c.sx.is_constant() for _, c in items):
             c0 = items[-1][1]
@@ -269,7 +352,9 @@ class _Builder:
         for m, _ in items:
             for f in set(m):
                 counts[f] = counts.get(f, 0) + 1
-        best = max(counts, key=lambda f: (counts[f], -f), default=None)
+        # Ties go to a state-dependent atom: pulling out an input (a runtime parameter) saves a
+        # scaling, pulling out a state-dependent factor saves a product or a division.
+        best = max(counts, key=lambda f: (counts[f], f not in self.inputs, -f), default=None)
         if best is not None and counts[best] > 1:
             inside, outside = [], []
             for m, c in items:
@@ -279,7 +364,11 @@ class _Builder:
                 else:
                     outside.append((m, c))
             inner = self._factor(inside)
-            product = self.mul_expr(self.atoms[best], inner, _CONV if any(m for m, _ in inside) else _LINEAR)
+            if best in self.reciprocals:  # (sum) / d: one division, whatever the sum
+                orig = self.atoms[self.inverse[best]]
+                product = self.node(inner / orig, _CONV, inner, orig)
+            else:
+                product = self.mul_expr(self.atoms[best], inner, _CONV if any(m for m, _ in inside) else _LINEAR)
             return product if not outside else self.sum_expr([product, self._factor(outside)])
         return self.sum_expr([self.term(m, c) for m, c in items])
 
@@ -357,14 +446,6 @@ class _Builder:
         idx = [k for k, f in enumerate(m) if f in self.trig]
         return [(i, j) for n, i in enumerate(idx) for j in idx[n + 1 :] if m[i] != m[j] or j == i + 1]
 
-    @staticmethod
-    def _ordered(x: Any, y: Any) -> tuple[Any, Any, bool]:
-        """``(x, y)`` in a canonical order (so that ``cos(a - b)`` and ``cos(b - a)`` are one atom)."""
-        return (x, y, False) if str(x) <= str(y) else (y, x, True)
-
-    def _angle(self, x: Any, y: Any, sign: float) -> Any:
-        return self.node(x - y if sign < 0 else x + y, _LINEAR, x, y)
-
     def _fold_pair(self, a: _Lin, m: tuple[int, ...], c: _Coef, i: int, j: int) -> bool:
         (fa, xa), (fb, xb) = self.trig[m[i]], self.trig[m[j]]
         pa = self.trig_ids.get((_OTHER_TRIG[fa], xa))
@@ -382,19 +463,47 @@ class _Builder:
         if xa == xb:  # m and partner are s_a s_a and c_a c_a
             if r != 1.0:
                 return False
-            new, coef = rest, c
-        elif fa == fb:  # c_cos c_a c_b + c_sin s_a s_b with c_sin = r c_cos: c_cos cos(a - r b)
-            x, y, _ = self._ordered(xa, xb)
-            atom = self.trig_atom("cos", self._angle(x, y, -r))
-            new, coef = tuple(sorted((*rest, atom))), (c if fa == "cos" else cp)
+            del a[m], a[partner]
+            self.accumulate(a, rest, c)
+            return True
+        angle_a, angle_b = self.angles[xa], self.angles[xb]
+        if fa == fb:  # c_cos c_a c_b + c_sin s_a s_b with c_sin = r c_cos: c_cos cos(a - r b)
+            new, coef = self.trig_atom("cos", self._angle_sum(angle_a, angle_b, -r)), (c if fa == "cos" else cp)
         else:  # c s_u c_w + r c c_u s_w = c sin(u + r w)
-            u, w = (xa, xb) if fa == "sin" else (xb, xa)
-            x, y, swapped = self._ordered(u, w)
-            atom = self.trig_atom("sin", self._angle(x, y, r))
-            new, coef = tuple(sorted((*rest, atom))), (-c if swapped and r == -1.0 else c)
+            u, w = (angle_a, angle_b) if fa == "sin" else (angle_b, angle_a)
+            new, coef = self.trig_atom("sin", self._angle_sum(u, w, r)), c
         del a[m], a[partner]
-        self.accumulate(a, new, coef)
+        for mt, ct in new.items():  # one trig atom (or a constant when the angle vanishes)
+            self.accumulate(a, tuple(sorted((*rest, *mt))), coef * ct)
         return True
+
+    def _angle_sum(self, x: _Lin, y: _Lin, sign: float) -> _Lin:
+        """``x + sign * y`` for angles (plain sum: no trigonometric folding inside an argument)."""
+        out = dict(x)
+        for m, v in y.items():
+            self.accumulate(out, m, v if sign > 0 else -v)
+        return out
+
+    def join(self, ma: tuple[int, ...], mb: tuple[int, ...]) -> tuple[int, ...]:
+        """The monomial ``ma * mb``: sorted, each atom cancelled against its reciprocal (``r * (1 / r) = 1``)."""
+        m = tuple(sorted(ma + mb))
+        if not self.reciprocals or not any(f in self.reciprocals for f in m):
+            return m
+        out = list(m)
+        for f in set(m) & self.reciprocals:
+            for _ in range(min(out.count(f), out.count(self.inverse[f]))):
+                out.remove(f)
+                out.remove(self.inverse[f])
+        return tuple(out)
+
+    def reciprocal(self, f: int) -> int:
+        """The atom ``1 / f`` (``f`` itself when ``f`` is a reciprocal's: ``1 / (1 / x) = x``)."""
+        if f not in self.inverse:
+            # Never emitted on its own (monomial, term and _factor divide by the atom instead): no cost.
+            i = self.atom(self.node(self.hy.expression(1.0) / self.atoms[f], 0.0))
+            self.inverse[f], self.inverse[i] = i, f
+            self.reciprocals.add(i)
+        return self.inverse[f]
 
     def mul(self, a: _Lin, b: _Lin) -> _Lin:
         if not a or not b:
@@ -408,11 +517,11 @@ class _Builder:
             out: _Lin = {}
             for ma, c_a in a.items():
                 for mb, c_b in b.items():
-                    self.accumulate(out, tuple(sorted(ma + mb)), c_a * c_b)
+                    self.accumulate(out, self.join(ma, mb), c_a * c_b)
             return self.fold_trig(out)
         ma, c_a = self.as_term(a)
         mb, c_b = self.as_term(b)
-        return self.single(tuple(sorted(ma + mb)), c_a * c_b)
+        return self.single(self.join(ma, mb), c_a * c_b)
 
     def _expand(self, a: _Lin, b: _Lin) -> bool:
         small, big = (a, b) if len(a) <= len(b) else (b, a)
@@ -428,10 +537,10 @@ class _Builder:
         if a == b:
             return {(): _ONE}
         mb, c_b = self.as_term(b)
-        den = self.monomial(mb)
         if self.strategy.reciprocal:
-            inv = self.atom(self.node(self.hy.expression(1.0) / den, _CONV, den))
-            return self.mul(a, {(inv,): _ONE / c_b})
+            # One reciprocal atom per factor of the denominator, so that it cancels against that factor.
+            return self.mul(a, {tuple(sorted(self.reciprocal(f) for f in mb)): _ONE / c_b})
+        den = self.monomial(mb)
         num, c_a = ((), self.value(a)) if self.param_only(a) else self.as_term(a)
         top = self.monomial(num) if num else self.hy.expression(1.0)
         return self.single((self.atom(self.node(top / den, _CONV, top, den)),), c_a / c_b)
@@ -444,9 +553,9 @@ class _Builder:
             raise NotImplementedError(
                 f"translate: CasADi operation {_op_name(op)!r} of a state-dependent value has no heyoka counterpart"
             )
-        arg = self.materialize(a)
         if name in _OTHER_TRIG:
-            return {(self.trig_atom(name, arg),): _ONE}
+            return self.trig_atom(name, a)
+        arg = self.materialize(a)
         return {(self.atom(self.node(getattr(self.hy, name)(arg), cost * _CONV, arg)),): _ONE}
 
     def power(self, a: _Lin, b: _Lin) -> _Lin:

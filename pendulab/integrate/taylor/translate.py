@@ -149,10 +149,12 @@ def translate(
     p_sym = ca.SX.sym("p", npar)
     # Log-uniform sample points in [0.5, 2]: the parameters are positive physical quantities.
     samples = np.exp(np.random.default_rng(20240611).uniform(np.log(0.5), np.log(2.0), (npar, _N_SAMPLES)))
+    zero_p, zero_u = {int(i) for i in zero_params}, {int(i) for i in zero_inputs}
+    params = [_Coef(p_sym[i], samples[i], samples[i]) for i in range(npar) if i not in zero_p]
     best: tuple[float, _Builder, list[Any]] | None = None
     for strategy in _STRATEGIES:
-        b = _Builder(hy, nu, strategy)
-        rhs = _walk(f, b, xs, p_sym, samples, {int(i) for i in zero_params}, {int(i) for i in zero_inputs})
+        b = _Builder(hy, nu, strategy, params)
+        rhs = _walk(f, b, xs, p_sym, samples, zero_p, zero_u)
         cost = b.cost(rhs)
         if best is None or cost < best[0]:
             best = (cost, b, rhs)
@@ -176,7 +178,7 @@ def _walk(
     nu, npar = f.nnz_in(1), f.nnz_in(2)
     leaves: list[list[_Lin]] = [
         [{(b.atom(v),): _ONE} for v in xs],
-        [{} if i in zero_u else {(b.atom(hy.par[i]),): _ONE} for i in range(nu)],
+        [{} if i in zero_u else {(b.input_atom(i),): _ONE} for i in range(nu)],
         [{} if i in zero_p else {(): _Coef(p_sym[i], samples[i], samples[i])} for i in range(npar)],
     ]
     work: dict[int, _Lin] = {}
