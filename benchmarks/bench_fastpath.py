@@ -1,6 +1,6 @@
 """``method="taylor"`` against a hand-written heyoka system and the other fast methods.
 
-    python benchmarks/bench_fastpath.py [--repeats N] [--out benchmarks/results/fastpath.md]
+    python benchmarks/bench_fastpath.py [--repeats N] [--inner K] [--out benchmarks/results/fastpath.md]
 
 Cases: rigid model with default parameters (m = 1 kg, L = 1 m, g = 9.81 m/s^2),
 theta1 = theta2 = 2 rad at rest, 10 s, output every 10 ms (the chaotic case); elastic model
@@ -15,8 +15,9 @@ argument checks, integration, outputs on the grid), SciPy DOP853 at
 rtol = atol = 1e-13, CVODES Adams at 1e-14 and CVODES BDF at 1e-12.
 
 Timing: every run once as a warm-up (JIT compilation, integrator construction),
-then ``--repeats`` rounds in which every run is timed once, interleaved so that
-all see the same machine load; medians. Errors: against the stored 32-digit
+then ``--repeats`` rounds in which every run is timed once (``--inner`` calls in a row, their mean: one call
+of ~0.5 ms is at the mercy of a single scheduler tick on a shared machine), interleaved so that all see the same
+machine load; medians. Errors: against the stored 32-digit
 reference ``rigid_chaotic_10s`` (Gragg-Bulirsch-Stoer in mpmath), at t = 10 s
 and as the max over the reference grid (every 50 ms).
 """
@@ -145,10 +146,12 @@ def simulate_run(model: pl.Model, method: str, tol: float, x0: np.ndarray = X0) 
     return run
 
 
-def timed(fn: Callable[[], object]) -> float:
+def timed(fn: Callable[[], object], calls: int = 1) -> float:
+    """Mean wall time [s] of ``calls`` calls in a row."""
     t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
+    for _ in range(calls):
+        fn()
+    return (time.perf_counter() - t0) / calls
 
 
 def machine_info() -> str:
@@ -163,10 +166,11 @@ def machine_info() -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=7, help="timed rounds (median), default 7")
+    ap.add_argument("--inner", type=int, default=10, help="calls per timed sample (their mean), default 10")
     ap.add_argument("--out", type=Path, default=OUT, help=f"Markdown output (default {OUT})")
     args = ap.parse_args(argv)
-    if args.repeats < 1:
-        ap.error("--repeats must be >= 1")
+    if args.repeats < 1 or args.inner < 1:
+        ap.error("--repeats and --inner must be >= 1")
     info = machine_info()
     model = pl.rigid()
     elastic = pl.elastic()
@@ -237,13 +241,15 @@ def main(argv: list[str] | None = None) -> int:
             bar.update()
         for _ in range(args.repeats):
             for r in every:
+                integ = []
                 t0 = time.perf_counter()
-                _, _, integ = r.fn()
-                r.times.append(time.perf_counter() - t0)
-                r.integ.append(integ if integ is not None else r.times[-1])
+                for _ in range(args.inner):
+                    integ.append(r.fn()[2])
+                r.times.append((time.perf_counter() - t0) / args.inner)
+                r.integ.append(statistics.fmean(integ) if None not in integ else r.times[-1])
                 bar.update()
-            parts["compiled"].append(timed(lambda: taylor_outputs.grid_outputs(model, tr.x, tr.u)))
-            parts["numpy"].append(timed(lambda: model.outputs(tr.x, tr.u)))
+            parts["compiled"].append(timed(lambda: taylor_outputs.grid_outputs(model, tr.x, tr.u), args.inner))
+            parts["numpy"].append(timed(lambda: model.outputs(tr.x, tr.u), args.inner))
 
     # Elementary operations of each Taylor system (heyoka's decomposition, tol 1e-15): what a step costs.
     ops = {
@@ -255,7 +261,8 @@ def main(argv: list[str] | None = None) -> int:
         for kind, sys_ in (("rigid", system), ("elastic", system_el))
     }
     t_parts = {k: statistics.median(v) for k, v in parts.items()}
-    text = render(runs, runs_el, ref, stride, (rhs_diff, rhs_diff_el), first_call, t_parts, info, args.repeats, (ops, ops_anchor))
+    timing = (args.repeats, args.inner)
+    text = render(runs, runs_el, ref, stride, (rhs_diff, rhs_diff_el), first_call, t_parts, info, timing, (ops, ops_anchor))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)
     print(text)
@@ -288,10 +295,11 @@ def render(
     first_call: dict,
     t_parts: dict,
     info: str,
-    repeats: int,
+    timing: tuple[int, int],
     op_counts: tuple[dict, dict],
 ) -> str:
     ops, ops_anchor = op_counts
+    repeats, inner = timing
     err = {id(r): (float(np.max(np.abs(r.x[-1] - ref.x[-1]))), float(np.max(np.abs(r.x[::stride] - ref.x)))) for r in runs}
     rows, hand = _table(runs, err)
     rows_el, hand_el = _table(runs_el, None)
@@ -363,13 +371,14 @@ def render(
     date = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return f"""# Fast path: `method="taylor"` against a hand-written heyoka system
 
-Generated by `python benchmarks/bench_fastpath.py --repeats {repeats}` on {date}.
+Generated by `python benchmarks/bench_fastpath.py --repeats {repeats} --inner {inner}` on {date}.
 
 Machine: {info}. The machine is shared with other jobs: absolute times are noisy; the
 ratios are measured in the same run (interleaved rounds).
 
 **Timing.** Median of {repeats} interleaved rounds after a warm-up round (every run of both cases timed once per
-round). *Time* is the whole call (`pl.simulate`: argument checks, integration, outputs on the grid);
+round, as the mean of {inner} calls in a row).
+*Time* is the whole call (`pl.simulate`: argument checks, integration, outputs on the grid);
 *integration* is the runner alone (`Trajectory.stats["wall_time"]`). Ratios divide *time*. The anchors are
 `propagate_grid` of a hand-written heyoka system over the same output grid (no Python around it).
 
@@ -397,8 +406,11 @@ The translated system has {ops["elastic"]} elementary operations (heyoka's decom
 {ops_anchor["elastic"]}. pendulab derives it from Lagrange's equations with the mass matrix factored through the
 bobs' Jacobian (`pendulab.model.lagrange.point_mass_accelerations`: two 2 x 2 block substitutions); the
 generic solve with the 4 x 4 mass matrix gave 307 operations and 10.66× the anchor's whole-call time (recorded
-2026-11-28 07:23 UTC). What is left: the model keeps its parameters symbolic (the anchor folds m = 1 kg, k and g
-into numbers) and cannot use sin² + cos² = 1 (the anchor's projection on the spring does).
+2026-11-28 07:23 UTC); then 130 operations (4.66×) until the translator (`pendulab.integrate.taylor.algebra`)
+learned to key each sine/cosine by its angle as a canonical linear combination (one pair per distinct angle), to
+cancel a reciprocal against its factor (the block inverses' `r * (x / r)`), to keep a spring force as
+`k (r - L)` and to give an opposite coefficient its own parameter (heyoka treats `-par` as a series): 130 -> 51,
+with as many products, divisions and sine/cosine pairs as the anchor (`tests/integrate/test_taylor_translate.py`).
 
 {header} final difference | steps |
 |---|---|---:|---:|---:|---:|---:|---:|

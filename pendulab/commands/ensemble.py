@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -120,7 +119,6 @@ def run_flipmap(args: argparse.Namespace) -> int:
     from ..ensemble.flipmap import plot_flip_map, plot_flip_map_compare
 
     t0 = time.perf_counter()
-    _import_matplotlib_meanwhile()
     main, partial = _compute(args.model, k, args, grid, t_max, rtol, threads, out)
     written = [main.save_npz(out / "flipmap.npz")]
     partials = [partial]
@@ -172,23 +170,6 @@ def run_flipmap(args: argparse.Namespace) -> int:
         )
     print(f"total {time.perf_counter() - t0:.2f} s; wrote " + ", ".join(str(p) for p in written))
     return 0
-
-
-def _import_matplotlib_meanwhile() -> None:
-    """Import matplotlib in a background thread while the maps are integrated.
-
-    The integration runs in worker processes while this process waits; importing matplotlib after it
-    put ~0.5 s on the path of a command whose target is 2 s. A failed import here is silent: the
-    figure step imports it again and reports the error there.
-    """
-
-    def load() -> None:
-        try:
-            import matplotlib.pyplot  # noqa: F401
-        except Exception:  # noqa: S110 -- reported by the figure step
-            pass
-
-    threading.Thread(target=load, name="pendulab-import-matplotlib", daemon=True).start()
 
 
 def _close(fig: Any) -> None:
