@@ -117,13 +117,16 @@ def flip_energy_threshold(model: Any) -> float:
         x = ca.vertcat(*q, ca.SX.zeros(nx - nq))
         solver = ca.nlpsol("v_flip", "ipopt", {"x": z, "f": pot(x, model.p)}, options)
         lower = [-math.inf if i < 2 else 1e-6 * rest[i] for i in free]
+        converged, statuses = [], []
         for other in (0.0, 0.5 * math.pi, math.pi, -0.5 * math.pi):
             z0 = [other if i < 2 else rest[i] for i in free]
             value = float(solver(x0=z0, lbx=lower)["f"])
-            status = solver.stats()["return_status"]
-            if not (math.isfinite(value) and status in _CONVERGED):
-                raise RuntimeError(f"flip energy threshold: minimisation failed for link {flipped + 1}: {status}")
-            best = min(best, value)
+            statuses.append(solver.stats()["return_status"])
+            if math.isfinite(value) and statuses[-1] in _CONVERGED:
+                converged.append(value)
+        if not converged:  # every start failed: no threshold to trust
+            raise RuntimeError(f"flip energy threshold: minimisation failed for link {flipped + 1}: {sorted(set(statuses))}")
+        best = min(best, *converged)
     return best
 
 
