@@ -14,9 +14,12 @@ The rule (backed by the work-precision study, ``docs/benchmarks.md``):
    at 1e-12 omega_max > 4800 rad/s: tight tolerances make explicit steps small anyway.
 2. **Not stiff:** ``taylor`` for the rigid model when heyoka is installed
    (10 s of chaos to 1e-9 in under a millisecond; its first run per tolerance
-   compiles for ~0.2 s); otherwise, and for the elastic model (whose Taylor
-   system takes seconds to compile per tolerance), ``compiled-dopri5`` when a C
-   compiler is available (built once per machine, cached on disk);
+   compiles for ~0.2 s); otherwise, and for the elastic model, ``compiled-dopri5``
+   when a C compiler is available (built once per machine, cached on disk). The
+   elastic Taylor system took seconds to compile per tolerance when this rule was
+   measured; since the translator emits 51 operations (was 130), its first run
+   compiles in 0.3-0.5 s without heyoka's disk cache (2 s runs, 1e-8 / 1e-12), so
+   the elastic choice is due for a new work-precision run;
    otherwise ``cvodes-adams``.
 3. **Stiff, but the fast modes excited by the start:** the non-stiff choice of 2.
    An implicit method steps over a fast mode only when it is not there: an
