@@ -420,7 +420,7 @@ _DECLARED: tuple[Input, ...] = (
     _i("runs_per_level", "runs per level of each stochastic category of a scorecard", 1, 5000),
     _i("hand_runs", "runs of the hand-written reference loop", 1, 10**12, budget="runs"),
     _i("grid", "points per axis of a square grid of initial states", 1, 20_000),
-    _i("elastic_grid", "points per axis of the elastic grid", 1, 4000),
+    _i("elastic_grid", "points per axis of the elastic grid (0: no elastic timing)", 0, 4000),
     _r("t_max", "longest time a run of an ensemble lasts", "s", 0.0, MAX_HORIZON, open_low=True),
     _i("threads", "threads of a local ensemble", 1, 256),
     _i("workers", "worker processes (each a forked process)", 1, 256),

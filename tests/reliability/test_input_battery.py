@@ -18,6 +18,7 @@ import importlib
 import inspect
 import math
 import os
+import re
 import runpy
 from pathlib import Path
 from typing import Any
@@ -140,6 +141,18 @@ def test_every_option_default_satisfies_its_declaration():
         for value in defaults:
             if value is not None:
                 spec.check(str(value) if spec.kind not in ("real", "integer") else value, action.dest), command
+
+
+def test_every_special_value_a_help_text_promises_satisfies_its_declaration():
+    # Found: `bench ensemble --elastic-grid` said "(0: skip; default 100)" while its declaration refused 0. A value
+    # an option's help names with a meaning ("V: what it does") must pass the option's own check.
+    promised = []
+    for command, action, spec in cli_surface():
+        for text in re.findall(r"(?:^|[(;,] ?)(-?\d[\d.e+-]*): ", action.help or ""):
+            value = int(text) if spec.kind == "integer" else float(text) if spec.kind == "real" else text
+            spec.check(value, f"{command} {action.option_strings[0]}")
+            promised.append((command, action.dest, value))
+    assert ("bench ensemble", "elastic_grid", 0) in promised  # the walk finds them
 
 
 def test_cli_battery(tmp_path, monkeypatch, record_property):
