@@ -116,8 +116,9 @@ def shutdown_now(pool: Executor) -> None:
     pool : concurrent.futures.Executor
         A process or thread pool.
     """
-    # The worker list must be read before shutdown(), which forgets it.
+    # The worker list and the pool's manager thread must be read before shutdown(), which forgets them.
     procs = list((getattr(pool, "_processes", None) or {}).values()) if isinstance(pool, ProcessPoolExecutor) else []
+    manager = getattr(pool, "_executor_manager_thread", None) if isinstance(pool, ProcessPoolExecutor) else None
     pool.shutdown(wait=False, cancel_futures=True)
     if procs:
         for p in procs:
@@ -128,6 +129,11 @@ def shutdown_now(pool: Executor) -> None:
             if p.is_alive():  # a worker that a loaded machine has not let handle SIGTERM yet: no worker outlives the pool
                 p.kill()
                 p.join(timeout=5.0)
+    if manager is not None:
+        # With its workers gone the manager thread ends and closes its wake-up pipe. Left running, it could close
+        # that pipe while the interpreter's exit hook writes to it (CPython 3.11's _python_exit does so without a
+        # lock; gh-125451 added one in 3.12): "OSError: [Errno 9] Bad file descriptor" at exit after a Ctrl-C.
+        manager.join(timeout=5.0)
 
 
 @contextlib.contextmanager

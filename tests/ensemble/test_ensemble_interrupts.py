@@ -159,3 +159,23 @@ def test_long_lyapunov_estimate_stops_on_ctrl_c() -> None:
         signal.signal(signal.SIGALRM, previous)
     print(f"largest_lyapunov: SIGINT -> KeyboardInterrupt in {latency:.3f} s")
     assert latency < CEILING
+
+
+def test_shutdown_now_leaves_no_pool_thread_to_race_the_exit_hook() -> None:
+    # Found in CI: after a Ctrl-C, Python's exit hook wrote to the wake-up pipe of a pool whose manager thread was
+    # closing it (CPython 3.11 takes no lock there): "OSError: [Errno 9] Bad file descriptor" on stderr. shutdown_now
+    # ends the manager thread before it returns, so nothing is left to race.
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from pendulab.ensemble.pool import ignore_sigint, shutdown_now
+
+    pool = ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("fork"), initializer=ignore_sigint)
+    futures = [pool.submit(time.sleep, 60.0) for _ in range(4)]  # two running, two queued
+    deadline = time.monotonic() + 60.0
+    while not any(f.running() for f in futures) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    manager, workers = pool._executor_manager_thread, list(pool._processes.values())
+    shutdown_now(pool)
+    assert not manager.is_alive() and not any(w.is_alive() for w in workers)
+    assert all(f.cancelled() or f.done() for f in futures)
