@@ -118,7 +118,7 @@ def test_v3_hardware_passive_allowance_is_passed_recorded_and_refused_elsewhere(
     # Only the hardware protocol takes it; out of its declared range it is refused before any work.
     for other in (["--protocol", "v3"], ["--protocol", "robustness-v2"], ["--realai"], []):
         assert main([*base, *other, "--passive-allowance", "0.5"]) == 2
-        assert "--passive-allowance applies to --protocol v3-hardware only" in capsys.readouterr().err
+        assert "--passive-allowance applies to --protocol v3-hardware and to --leaderboard" in capsys.readouterr().err
     assert main([*base, "--protocol", "v3-hardware", "--passive-allowance", "0.7"]) == 2
     assert "--passive-allowance = '0.7': out of range; expected a finite number in [0, 0.5] N.m" in capsys.readouterr().err
     # The real runner, on a 0.2 s episode instead of 60 s (the CLI's wiring is under test, not the score).

@@ -79,6 +79,9 @@ def write_leaderboard(
     root: str | Path | None = None,
     tasks: Sequence[str] | None = None,
     scorecards: bool = True,
+    protocols: Sequence[str] | None = None,
+    passive_allowance: float = 0.0,
+    upstream_records: str | Path | None = None,
 ) -> Path:
     """Regenerate the leaderboard markdown and its figures.
 
@@ -109,7 +112,17 @@ def write_leaderboard(
     tasks : sequence of str, optional
         RealAIGym tasks (default pendubot and acrobot).
     scorecards : bool
-        Include the own scorecard section (it is "not run" with ``quick``).
+        Include the own scorecard section (it is "not run" with ``quick``, and left out with ``protocols``).
+    protocols : sequence of str, optional
+        Only these protocols' cases and tables (names of :data:`pendulab.evaluate.realai.leaderboard.PROTOCOLS`);
+        default all, and the own scorecards.
+    passive_allowance : float
+        Torque the v3-hardware entries may put on the passive joint [N.m], in [0, 0.5] (the hardware rules' friction
+        allowance; pendulab's controllers compensate the identified friction with it).
+    upstream_records : str or Path, optional
+        Records of ``benchmarks/bench_upstream_entries.py`` whose v3-hardware episodes of the ICRA 2025 entries are
+        shown beside their real-robot scores (default
+        :data:`pendulab.evaluate.realai.upstream_records.UPSTREAM_RECORDS`).
 
     Returns
     -------
@@ -128,8 +141,9 @@ def write_leaderboard(
     KeyboardInterrupt
         Ctrl-C; the finished cases stay journaled (continue with ``resume``).
     """
-    from ..evaluate.realai.leaderboard import DEFAULT_ROOT, TASKS, check_controllers, run_protocols
+    from ..evaluate.realai.leaderboard import DEFAULT_ROOT, PROTOCOLS, TASKS, check_controllers, run_protocols
     from ..evaluate.realai.leaderboard_tables import protocol_tables
+    from ..evaluate.realai.upstream_records import UPSTREAM_RECORDS, read_hardware_entries
 
     check_controllers(controllers)  # bad names fail before anything runs
     out = DEFAULT_PATH if path is None else Path(path)
@@ -140,19 +154,22 @@ def write_leaderboard(
     bars = _Bars(progress)
     try:
         board = run_protocols(
-            controllers, tasks=TASKS if tasks is None else tasks, quick=quick, resume=resume, root=jroot,
-            workers=1 if workers is None else workers, progress=bars, max_wall_time=max_wall_time,
+            controllers, tasks=TASKS if tasks is None else tasks, protocols=PROTOCOLS if protocols is None else protocols,
+            quick=quick, resume=resume, root=jroot, workers=1 if workers is None else workers, progress=bars,
+            max_wall_time=max_wall_time, passive_allowance=passive_allowance,
         )  # fmt: skip
         remaining = None if max_wall_time is None else max(0.0, max_wall_time - (time.perf_counter() - w0))
-        cards = _scorecards(runs, workers, progress, resume, jroot / "scorecard", remaining) if scorecards and not quick else None
+        own = scorecards and not quick and protocols is None
+        cards = _scorecards(runs, workers, progress, resume, jroot / "scorecard", remaining) if own else None
         checks = None if cards is None else _integrator_checks(resume, jroot / "integrators")
     finally:
         bars.close()
-    figs = _figures(board, out.parent / "figures")
-    cmd = "pendulab score --leaderboard" + (" --quick" if quick else "") + (" --resume" if resume else "")
-    cmd += f" --runs {runs}" if runs != 20 else ""
-    cmd += f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else ""
-    cmd += f" --out {path}" if path else ""
+    hardware_tasks = sorted({c.task for c in board.cases if c.protocol == "v3-hardware"})
+    records = UPSTREAM_RECORDS if upstream_records is None else Path(upstream_records)
+    upstream = {t: read_hardware_entries(records, t, passive_allowance) for t in hardware_tasks}
+    figs = _figures(board, out.parent / "figures", upstream)
+    options = _options(protocols, passive_allowance, controllers, runs, path)
+    cmd = "pendulab score --leaderboard" + (" --quick" if quick else "") + (" --resume" if resume else "") + options
     lines = [
         "# Leaderboard",
         "",
@@ -161,7 +178,9 @@ def write_leaderboard(
         "",
     ]
     lines += [
-        "Regenerate: `pendulab score --leaderboard --resume --runs 10 --out docs/leaderboard.md` (repository root; "
+        f"Regenerate: `{cmd}` (repository root)."
+        if protocols is not None
+        else "Regenerate: `pendulab score --leaderboard --resume --runs 10 --out docs/leaderboard.md` (repository root; "
         "`--workers N` for the robustness-v2 runs and scorecards, `--controllers A,B` to choose the RealAIGym "
         "controllers, `--max-wall-time S` to stop starting new cases after S seconds). A full run takes hours on 2 "
         "cores: robustness v2 is 722 runs of 10 s per controller and task (300-700 s; `robust` ~1500 s), a v3 episode "
@@ -172,27 +191,17 @@ def write_leaderboard(
     if quick:
         lines += ["**QUICK RUN (`--quick`): reduced grids and one short v3 episode. These numbers are a smoke test, NOT "
                   "comparable with the published rows.**", ""]  # fmt: skip
-    lines += protocol_tables(board)
+    lines += protocol_tables(board, upstream)
     for p in figs:
         lines += [f"![{p.stem}](figures/{p.name})", ""]
-    if figs:
-        lines += [
-            "*Robustness v2: success rate against each category's level, one line per controller (model parameters: "
-            "the mean over the ten parameters at each grid point; noise: mean over the repetitions; perturbations: runs "
-            "binned by their largest pulse on the driven joint). Upstream publishes only category rates, so the "
-            "published entries are gray ticks right of each panel (the best named). v3: score per seed and the mean, "
-            "the dashed line the best published score.*",
-            "",
-        ]
-    lines += _scorecard_section(cards, runs, quick, checks)
+    captions = [text for kind, text in _CAPTIONS.items() if any(_figure_kind(p) == kind for p in figs)]
+    if captions:
+        lines += ["*" + " ".join(captions) + "*", ""]
+    if protocols is None:
+        lines += _scorecard_section(cards, runs, quick, checks)
     not_run = [c for c in board.cases if c.status != "done"]
     if not_run:
-        again = (
-            "pendulab score --leaderboard --resume" + (" --quick" if quick else "") + (f" --runs {runs}" if runs != 20 else "")
-        )
-        again += (f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else "") + (
-            f" --out {path}" if path else ""
-        )
+        again = "pendulab score --leaderboard --resume" + (" --quick" if quick else "") + options
         lines += ["## Cases not finished", "", f"Continue with `{again}` (finished cases are reused).", ""]
         lines += [f"* {c.protocol} / {c.task} / `{c.controller}`: {c.status} ({c.reason})" for c in not_run] + [""]
     lines += [f"Wall time of this generation: {time.perf_counter() - w0:.0f} s (journaled cases reused: "
@@ -202,9 +211,40 @@ def write_leaderboard(
     return out
 
 
-def _figures(board: Any, fig_dir: Path) -> list[Path]:
+#: The caption of each kind of leaderboard figure (a kind is the figure file's name).
+_CAPTIONS: dict[str, str] = {
+    "robustness": (
+        "Robustness v2: success rate against each category's level, one line per controller (model parameters: the mean "
+        "over the ten parameters at each grid point; noise: mean over the repetitions; perturbations: runs binned by "
+        "their largest pulse on the driven joint). Upstream publishes only category rates, so the published entries "
+        "are gray ticks right of each panel (the best named)."
+    ),
+    "v3": "v3: score per seed and the mean, the dashed line the best published score.",
+    "v3_hardware": (
+        "v3-hardware: each ICRA 2025 entry's mean score on this protocol (± std over seeds) against its best run on "
+        "the real robot (the diagonal is agreement; hollow: the entry could only run approximated), pendulab's "
+        "controllers as dashed lines (they have no real-robot run)."
+    ),
+}
+
+
+def _figure_kind(path: Path) -> str:
+    stem = path.stem.removeprefix("leaderboard_")
+    return "robustness" if stem.startswith("robustness") else stem
+
+
+def _options(protocols: Sequence[str] | None, allowance: float, controllers: Any, runs: int, path: str | Path | None) -> str:
+    """The command-line options that reproduce these settings (after ``--leaderboard``, ``--quick``, ``--resume``)."""
+    text = f" --runs {runs}" if runs != 20 else ""
+    text += f" --controllers {','.join(controllers)}" if isinstance(controllers, (list, tuple)) else ""
+    text += f" --protocol {protocols[0]}" if protocols is not None and len(protocols) == 1 else ""
+    text += f" --passive-allowance {allowance:g}" if allowance else ""
+    return text + (f" --out {path}" if path else "")
+
+
+def _figures(board: Any, fig_dir: Path, upstream: Mapping[str, Any]) -> list[Path]:
     from ..evaluate.realai.leaderboard import TASKS
-    from ..viz.leaderboard import plot_robustness_levels, plot_v3_seeds
+    from ..viz.leaderboard import plot_hardware_agreement, plot_robustness_levels, plot_v3_seeds
 
     figs: list[Path] = []
     for task in TASKS:
@@ -212,6 +252,8 @@ def _figures(board: Any, fig_dir: Path) -> list[Path]:
             figs.append(plot_robustness_levels(board, task, fig_dir / f"leaderboard_robustness_{task}.png"))
     if any(c.protocol == "v3" and c.status == "done" for c in board.cases):
         figs.append(plot_v3_seeds(board, fig_dir / "leaderboard_v3.png"))
+    if any(c.protocol == "v3-hardware" and c.status == "done" for c in board.cases):
+        figs.append(plot_hardware_agreement(board, upstream, fig_dir / "leaderboard_v3_hardware.png"))
     return figs
 
 

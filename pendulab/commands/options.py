@@ -21,6 +21,7 @@ from .._inputs import INPUTS, Input
 __all__ = [
     "OPTION_INPUTS",
     "COMMAND_INPUTS",
+    "MODE_INPUTS",
     "declare_options",
     "check_options",
     "declared_actions",
@@ -116,6 +117,14 @@ COMMAND_INPUTS: Mapping[str, str] = {
 }
 
 
+#: ``"<command> <dest>"`` to ``(mode, declared input)``: an option that means something else when the boolean option
+#: ``mode`` of the same command is given. ``pendulab score --out`` is a folder, but with ``--leaderboard`` it is the
+#: page (a Markdown file), which regenerating overwrites.
+MODE_INPUTS: Mapping[str, tuple[str, str]] = {
+    "score out": ("leaderboard", "file_out"),
+}
+
+
 class UndeclaredOptionError(RuntimeError):
     """A CLI option that takes a value and has no declaration (a programming error of pendulab)."""
 
@@ -181,7 +190,9 @@ def declare_options(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
             action.type = None
         if spec.kind in ("real", "integer") and action.help not in (None, argparse.SUPPRESS):
             action.help = f"{action.help} [admits {spec.interval()}]"
-        plans.setdefault(id(owner), (owner, []))[1].append(_Declared(action.dest, spec, str(label), as_path))
+        mode = MODE_INPUTS.get(f"{command} {action.dest}")
+        alternative = None if mode is None else (mode[0], INPUTS[mode[1]])
+        plans.setdefault(id(owner), (owner, []))[1].append(_Declared(action.dest, spec, str(label), as_path, alternative))
     for owner, plan in plans.values():
         owner.set_defaults(**{PLAN: tuple(plan)})
     return parser
@@ -198,6 +209,7 @@ class _Declared(NamedTuple):
     spec: Input
     label: str
     as_path: bool
+    mode: tuple[str, Input] | None = None  # (boolean option, declaration in force when it is given)
 
 
 def _owner(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
@@ -211,6 +223,8 @@ def _owner(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentPa
 
 def check_options(args: argparse.Namespace) -> argparse.Namespace:
     """Check and convert every declared option of the parsed sub-command in place, before any work.
+
+    An option of :data:`MODE_INPUTS` is checked with its mode's declaration when that mode's flag is given.
 
     Parameters
     ----------
@@ -238,6 +252,8 @@ def check_options(args: argparse.Namespace) -> argparse.Namespace:
         value = getattr(args, item.dest, None)
         if value is None:
             continue
+        if item.mode is not None and getattr(args, item.mode[0], False):
+            item = item._replace(spec=item.mode[1])
         if isinstance(value, list):
             setattr(args, item.dest, [_one(item, v) for v in value])
         else:

@@ -79,7 +79,8 @@ def register(subparsers: Any) -> None:
         help="a RealAIGym protocol on --task pendubot | acrobot: v2 (the simulation leaderboard, = --realai), "
         "robustness-v2 (the robustness leaderboard v2: 722 runs, journaled, --resume, --workers, --seed, --quick), "
         "v3 (the ICRA 2025 global protocol), v3-hardware (its hardware final: 10 PID resets of 1 s on the identified "
-        f"C.1 robot with measured sensing and loop timing, {docs_page('realai_v3')})",
+        f"C.1 robot with measured sensing and loop timing, {docs_page('realai_v3')}); with --leaderboard: that "
+        "protocol's cases and tables only (no own scorecards)",
     )
     p.add_argument(
         "--quick",
@@ -92,14 +93,15 @@ def register(subparsers: Any) -> None:
         "--controllers",
         default=None,
         metavar="A,B",
-        help="--leaderboard: RealAIGym controllers for all three protocols (default: v2 best,tvlqr,robust,global,replan; "
-        "robustness-v2 best,tvlqr,robust; v3 best,global,replan)",
+        help="--leaderboard: RealAIGym controllers for every protocol (default: v2 best,tvlqr,robust,rti,global,replan; "
+        "robustness-v2 best,tvlqr,robust; v3 and v3-hardware best,global,replan,library,mpc)",
     )
     p.add_argument(
         "--passive-allowance",
         default=None,
         metavar="N.M",
-        help="--protocol v3-hardware: torque the controller may put on the passive joint [N.m] (the hardware rules "
+        help="--protocol v3-hardware and --leaderboard's v3-hardware cases: torque the controller may put on the "
+        "passive joint [N.m] (the hardware rules "
         "grant 0.5 to compensate motor friction; default 0); pendulab's controllers use it to compensate the "
         "identified friction",
     )
@@ -168,12 +170,10 @@ def run_score(args: argparse.Namespace) -> int:
 
     if args.protocol not in (None, "v2") and args.realai:
         raise CLIError(f"--realai is --protocol v2; it does not combine with --protocol {args.protocol}")
-    if args.protocol is not None and args.leaderboard:
-        raise CLIError("--protocol does not apply to --leaderboard (it scores every controller on every task)")
     if args.quick and args.protocol != "robustness-v2" and not args.leaderboard:
         raise CLIError("--quick applies to --protocol robustness-v2 and --leaderboard only")
-    if args.passive_allowance is not None and args.protocol != "v3-hardware":
-        raise CLIError("--passive-allowance applies to --protocol v3-hardware only")
+    if args.passive_allowance is not None and (args.protocol or ("v3-hardware" if args.leaderboard else None)) != "v3-hardware":
+        raise CLIError("--passive-allowance applies to --protocol v3-hardware and to --leaderboard (its v3-hardware cases)")
     if args.controllers is not None and not args.leaderboard:
         raise CLIError("--controllers applies to --leaderboard only (use --controller NAME otherwise)")
     if args.plant is not None and args.leaderboard:
@@ -181,7 +181,7 @@ def run_score(args: argparse.Namespace) -> int:
     plant = read_plant(args)
     from ..evaluate.realai.plant import plant_label
 
-    if args.protocol in ("robustness-v2", "v3", "v3-hardware"):
+    if args.protocol in ("robustness-v2", "v3", "v3-hardware") and not args.leaderboard:
         if args.controller is None or args.task is None:
             raise CLIError(f"--protocol {args.protocol} needs --controller and --task")
         return _run_protocol(args, plant)
@@ -293,6 +293,7 @@ def _run_leaderboard(args: argparse.Namespace, runs: int | None, workers: int | 
         path = write_leaderboard(
             args.out, runs=runs or 20, workers=workers, progress=not args.no_progress, controllers=names,
             quick=args.quick, resume=args.resume, max_wall_time=budget,
+            protocols=None if args.protocol is None else (args.protocol,), passive_allowance=args.passive_allowance or 0.0,
         )  # fmt: skip
     except KeyboardInterrupt:
         again = "pendulab score --leaderboard --resume" + (" --quick" if args.quick else "")

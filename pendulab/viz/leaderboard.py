@@ -1,7 +1,9 @@
-"""Leaderboard figures: where each controller fails on robustness v2 (success against each category's level), v3 per seed."""
+"""Leaderboard figures: where each controller fails on robustness v2 (success against each category's level), v3 per
+seed, and the v3 hardware protocol against the real robot."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +21,9 @@ from .save import save_figure  # noqa: E402
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["plot_robustness_levels", "plot_v3_seeds", "PERTURBATION_BINS"]
+    from ..evaluate.realai.upstream_records import EntryScores
+
+__all__ = ["plot_robustness_levels", "plot_v3_seeds", "plot_hardware_agreement", "PERTURBATION_BINS"]
 
 _TITLES = {
     "model": "model parameters",
@@ -158,6 +162,17 @@ def plot_robustness_levels(run: LeaderboardRun, task: str, path: str | Path) -> 
     return save_figure(fig, path)
 
 
+def _task_panels(
+    run: LeaderboardRun, protocol: str, panel: tuple[float, float], min_width: float
+) -> tuple[list[str], Any, Any, str]:
+    """The tasks with cases of ``protocol``, a figure with one panel [in] per task, and the quick-run note of its title."""
+    tasks = [t for t in TASKS if any(c.protocol == protocol and c.task == t for c in run.cases)]
+    fig, axes = plt.subplots(1, max(1, len(tasks)), figsize=(max(min_width, panel[0] * len(tasks)), panel[1]),
+                             constrained_layout=True, squeeze=False)  # fmt: skip
+    note = "" if run.settings.comparable else "\nQUICK: the first 10 s of seed 0, not comparable"
+    return tasks, fig, axes[0], note
+
+
 def plot_v3_seeds(run: LeaderboardRun, path: str | Path) -> Path:
     """v3: each controller's score (uptime fraction) per seed and its mean, beside the best published score.
 
@@ -173,15 +188,12 @@ def plot_v3_seeds(run: LeaderboardRun, path: str | Path) -> Path:
     Path
         The file written.
     """
-    tasks = [t for t in TASKS if any(c.protocol == "v3" and c.task == t for c in run.cases)]
-    fig, axes = plt.subplots(1, max(1, len(tasks)), figsize=(max(8.0, 6.5 * len(tasks)), 4.8), constrained_layout=True,
-                             squeeze=False)  # fmt: skip
+    tasks, fig, axes, note = _task_panels(run, "v3", (6.5, 4.8), 8.0)
     seeds = list(run.settings.v3_seeds)
-    note = "" if run.settings.comparable else "\nQUICK: the first 10 s of seed 0, not comparable"
     fig.suptitle(f"RealAIGym v3: fraction of the episode with the end effector above 0.9 (L1 + L2), per seed{note}")
     names = run.controllers("v3")
     width = 0.8 / max(1, len(names))
-    for ax, task in zip(axes[0], tasks, strict=False):
+    for ax, task in zip(axes, tasks, strict=False):
         for j, name in enumerate(names):
             c = run.case("v3", task, name)
             xs = np.arange(len(seeds) + 1) + (j - (len(names) - 1) / 2) * width
@@ -204,4 +216,66 @@ def plot_v3_seeds(run: LeaderboardRun, path: str | Path) -> Path:
         ax.set_title(task)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7, loc="upper center", ncol=2)
+    return save_figure(fig, path)
+
+
+def plot_hardware_agreement(
+    run: LeaderboardRun, upstream: Mapping[str, tuple[Sequence[EntryScores], Sequence[str]]], path: str | Path
+) -> Path:
+    """v3-hardware: each ICRA 2025 entry's simulated score against its score on the real robot; pendulab's controllers.
+
+    One panel per task. An upstream entry is a point: x its best run on the robot, y its mean (± standard deviation
+    over seeds) on pendulab's hardware-faithful protocol; the diagonal is perfect agreement. pendulab's own
+    controllers have no real-robot run: each is a horizontal line at its mean over the leaderboard's seeds.
+
+    Parameters
+    ----------
+    run : LeaderboardRun
+        Leaderboard cases (the v3-hardware ones are drawn).
+    upstream : mapping
+        Task -> (entries, skipped) of :func:`pendulab.evaluate.realai.upstream_records.read_hardware_entries`.
+    path : str or Path
+        Output image (e.g. ``leaderboard_v3_hardware.png``).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    tasks, fig, axes, note = _task_panels(run, "v3-hardware", (5.6, 5.4), 6.0)
+    fig.suptitle(
+        f"RealAIGym v3 hardware protocol on the simulated C.1 robot (passive allowance {run.settings.passive_allowance:g} N m)"
+        f" against the ICRA 2025 final on the real robot{note}",
+        fontsize=10,
+    )
+    for ax, task in zip(axes, tasks, strict=False):
+        entries = upstream.get(task, ((), ()))[0]
+        for k, e in enumerate(entries):
+            approx = bool(e.approximation)
+            ax.errorbar(e.published_hardware, e.mean, yerr=e.std, fmt="s", color="tab:blue", capsize=3,
+                        mfc="white" if approx else "tab:blue")  # fmt: skip
+            label = f"{e.label} ({len(e.seeds)} seeds{', approximated' if approx else ''})"
+            # Labels to the left (the right edge is the best real-robot score), alternately above and below.
+            ax.annotate(label, (e.published_hardware, e.mean), textcoords="offset points", ha="right",
+                        xytext=(-8, 6 if k % 2 == 0 else -12), fontsize=8)  # fmt: skip
+        for j, name in enumerate(run.controllers("v3-hardware")):
+            c = run.case("v3-hardware", task, name)
+            if c.status != "done":
+                continue
+            color = _COLORS[(j + 1) % len(_COLORS)]
+            ax.axhline(c.summary["mean"], color=color, ls="--", lw=1.0)
+            ax.text(0.02, c.summary["mean"] + 0.008, f"pendulab {name}: {c.summary['mean']:.3f}", color=color, fontsize=8)
+        ax.plot([0, 1], [0, 1], "k:", lw=0.8)
+        ax.plot([], [], "s", color="tab:blue", label="upstream entry, pendulab v3-hardware (mean ± std over seeds)")
+        if any(e.approximation for e in entries):
+            ax.plot([], [], "s", color="tab:blue", mfc="white", label="the same, controller approximated (see the table)")
+        ax.plot([], [], "k:", lw=0.8, label="simulated = real robot")
+        ax.plot([], [], "--", color="gray", lw=1.0, label="pendulab controller (no real-robot run)")
+        if not entries:
+            ax.text(0.5, 0.05, "no recorded upstream episodes", ha="center", fontsize=8, color="gray")
+        ax.set(xlim=(0, 1), ylim=(0, 1), title=task)
+        ax.set_xlabel("score on the real robot, ICRA 2025 final (best run) [-]")
+        ax.set_ylabel("score on pendulab's v3-hardware protocol [-]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
     return save_figure(fig, path)

@@ -31,6 +31,7 @@ __all__ = [
     "PUBLISHED_V2_ROWS",
     "PUBLISHED_ROBUSTNESS_ROWS",
     "PUBLISHED_V3_ROWS",
+    "PUBLISHED_HARDWARE",
     "SOURCES",
     "UPSTREAM_COMMIT",
 ]
@@ -152,6 +153,13 @@ def _v3(task: str) -> tuple[PublishedRow, ...]:
 
 #: v3 entries: the best published score of each task, the other upstream entries without a score.
 PUBLISHED_V3_ROWS: Mapping[str, tuple[PublishedRow, ...]] = {t: _v3(t) for t in ("pendubot", "acrobot")}
+
+#: ICRA 2025 hardware final, v3 score of each entry's best run on the real robot (issue 30; upstream
+#: ``real_ai_gym_leaderboard``, ``leaderboards/icra2025/*_real_system_results.csv``).
+PUBLISHED_HARDWARE: Mapping[str, Mapping[str, float]] = {
+    "pendubot": {"acados_mpc": 0.721, "ar_eapo": 0.714, "mcpilco": 0.559, "vimppi": 0.401},
+    "acrobot": {"acados_mpc": 0.775, "ar_eapo": 0.655, "mcpilco": 0.585, "vimppi": 0.408},
+}
 
 #: Where each protocol's published rows and definition come from (cited under each table).
 SOURCES: Mapping[str, str] = {

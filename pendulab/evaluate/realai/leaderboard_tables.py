@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from .leaderboard import IDENTIFIED, TASKS, Case, LeaderboardRun
 from .leaderboard_published import (
+    PUBLISHED_HARDWARE,
     PUBLISHED_ROBUSTNESS_ROWS,
     PUBLISHED_V2_ROWS,
     PUBLISHED_V3_ROWS,
     SOURCES,
 )
 from .robustness_grid import CATEGORIES
+from .upstream_records import ENTRY_LABELS, UPSTREAM_RECORDS, EntryScores, spearman_rho
 
 __all__ = ["protocol_tables", "CATEGORY_HEADERS"]
 
@@ -116,9 +118,7 @@ def _v3_table(run: LeaderboardRun, task: str, protocol: str = "v3") -> list[str]
             f"{_ms(max(med) if med else None)} / {_ms(max(mx) if mx else None)} |",
         ))  # fmt: skip
     if protocol == "v3-hardware":  # the ICRA 2025 hardware final's rows: one run each on the real robot
-        from .v3_hardware import PUBLISHED_HARDWARE
-
-        labels = {"acados_mpc": "AcadosMPC", "ar_eapo": "AR-EAPO", "mcpilco": "MC-PILCO", "vimppi": "VIMPPI"}
+        labels = ENTRY_LABELS
         blank = " | ".join("" for _ in seeds)
         for key, score in PUBLISHED_HARDWARE[task].items():
             rows.append((score, f"| published {labels.get(key, key)} (`{key}`, real robot) | {blank} | {score:.3f} | | | |"))
@@ -211,13 +211,50 @@ def _explain(run: LeaderboardRun, protocol: str) -> str:
     )
 
 
-def protocol_tables(run: LeaderboardRun) -> list[str]:
+def _upstream_table(task: str, entries: Sequence[EntryScores], skipped: Sequence[str], allowance: float) -> list[str]:
+    """The ICRA 2025 entries' recorded v3-hardware means beside their real-robot scores, and the rank correlation."""
+    lines = [f"The ICRA 2025 entries on this protocol ({task}, allowance {allowance:g} N m; recorded by "
+             "`benchmarks/bench_upstream_entries.py` with upstream's code, not in CI):", ""]  # fmt: skip
+    if not entries:
+        lines += [f"*No recorded episodes in `{UPSTREAM_RECORDS}/`: run the benchmark (docs/realai_v3.md).*"]
+    else:
+        head = "| entry | pendulab v3-hardware: mean | std over seeds | seeds | real robot (best run) | ran as |"
+        lines += [head, "|---|---|---|---|---|---|"]
+        lines += [
+            f"| {e.label} (`{e.entry}`) | **{e.mean:.3f}** | {e.std:.3f} | {len(e.seeds)} | {e.published_hardware:.3f} | "
+            f"{e.approximation or 'submitted'} |"
+            for e in entries
+        ]
+        ran = ", ".join(e.label for e in entries)
+        missing = [ENTRY_LABELS[k] for k in PUBLISHED_HARDWARE[task] if k not in {e.entry for e in entries}]
+        rho = (
+            f"{spearman_rho([e.mean for e in entries], [e.published_hardware for e in entries]):+.2f}"
+            if len(entries) > 1
+            else "— (one entry)"
+        )
+        lines += ["", f"Spearman ρ of these means against the real robot over the entries that ran ({ran}): **{rho}**"
+                  + (f"; not run: {', '.join(missing)}." if missing else ".")]  # fmt: skip
+        exact = [e for e in entries if not e.approximation]
+        if len(exact) != len(entries) and len(exact) > 1:
+            rho_exact = spearman_rho([e.mean for e in exact], [e.published_hardware for e in exact])
+            lines[-1] += (f" Over the entries that ran as submitted ({', '.join(e.label for e in exact)}): "
+                          f"**{rho_exact:+.2f}**.")  # fmt: skip
+    lines += [f"*Skipped record {s}*" for s in skipped]
+    return lines
+
+
+def protocol_tables(
+    run: LeaderboardRun, upstream: Mapping[str, tuple[Sequence[EntryScores], Sequence[str]]] | None = None
+) -> list[str]:
     """Markdown lines: one section per protocol, one table per task, pendulab's rows beside the published ones.
 
     Parameters
     ----------
     run : LeaderboardRun
         The cases (:func:`~.leaderboard.run_protocols`).
+    upstream : mapping, optional
+        Task -> (entries, skipped records) of :func:`~.upstream_records.read_hardware_entries`: shown under that
+        task's v3-hardware table.
 
     Returns
     -------
@@ -242,6 +279,8 @@ def protocol_tables(run: LeaderboardRun) -> list[str]:
             if not any(c.task == task and c.protocol in members for c in run.cases):
                 continue
             lines += [f"### {task}", "", *makers[protocol](run, task), ""]
+            if protocol == "v3-hardware" and upstream is not None and task in upstream:
+                lines += [*_upstream_table(task, *upstream[task], run.settings.passive_allowance), ""]
         if protocol in SOURCES:
             lines += [SOURCES[protocol], ""]
     return lines

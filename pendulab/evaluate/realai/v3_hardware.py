@@ -66,6 +66,7 @@ from ...model.plant_file import IdentifiedPlant, load_plant
 from ...model.pycode import to_python
 from ...model.robot import COULOMB_SHARPNESS
 from .controllers import RATE_BOUNDED, resolve_controller
+from .leaderboard_published import PUBLISHED_HARDWARE
 from .plant import plant_label, protocol_model
 from .v3 import ProtocolController, _gravity_compensation, v3_score
 from .v3_definition import count_swingups, reset_schedule, uptime
@@ -113,11 +114,6 @@ PASSIVE_ALLOWANCE: float = 0.5
 PLAN_VELOCITY_LIMIT_HW: float = 16.0
 #: Longest RK4 sub-step inside a loop interval [s].
 SUBSTEP: float = 0.001
-#: ICRA 2025 hardware final, v3 score on the real robot (issue 30; upstream ``leaderboards/icra2025/*_real_system_results.csv``).
-PUBLISHED_HARDWARE: dict[str, dict[str, float]] = {
-    "pendubot": {"acados_mpc": 0.721, "ar_eapo": 0.714, "mcpilco": 0.559, "vimppi": 0.401},
-    "acrobot": {"acados_mpc": 0.775, "ar_eapo": 0.655, "mcpilco": 0.585, "vimppi": 0.408},
-}
 
 
 @dataclass
