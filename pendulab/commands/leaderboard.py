@@ -55,7 +55,7 @@ class _Bars:
 
         if label != self.label:
             self.close()
-            unit = "runs" if label.startswith("robustness") else "2 ms steps"
+            unit = "runs" if label.startswith("robustness") else "plans" if label.startswith("plan library") else "2 ms steps"
             self.label, self.bar = label, ProgressBar(f"{label} ({unit})", self.enabled)
         if self.bar is not None:
             self.bar(done, total)

@@ -188,3 +188,33 @@ def test_cli_leaderboard_options_refused_before_anything_runs(argv, message, tmp
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1, err
     assert not (tmp_path / "pendulab-out").exists()
+
+
+def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tmp_path, monkeypatch):
+    # The library's first use solves hundreds of plans (minutes): the leaderboard reports them as they finish,
+    # bounded at the hardware protocol's rate on v3-hardware and unbounded on v3, and builds once per case.
+    import pendulab.control.plan_library as pl_lib
+    import pendulab.evaluate.realai.leaderboard as lb
+    from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW
+
+    builds = []
+
+    def fake_library(task, *, progress=None, velocity_limit=None, **_):
+        builds.append((task, velocity_limit))
+        for k in range(3):
+            progress(k + 1, 3)
+
+    def no_episode(*a, **k):
+        raise RuntimeError("episode not run in this test")
+
+    monkeypatch.setattr(pl_lib, "library_controller", fake_library)
+    monkeypatch.setattr(lb, "_run_v3", no_episode)
+    seen = []
+    run = run_protocols(
+        ["library"], tasks=["pendubot"], protocols=("v3", "v3-hardware"), quick=True, root=tmp_path,
+        progress=lambda label, done, total: seen.append((label, done, total)),
+    )  # fmt: skip
+    assert builds == [("pendubot", None), ("pendubot", PLAN_VELOCITY_LIMIT_HW)]
+    label = "plan library for pendubot"
+    assert [s for s in seen if s[0] == label] == [(label, k, 3) for k in (1, 2, 3)] * 2
+    assert all(c.status == "failed" and "episode not run" in c.reason for c in run.cases)

@@ -419,6 +419,15 @@ def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> C
     return report
 
 
+def _build_library(task: str, hardware: bool, progress: Callable[[str, int, int], None] | None) -> None:
+    """Solve (or read from its cache) the plan library a v3 case of ``library`` will use, reporting each start."""
+    from ...control.plan_library import library_controller
+    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
+
+    bound = PLAN_VELOCITY_LIMIT_HW if hardware else None  # as hardware_entry plans on the hardware protocol
+    library_controller(task, progress=_reporter(progress, f"plan library for {task}"), velocity_limit=bound)
+
+
 def _run_case(
     case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int,
     progress: Callable[[str, int, int], None] | None, run_new: bool = True,
@@ -462,6 +471,7 @@ def _run_case(
         case.status = "done"
     else:
         seeds = []
+        library_ready = name != "library"
         for seed in settings.v3_seeds:
             path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
             keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
@@ -470,6 +480,9 @@ def _run_case(
                 keys["passive_allowance"] = settings.passive_allowance
                 keys["hardware_plans"] = settings.hardware_plans
             summary = _read(path, keys) if resume else None
+            if summary is None and not library_ready:
+                _build_library(task, hardware, progress)  # minutes of planning at first use: a bar of its own
+                library_ready = True
             if summary is None:
                 summary = _run_v3(
                     task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"), plant,
