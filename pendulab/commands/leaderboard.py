@@ -115,7 +115,8 @@ def write_leaderboard(
         Include the own scorecard section (it is "not run" with ``quick``, and left out with ``protocols``).
     protocols : sequence of str, optional
         Only these protocols' cases and tables (names of :data:`pendulab.evaluate.realai.leaderboard.PROTOCOLS`);
-        default all, and the own scorecards.
+        default all, and the own scorecards. The page's command line names ``--protocol`` when one is asked (the
+        CLI takes one); for several it names none, and says so.
     passive_allowance : float
         Torque the v3-hardware entries may put on the passive joint [N.m], in [0, 0.5] (the hardware rules' friction
         allowance; pendulab's controllers compensate the identified friction with it).
@@ -178,7 +179,7 @@ def write_leaderboard(
         "",
     ]
     lines += [
-        f"Regenerate: `{cmd}` (repository root)."
+        f"Regenerate: `{cmd}` (repository root){_several(protocols)}"
         if protocols is not None
         else "Regenerate: `pendulab score --leaderboard --resume --runs 10 --out docs/leaderboard.md` (repository root; "
         "`--workers N` for the robustness-v2 runs and scorecards, `--controllers A,B` to choose the RealAIGym "
@@ -231,6 +232,13 @@ _CAPTIONS: dict[str, str] = {
 def _figure_kind(path: Path) -> str:
     stem = path.stem.removeprefix("leaderboard_")
     return "robustness" if stem.startswith("robustness") else stem
+
+
+def _several(protocols: Sequence[str]) -> str:
+    """The end of the regenerate sentence: the CLI takes one ``--protocol``, the API several."""
+    if len(protocols) == 1:
+        return "."
+    return f" with `write_leaderboard(protocols={list(protocols)!r})` (the CLI takes one `--protocol`)."
 
 
 def _options(protocols: Sequence[str] | None, allowance: float, controllers: Any, runs: int, path: str | Path | None) -> str:

@@ -118,10 +118,9 @@ def _v3_table(run: LeaderboardRun, task: str, protocol: str = "v3") -> list[str]
             f"{_ms(max(med) if med else None)} / {_ms(max(mx) if mx else None)} |",
         ))  # fmt: skip
     if protocol == "v3-hardware":  # the ICRA 2025 hardware final's rows: one run each on the real robot
-        labels = ENTRY_LABELS
         blank = " | ".join("" for _ in seeds)
         for key, score in PUBLISHED_HARDWARE[task].items():
-            rows.append((score, f"| published {labels.get(key, key)} (`{key}`, real robot) | {blank} | {score:.3f} | | | |"))
+            rows.append((score, f"| published {ENTRY_LABELS[key]} (`{key}`, real robot) | {blank} | {score:.3f} | | | |"))
     for p in PUBLISHED_V3_ROWS[task] if protocol == "v3" else ():  # published rows: the nominal plant's
         cells = " | ".join("" for _ in seeds)
         score = "score not in the stored sources" if p.score is None else f"{p.score:.3f} (one unseeded run)"
@@ -227,20 +226,20 @@ def _upstream_table(task: str, entries: Sequence[EntryScores], skipped: Sequence
         ]
         ran = ", ".join(e.label for e in entries)
         missing = [ENTRY_LABELS[k] for k in PUBLISHED_HARDWARE[task] if k not in {e.entry for e in entries}]
-        rho = (
-            f"{spearman_rho([e.mean for e in entries], [e.published_hardware for e in entries]):+.2f}"
-            if len(entries) > 1
-            else "— (one entry)"
-        )
+        rho = f"{_rho(entries):+.2f}" if len(entries) > 1 else "— (one entry)"
         lines += ["", f"Spearman ρ of these means against the real robot over the entries that ran ({ran}): **{rho}**"
                   + (f"; not run: {', '.join(missing)}." if missing else ".")]  # fmt: skip
         exact = [e for e in entries if not e.approximation]
         if len(exact) != len(entries) and len(exact) > 1:
-            rho_exact = spearman_rho([e.mean for e in exact], [e.published_hardware for e in exact])
             lines[-1] += (f" Over the entries that ran as submitted ({', '.join(e.label for e in exact)}): "
-                          f"**{rho_exact:+.2f}**.")  # fmt: skip
+                          f"**{_rho(exact):+.2f}**.")  # fmt: skip
     lines += [f"*Skipped record {s}*" for s in skipped]
     return lines
+
+
+def _rho(entries: Sequence[EntryScores]) -> float:
+    """Spearman rho of the entries' simulated means against their real-robot scores."""
+    return spearman_rho([e.mean for e in entries], [e.published_hardware for e in entries])
 
 
 def protocol_tables(
