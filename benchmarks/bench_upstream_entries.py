@@ -57,21 +57,17 @@ REPO = Path(__file__).resolve().parents[1]
 UPSTREAM_DEFAULT = Path(os.environ.get("REALAI_UPSTREAM", "/work/upstream_realai"))
 
 #: Published ICRA 2025 scores (dfki-ric-underactuated-lab/real_ai_gym_leaderboard, leaderboards/icra2025/
-#: ICRA_2025_<task>_{simulation,real_system}_results.csv): simulation (seed 333 pendubot, 777 acrobot), hardware best
-#: and hardware average of the runs.
+#: ICRA_2025_<task>_{simulation,real_system}_results.csv): simulation (seed 333 pendubot, 777 acrobot) and hardware
+#: average of the runs. The hardware best runs and the entries' names are pendulab's own (PUBLISHED_HARDWARE,
+#: ENTRY_LABELS), imported where used: the acados worker runs this file in a venv of its own and needs neither.
 PUBLISHED_SIM = {
     "pendubot": {"vimppi": 0.799, "ar_eapo": 0.759, "acados_mpc": 0.726, "mcpilco": 0.509},
     "acrobot": {"ar_eapo": 0.658, "vimppi": 0.648, "acados_mpc": 0.630, "mcpilco": 0.307},
-}
-PUBLISHED_HW_BEST = {
-    "pendubot": {"acados_mpc": 0.721, "ar_eapo": 0.714, "mcpilco": 0.559, "vimppi": 0.401},
-    "acrobot": {"acados_mpc": 0.775, "ar_eapo": 0.655, "mcpilco": 0.585, "vimppi": 0.408},
 }
 PUBLISHED_HW_MEAN = {
     "pendubot": {"acados_mpc": 0.716, "ar_eapo": 0.696, "mcpilco": 0.542, "vimppi": 0.363},
     "acrobot": {"acados_mpc": 0.755, "ar_eapo": 0.616, "mcpilco": 0.566, "vimppi": 0.364},
 }
-LABELS = {"acados_mpc": "AcadosMPC", "ar_eapo": "AR-EAPO", "mcpilco": "MC-PILCO", "vimppi": "VIMPPI"}
 ENTRIES = ("acados_mpc", "ar_eapo", "mcpilco", "vimppi")
 #: Why an entry does not run in this benchmark (written into its case records and the report).
 CANNOT_RUN = {
@@ -330,6 +326,8 @@ def run_case(
 ) -> dict[str, Any]:
     """Run one case and return its record (score, published scores, controller time, protocol details)."""
     from pendulab.control.realai.adapter import from_realai
+    from pendulab.evaluate.realai.leaderboard_published import PUBLISHED_HARDWARE as PUBLISHED_HW_BEST
+    from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
     from pendulab.evaluate.realai.v3 import ProtocolController, run_v3
     from pendulab.evaluate.realai.v3_definition import PLANT_LIMIT
     from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
@@ -448,7 +446,9 @@ def _fmt(v: Any, nd: int = 3) -> str:
 
 def report(out: Path) -> str:
     """Markdown tables of the recorded cases: scores beside the published ones, Spearman rho, controller time."""
-    from scipy.stats import spearmanr
+    from pendulab.evaluate.realai.leaderboard_published import PUBLISHED_HARDWARE as PUBLISHED_HW_BEST
+    from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
+    from pendulab.evaluate.realai.upstream_records import spearman_rho
 
     recs = [r for r in load_records(out) if r.get("status") == "ok"]
     lines: list[str] = []
@@ -501,7 +501,7 @@ def report(out: Path) -> str:
             if len(names) < 2:
                 cells.append("– (one entry)")
                 continue
-            rho, _ = spearmanr([m[n] for n in names], [pub[task][n] for n in names])
+            rho = spearman_rho([m[n] for n in names], [pub[task][n] for n in names])
             # with n entries rho takes few values (n = 3: ±1, ±0.5); asymptotic p-values mean nothing here
             cells.append(f"{rho:+.2f} (n = {len(names)})")
         lines.append(f"| {task} | {proto} | {variant} | {', '.join(LABELS[n] for n in names)} | " + " | ".join(cells) + " |")

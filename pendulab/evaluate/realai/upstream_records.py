@@ -123,17 +123,11 @@ def read_hardware_entries(directory: str | Path, task: str, passive_allowance: f
         # The benchmark says "an approximation of the submitted controller" where it could not run it as submitted.
         for note in (n for n in notes if "approximation" in n):
             approximations[entry] = note
-    entries = [
-        EntryScores(
-            e,
-            task,
-            tuple(sorted(by_seed)),
-            tuple(by_seed[s] for s in sorted(by_seed)),
-            PUBLISHED_HARDWARE[task][e],
-            approximations.get(e, ""),
-        )  # fmt: skip
-        for e, by_seed in runs.items()
-    ]
+    entries = []
+    for e, by_seed in runs.items():
+        seeds = tuple(sorted(by_seed))
+        scores = tuple(by_seed[k] for k in seeds)
+        entries.append(EntryScores(e, task, seeds, scores, PUBLISHED_HARDWARE[task][e], approximations.get(e, "")))
     entries.sort(key=lambda es: -es.published_hardware)
     return entries, skipped
 
