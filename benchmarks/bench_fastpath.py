@@ -25,6 +25,7 @@ and as the max over the reference grid (every 50 ms).
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import platform
 import statistics
@@ -229,7 +230,14 @@ def main(argv: list[str] | None = None) -> int:
             return tr.x, int(tr.stats["n_steps"]), float(tr.stats["wall_time"])
 
         runs.insert(4, Run("taylor (`simulate.__wrapped__`)", "rtol = atol = 1e-15", inner_run, "tol 1e-15"))
-    parts: dict[str, list[float]] = {"compiled": [], "numpy": []}
+    parts: dict[str, list[float]] = {"compiled": [], "numpy": [], "front_short": []}
+
+    def front_short() -> float:
+        """Time outside the runner of a call as large but 1000x shorter (10 ms, 1001 points): the fixed cost."""
+        t0 = time.perf_counter()
+        tr = pl.simulate(model, X0, T_FINAL / 1000, dt=DT / 1000, method="taylor", rtol=1e-15, atol=1e-15)
+        return time.perf_counter() - t0 - float(tr.stats["wall_time"])
+
     y_c = taylor_outputs.grid_outputs(model, tr.x, tr.u)
     if not np.allclose(y_c, model.outputs(tr.x, tr.u), rtol=1e-13, atol=1e-13):
         raise SystemExit("the compiled outputs differ from model.outputs")
@@ -242,14 +250,21 @@ def main(argv: list[str] | None = None) -> int:
         for _ in range(args.repeats):
             for r in every:
                 integ = []
+                # As timeit does: no cyclic garbage collection inside a sample. The rounds allocate alike, so the
+                # collector would otherwise stop in the same run every round and bias that one row (0.5 ms of a
+                # 0.7 ms call was seen); the garbage is collected between samples instead.
+                gc.collect()
+                gc.disable()
                 t0 = time.perf_counter()
                 for _ in range(args.inner):
                     integ.append(r.fn()[2])
                 r.times.append((time.perf_counter() - t0) / args.inner)
+                gc.enable()
                 r.integ.append(statistics.fmean(integ) if None not in integ else r.times[-1])
                 bar.update()
             parts["compiled"].append(timed(lambda: taylor_outputs.grid_outputs(model, tr.x, tr.u), args.inner))
             parts["numpy"].append(timed(lambda: model.outputs(tr.x, tr.u), args.inner))
+            parts["front_short"].append(statistics.fmean(front_short() for _ in range(args.inner)))
 
     # Elementary operations of each Taylor system (heyoka's decomposition, tol 1e-15): what a step costs.
     ops = {
@@ -377,7 +392,7 @@ Machine: {info}. The machine is shared with other jobs: absolute times are noisy
 ratios are measured in the same run (interleaved rounds).
 
 **Timing.** Median of {repeats} interleaved rounds after a warm-up round (every run of both cases timed once per
-round, as the mean of {inner} calls in a row).
+round, as the mean of {inner} calls in a row, with Python's cyclic garbage collector paused as `timeit` does).
 *Time* is the whole call (`pl.simulate`: argument checks, integration, outputs on the grid);
 *integration* is the runner alone (`Trajectory.stats["wall_time"]`). Ratios divide *time*. The anchors are
 `propagate_grid` of a hand-written heyoka system over the same output grid (no Python around it).
@@ -437,6 +452,10 @@ model's CasADi graph replayed as
 heyoka expressions and compiled once per model kind (a `cfunc` in batch mode): {t_out * 1e3:.3f} ms for 1001
 points, against {t_parts["numpy"] * 1e3:.3f} ms for `model.outputs` (element-wise NumPy, what the other methods use).
 {deco_text}
+The same call over 10 ms instead of 10 s (1001 output points, a few Taylor steps) spends {t_parts["front_short"] * 1e3:.3f} ms
+outside its runner, against {(t15.median - runner15) * 1e3:.3f} ms here: the front end (checks, grid, outputs, Trajectory)
+costs about that much per call of this size however long the run; what the 10 s call spends beyond it is the cost of
+caches the long integration emptied.
 
 ## Targets
 

@@ -37,7 +37,6 @@ def _build(task: str, build: bool = True) -> object:
 def _grow(task: str, seeds: list[int], distance: float) -> int:
     """Play the library on training ``seeds``; add the hand-overs farther than ``distance`` from every knot as starts."""
     from pendulab._io import atomic_path
-    from pendulab.control.plan_library import DEFAULT_LIBRARY_DIR, EXTRA_STARTS_FILE
 
     ctrl = _build(task)
     new = []
@@ -45,7 +44,7 @@ def _grow(task: str, seeds: list[int], distance: float) -> int:
         ctrl.handovers.clear()
         v3_score(task, ctrl, seed=seed)
         new += [h for h in ctrl.handovers if ctrl.library.nearest(h)[2] > distance]
-    path = Path(DEFAULT_LIBRARY_DIR) / task / EXTRA_STARTS_FILE
+    path = ctrl.grown_starts  # the list of this library's design: no other library reads it
     old = np.load(path) if path.exists() else np.zeros((0, 4))
     starts = np.vstack([old, np.array(new).reshape(-1, 4)])
     with atomic_path(path) as tmp:

@@ -147,6 +147,23 @@ class PlanCache:
         """
         return self.directory / f"plan-{hashlib.sha256(self.key(start).encode()).hexdigest()[:20]}.npz"
 
+    def grown_starts_path(self) -> Path:
+        """Where this library's grown starts are listed: ``extra_starts-<hash>.npy``, the hash of the design alone.
+
+        Grown starts are the hand-overs one protocol's closed loop met that the grid did not cover
+        (``benchmarks/bench_v3.py --grow-seeds``). They belong to the library they were grown for: a file per
+        task shared by every design let starts grown on the simulation protocol's library enter the rate-bounded
+        hardware library too (~160 plans solved anew and a lower score, 2026-11-28). Each design now reads
+        only its own list.
+
+        Returns
+        -------
+        Path
+            An ``(S, 4)`` array of start states (theta1, theta2 [rad], omega1, omega2 [rad/s]) when present.
+        """
+        digest = hashlib.sha256(json.dumps(self.design, sort_keys=True).encode()).hexdigest()[:20]
+        return self.directory / f"extra_starts-{digest}.npy"
+
     def _what(self, start: np.ndarray) -> str:
         return f"the plan library in {self.directory} needs the plan from start {np.round(start, 6).tolist()}; it"
 
@@ -480,6 +497,9 @@ class LibrarySwingUp:
         Plans taken (diagnostics).
     handovers : list of ndarray
         The state at each gap in the calls (the protocol's reset hand-overs; diagnostics and library growth).
+    grown_starts : Path or None
+        Where starts grown for this library's design are listed (:meth:`PlanCache.grown_starts_path`): growth
+        appends there, and only a library of the same design reads them.
     """
 
     fallback: GlobalSwingUp
@@ -489,6 +509,7 @@ class LibrarySwingUp:
     scaled_tube: bool = True
     n_lookups: int = 0
     handovers: list[np.ndarray] = field(default_factory=list)
+    grown_starts: Path | None = None
     _plan: tuple[int, int, float] | None = field(default=None, init=False, repr=False)
     _t_last: float | None = field(default=None, init=False, repr=False)
 
@@ -550,9 +571,6 @@ LIBRARY_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
 LIBRARY_BRANCHES: dict[str, tuple[tuple[int, int], ...]] = {"pendubot": DEFAULT_BRANCHES, "acrobot": DEFAULT_BRANCHES[:2]}
 #: Re-plan the library's plans for band entry, per task (the acrobot's not yet: its band-entry solves were not run).
 LIBRARY_BAND: dict[str, bool] = {"pendubot": True, "acrobot": False}
-#: Grown starts (observed hand-overs the grid did not cover), an (S, 4) array in the task's cache directory,
-#: appended to the grid's starts when present (written by ``benchmarks/bench_v3.py --grow-seeds``).
-EXTRA_STARTS_FILE: str = "extra_starts.npy"
 #: Configurations at rest per angle that a rate-bounded library also plans from (:func:`rest_starts`: where the
 #: hardware protocol's 1 s PID resets hand over; a bound is given for that protocol).
 LIBRARY_REST_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
@@ -584,8 +602,8 @@ def library_controller(
     branches : sequence of (int, int), optional
         Upright branches the resets leave from; default :data:`LIBRARY_BRANCHES`.
     directory : str or Path, optional
-        Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``. Starts listed in
-        ``<directory>/<task>/extra_starts.npy`` (:data:`EXTRA_STARTS_FILE`) are added to the grid's.
+        Cache root (a subdirectory per task); default ``./pendulab-out/plan_library``. Starts grown for this
+        very design (:meth:`PlanCache.grown_starts_path`) are added to the grid's.
     accept : float
         Lookup distance within which a plan is taken.
     band : bool, optional
@@ -633,7 +651,7 @@ def library_controller(
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, LIBRARY_BRANCHES[task] if branches is None else branches)
-    extra = root / task / EXTRA_STARTS_FILE
+    extra = cache.grown_starts_path()
     if extra.exists():
         try:
             more = np.load(extra, allow_pickle=False)
@@ -665,4 +683,4 @@ def library_controller(
         velocity_limit=design.get("velocity_limit"),
         progress=progress,
     )
-    return LibrarySwingUp(fb, lib, accept=accept)
+    return LibrarySwingUp(fb, lib, accept=accept, grown_starts=extra)

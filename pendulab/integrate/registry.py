@@ -415,7 +415,11 @@ class MethodSpec:
     fixed_step : bool
         True when ``rtol``/``atol`` do not apply (the step is ``max_step``).
     settings : mapping
-        Family-specific settings (e.g. the CasADi plugin and its options).
+        Family-specific settings (e.g. the CasADi plugin and its options). Keys the front end reads:
+        ``"available"`` (a callable giving the reason the method cannot run here, or None), ``"outputs"``
+        (``f(model, X, U) -> Y``, the outputs on the grid by the family's own compiled code) and
+        ``"passes_interrupts"`` (True: the runner's native code lets Ctrl-C through as ``KeyboardInterrupt``,
+        so :func:`~pendulab.integrate.simulate` installs no SIGINT watch around it).
 
     Examples
     --------

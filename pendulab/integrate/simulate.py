@@ -33,7 +33,7 @@ import signal
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -186,6 +186,11 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
         ...
     pendulab._checks.BudgetError: ...
     """
+    return _uniform_grid(t_final, dt)
+
+
+def _uniform_grid(t_final: float, dt: float) -> np.ndarray:
+    """:func:`time_grid` of arguments already checked (simulate's hot path: no second check of its inputs)."""
     points = t_final / dt + 1.0
     within_budget("output points (t_final / dt + 1)", points, BUDGETS["output_points"].env, MAX_OUTPUT_POINTS)
     n = max(1, math.ceil(t_final / dt - 1e-9))
@@ -381,7 +386,7 @@ def simulate(
     atol = float(atol)
     if max_step is not None:
         max_step = float(max_step)
-    t = time_grid(t_final, dt)
+    t = _uniform_grid(t_final, dt)
     # A TimeInput is held on its own input grid (the output grid refined); every other input on the output grid.
     t_run = u.hold_grid(t) if isinstance(u, TimeInput) else t
     sub = (len(t_run) - 1) // (len(t) - 1)
@@ -405,7 +410,9 @@ def simulate(
         options=opts,
         budget=budget,
     )
-    with _interrupt_watch(budget):
+    # A runner whose native code lets Ctrl-C through as KeyboardInterrupt needs no watch (~10 us of a ~0.5 ms run).
+    watch = nullcontext() if spec.settings.get("passes_interrupts") else _interrupt_watch(budget)
+    with watch:
         start = budget.start = time.perf_counter()
         try:
             result = spec.runner(request)

@@ -258,13 +258,17 @@ def plot_hardware_agreement(
             # Labels to the left (the right edge is the best real-robot score), alternately above and below.
             ax.annotate(label, (e.published_hardware, e.mean), textcoords="offset points", ha="right",
                         xytext=(-8, 6 if k % 2 == 0 else -12), fontsize=8)  # fmt: skip
+        lines = []
         for j, name in enumerate(run.controllers("v3-hardware")):
             c = run.case("v3-hardware", task, name)
-            if c.status != "done":
-                continue
-            color = _COLORS[(j + 1) % len(_COLORS)]
-            ax.axhline(c.summary["mean"], color=color, ls="--", lw=1.0)
-            ax.text(0.02, c.summary["mean"] + 0.008, f"pendulab {name}: {c.summary['mean']:.3f}", color=color, fontsize=8)
+            if c.status == "done":
+                lines.append((c.summary["mean"], name, _COLORS[(j + 1) % len(_COLORS)]))
+        label_y = -1.0
+        for mean, name, color in sorted(lines):
+            ax.axhline(mean, color=color, ls="--", lw=1.0)
+            label_y = max(mean + 0.008, label_y + 0.03)  # close means: each label above the one below (readable)
+            ax.text(0.02, label_y, f"pendulab {name}: {mean:.3f}", color=color, fontsize=8,
+                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5})  # fmt: skip
         ax.plot([0, 1], [0, 1], "k:", lw=0.8)
         ax.plot([], [], "s", color="tab:blue", label="upstream entry, pendulab v3-hardware (mean ± std over seeds)")
         if any(e.approximation for e in entries):

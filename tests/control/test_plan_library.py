@@ -9,6 +9,7 @@ import shutil
 import numpy as np
 import pytest
 
+from pendulab.control import plan_library
 from pendulab.control.global_swingup import global_controller
 from pendulab.control.plan_library import (
     PlanCache,
@@ -190,3 +191,28 @@ def test_rest_starts_are_the_grid_configurations_at_rest() -> None:
     assert np.allclose(starts[:, 0], np.repeat(q, 2)) and np.allclose(starts[:, 1] - starts[:, 0], np.tile(q, 2))
     with pytest.raises(ValueError, match="n_grid"):
         rest_starts(0)
+
+
+def test_grown_starts_belong_to_the_design_they_were_grown_for(tiny, monkeypatch) -> None:
+    """Starts grown for one library (bench_v3 --grow-seeds) must not enter a library of another design (a rate bound)."""
+    ctrl, d = tiny
+    grown = np.array([[0.3, -0.2, 1.0, 0.5]])
+    np.save(ctrl.grown_starts, grown)  # as growth writes it for this library
+    seen: dict[float | None, np.ndarray] = {}
+
+    def capture(fb, task, starts, *args, **kwargs):  # what each library would plan from, without solving
+        seen[kwargs.get("velocity_limit")] = starts
+        return ctrl.library
+
+    monkeypatch.setattr(plan_library, "build_library", capture)
+    kw = {"n_grid": 1, "branches": ((0, 0),), "directory": d, "build": False}
+    try:
+        same = library_controller("pendubot", **kw)
+        bounded = library_controller("pendubot", **kw, velocity_limit=12.0, rest_grid=0)
+    finally:
+        ctrl.grown_starts.unlink()
+    assert same.grown_starts == ctrl.grown_starts
+    assert bounded.grown_starts != ctrl.grown_starts and bounded.grown_starts.parent == ctrl.grown_starts.parent
+    assert any(np.array_equal(s, grown[0]) for s in seen[None])
+    assert not any(np.array_equal(s, grown[0]) for s in seen[12.0])
+    assert len(seen[None]) == len(seen[12.0]) + 1  # the same grid otherwise

@@ -66,3 +66,44 @@ def test_check_start_single_state_refuses_non_finite_dynamics():
     # bobs' Jacobian (the old solve with M ~ r1^2 underflowed to a singular matrix and returned NaN).
     assert np.all(np.isfinite(model.rhs(model.state(r1=1e-300))))
     np.testing.assert_array_equal(model.check_start(model.rest_state()), model.rest_state())
+
+
+def test_unforced_parameter_array_never_serves_another_run():
+    """The parameter array kept between unforced calls must follow the parameters, the grid size and any torque."""
+    model = pl.rigid()
+    evaluate = taylor_outputs.output_evaluator("rigid")
+    assert evaluate is not None
+    rng = np.random.default_rng(5)
+    X = rng.normal(0.0, 2.0, (257, 4))
+    zero = np.zeros((257, 2))
+    # Interleaved as a sweep would call: the same parameters and size again, then another of each, then torques.
+    for m, rows, U in [
+        (model, 257, zero),
+        (model, 257, zero),
+        (model.with_params(L1=0.3, m2=4.0), 257, zero),
+        (model, 100, zero[:100]),
+        (model, 257, rng.normal(0.0, 1.0, (257, 2))),
+        (model, 257, zero),
+    ]:
+        # Tolerance: the same graph through heyoka's sin/cos against NumPy's, a few ulp on values of order 10.
+        np.testing.assert_allclose(evaluate(X[:rows], U, m.p), m.outputs(X[:rows], U), rtol=1e-13, atol=1e-13)
+
+
+def test_ctrl_c_in_a_taylor_run_is_an_interrupt_not_a_failure():
+    """Taylor runs without simulate's SIGINT watch: Ctrl-C must still surface as KeyboardInterrupt, handler intact."""
+    import signal
+
+    model = pl.rigid()
+    before = signal.getsignal(signal.SIGINT)
+    calls = []
+
+    def feedback(t, x):
+        calls.append(t)
+        if len(calls) == 3:
+            signal.raise_signal(signal.SIGINT)  # as a Ctrl-C between two heyoka propagations
+        return [0.0, 0.0]
+
+    with pytest.raises(KeyboardInterrupt):
+        pl.simulate(model, model.state(theta1=1.0), 1.0, method="taylor", u=feedback)
+    assert len(calls) == 3  # stopped at once, not after the run
+    assert signal.getsignal(signal.SIGINT) is before
