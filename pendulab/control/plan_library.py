@@ -325,6 +325,24 @@ class PlanLibrary:
         self._tree = cKDTree(np.concatenate(feats))
         self._index = np.concatenate(index)
 
+    def digest(self) -> str:
+        """SHA-256 of everything the library plays (starts, references, torques, gains, lookup weight), hex.
+
+        A result computed with this library (a journaled leaderboard case) names it: another library (grown,
+        re-planned, of another design) is another experiment, never read back as this one's.
+
+        Returns
+        -------
+        str
+            64 hex digits.
+        """
+        h = hashlib.sha256()
+        for a in (self.starts, *self.x_ref, *self.u_ref, *self.K, np.array([self.velocity_scale])):
+            arr = np.ascontiguousarray(a, dtype=float)
+            h.update(repr(arr.shape).encode())
+            h.update(arr.tobytes())
+        return h.hexdigest()
+
     def features(self, x: np.ndarray) -> np.ndarray:
         """Lookup coordinates of states: angles on the circle, rates scaled by ``velocity_scale``.
 

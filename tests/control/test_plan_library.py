@@ -216,3 +216,15 @@ def test_grown_starts_belong_to_the_design_they_were_grown_for(tiny, monkeypatch
     assert any(np.array_equal(s, grown[0]) for s in seen[None])
     assert not any(np.array_equal(s, grown[0]) for s in seen[12.0])
     assert len(seen[None]) == len(seen[12.0]) + 1  # the same grid otherwise
+
+
+def test_digest_names_exactly_the_plans_played() -> None:
+    starts = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, -0.5, 2.0, 0.0]])
+    lib = _synthetic(starts)
+    assert lib.digest() == _synthetic(starts.copy()).digest()  # the content, not the objects
+    grown = _synthetic(np.vstack([starts, [[0.3, 0.1, 0.0, 0.0]]]))
+    nudged = _synthetic(starts)
+    nudged.K[1][7, 2] = 1e-12  # one gain of one plan
+    rescaled = _synthetic(starts)
+    rescaled.velocity_scale = 0.4
+    assert len({lib.digest(), grown.digest(), nudged.digest(), rescaled.digest()}) == 4

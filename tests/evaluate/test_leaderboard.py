@@ -193,6 +193,8 @@ def test_cli_leaderboard_options_refused_before_anything_runs(argv, message, tmp
 def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tmp_path, monkeypatch):
     # The library's first use solves hundreds of plans (minutes): the leaderboard reports them as they finish,
     # bounded at the hardware protocol's rate on v3-hardware and unbounded on v3, and builds once per case.
+    from types import SimpleNamespace
+
     import pendulab.control.plan_library as pl_lib
     import pendulab.evaluate.realai.leaderboard as lb
     from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW
@@ -203,18 +205,27 @@ def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tm
         builds.append((task, velocity_limit))
         for k in range(3):
             progress(k + 1, 3)
+        return SimpleNamespace(library=SimpleNamespace(digest=lambda: f"plans-{velocity_limit}"))
 
     def no_episode(*a, **k):
         raise RuntimeError("episode not run in this test")
 
+    read_keys = []
+
+    def journal_keys(path, keys):
+        read_keys.append(dict(keys))
+
     monkeypatch.setattr(pl_lib, "library_controller", fake_library)
     monkeypatch.setattr(lb, "_run_v3", no_episode)
+    monkeypatch.setattr(lb, "_read", journal_keys)
     seen = []
     run = run_protocols(
-        ["library"], tasks=["pendubot"], protocols=("v3", "v3-hardware"), quick=True, root=tmp_path,
+        ["library"], tasks=["pendubot"], protocols=("v3", "v3-hardware"), quick=True, root=tmp_path, resume=True,
         progress=lambda label, done, total: seen.append((label, done, total)),
     )  # fmt: skip
     assert builds == [("pendubot", None), ("pendubot", PLAN_VELOCITY_LIMIT_HW)]
+    # Each case's journal names the library it plays: another library is never read back as this one's.
+    assert [k["library_sha256"] for k in read_keys] == ["plans-None", f"plans-{PLAN_VELOCITY_LIMIT_HW}"]
     label = "plan library for pendubot"
     assert [s for s in seen if s[0] == label] == [(label, k, 3) for k in (1, 2, 3)] * 2
     assert all(c.status == "failed" and "episode not run" in c.reason for c in run.cases)

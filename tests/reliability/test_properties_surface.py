@@ -64,6 +64,10 @@ def test_gym_env_accepts_exactly_the_admissible_settings(request):
         assert exc is None, f"rejected admissible settings: {exc!r}"
         if dt > 0.05 or noise > 0.5:
             return  # the first-order torque effect below holds for short steps from near rest only
+        if torque * dt < 1e-10:
+            # The torque changes omega1 by ~torque * dt / I: below this it nears the rounding of omega1 (6e-80 N.m
+            # left it bit-identical); above it the difference is 1e7 ulp or more.
+            return
         omega1 = {}
         for action in (1.0, -1.0):
             env.reset(seed=0)  # same seed: same (noisy) start for both actions

@@ -419,13 +419,18 @@ def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> C
     return report
 
 
-def _build_library(task: str, hardware: bool, progress: Callable[[str, int, int], None] | None) -> None:
-    """Solve (or read from its cache) the plan library a v3 case of ``library`` will use, reporting each start."""
+def _build_library(task: str, hardware: bool, progress: Callable[[str, int, int], None] | None) -> str:
+    """Solve (or read from its cache) the plan library a v3 case of ``library`` will use, reporting each start.
+
+    Returns the library's :meth:`~pendulab.control.plan_library.PlanLibrary.digest`: the case's journals name it, so
+    a resumed leaderboard never reads back the scores of another library (one grown or re-planned since) as its own.
+    """
     from ...control.plan_library import library_controller
     from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
 
     bound = PLAN_VELOCITY_LIMIT_HW if hardware else None  # as hardware_entry plans on the hardware protocol
-    library_controller(task, progress=_reporter(progress, f"plan library for {task}"), velocity_limit=bound)
+    ctrl = library_controller(task, progress=_reporter(progress, f"plan library for {task}"), velocity_limit=bound)
+    return ctrl.library.digest()
 
 
 def _run_case(
@@ -471,18 +476,16 @@ def _run_case(
         case.status = "done"
     else:
         seeds = []
-        library_ready = name != "library"
+        hardware = case.protocol in HARDWARE
+        if name == "library":  # minutes of planning at first use: a bar of its own; the journals name the library
+            on = {**on, "library_sha256": _build_library(task, hardware, progress)}
         for seed in settings.v3_seeds:
             path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
             keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
-            hardware = case.protocol in HARDWARE
             if hardware:
                 keys["passive_allowance"] = settings.passive_allowance
                 keys["hardware_plans"] = settings.hardware_plans
             summary = _read(path, keys) if resume else None
-            if summary is None and not library_ready:
-                _build_library(task, hardware, progress)  # minutes of planning at first use: a bar of its own
-                library_ready = True
             if summary is None:
                 summary = _run_v3(
                     task, name, seed, settings.v3_steps, _reporter(progress, f"{label}, seed {seed}"), plant,
