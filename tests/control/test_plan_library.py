@@ -228,3 +228,21 @@ def test_digest_names_exactly_the_plans_played() -> None:
     rescaled = _synthetic(starts)
     rescaled.velocity_scale = 0.4
     assert len({lib.digest(), grown.digest(), nudged.digest(), rescaled.digest()}) == 4
+
+
+def test_bounded_lookup_is_the_exact_lookup_within_the_bound() -> None:
+    """The controller's pruned search (within=accept) must pick exactly the knot the full search picks, or none."""
+    rng = np.random.default_rng(11)
+    lib = _synthetic(rng.uniform(-3.0, 3.0, (6, 4)))
+    states = np.column_stack([rng.uniform(-np.pi, np.pi, (400, 2)), rng.normal(0.0, 6.0, (400, 2))])
+    found = 0
+    for x in states:
+        i, k, d = lib.nearest(x)
+        for within in (0.5, 1.0, d):  # d itself: a knot exactly at the bound still counts
+            got = lib.nearest(x, within=within)
+            if d <= within:
+                assert got == (i, k, d)
+                found += within != d
+            else:
+                assert got == (-1, -1, math.inf)
+    assert 0 < found < 800  # both outcomes were exercised
