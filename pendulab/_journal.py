@@ -5,7 +5,7 @@ study) keeps its finished units in a journal, rewritten atomically (:func:`pendu
 after each batch. A journal file is one JSON object::
 
     {"format": "pendulab-journal", "format_version": 1, "kind": "scorecard",
-     "pendulab_version": "0.1.0", "settings": {...}, "header_sha256": "...",
+     "pendulab_version": "0.1.0+src.1a2b3c4d5e6f7a8b", "settings": {...}, "header_sha256": "...",
      "meta": {...}, "meta_sha256": "...",
      "records": {"KEY": {"sha256": "...", "data": {...}}, ...}}
 
@@ -16,7 +16,9 @@ work is done, and trusts nothing that does not validate:
 
 * a file that is not valid JSON (truncated, damaged), a JSON file without the journal format (written by an
   older pendulab), another pendulab version, another format version, or a header that does not match its hash
-  (settings edited by hand): **stale** -- no record is reused, everything is re-run, one notice;
+  (settings edited by hand): **stale** -- no record is reused, everything is re-run, one notice. The version is
+  :func:`~pendulab._version.source_version`: the release number *and* a digest of the package's source, so the work
+  of edited code (a changed controller constant) is stale too, though the release number stayed the same;
 * a record that does not match its hash (edited, damaged) or that lacks fields or does not belong to this work
   (the caller's ``check``): **dropped** and re-run, one notice per problem naming the records;
 * meta data that do not match their hash: dropped (e.g. a wall time is then "not journaled"), one notice;
@@ -41,7 +43,7 @@ from typing import Any
 
 from ._checks import stacklevel_outside_package
 from ._io import atomic_write_text, check_writable
-from ._version import __version__
+from ._version import source_version
 
 __all__ = [
     "FORMAT", "FORMAT_VERSION", "Journal", "JournalError", "JournalWarning", "canonical_json", "digest", "finite",
@@ -127,7 +129,7 @@ def notify(notices: Iterable[str]) -> None:
         warnings.warn(line, JournalWarning, stacklevel=stacklevel_outside_package())
 
 
-def header(kind: str, settings: Mapping[str, Any], version: str = __version__) -> dict[str, Any]:
+def header(kind: str, settings: Mapping[str, Any], version: str | None = None) -> dict[str, Any]:
     """The header of a journal: format, kind, pendulab version, settings and ``header_sha256`` over them.
 
     Parameters
@@ -136,17 +138,25 @@ def header(kind: str, settings: Mapping[str, Any], version: str = __version__) -
         What the journal records.
     settings : mapping
         Everything its records depend on.
-    version : str
-        The pendulab version (default: this one).
+    version : str, optional
+        The pendulab version; default: this code's :func:`~pendulab._version.source_version` (release and source
+        digest, so that a journal of edited code is stale even when the release number is the same).
 
     Returns
     -------
     dict
         The header fields of the file.
     """
+    version = source_version() if version is None else version
     head = {"format": FORMAT, "format_version": FORMAT_VERSION, "kind": kind, "pendulab_version": version,
             "settings": _plain(dict(settings))}  # fmt: skip
     return {**head, "header_sha256": digest(head)}
+
+
+def _code_changed(then: Any, now: str) -> str:
+    """Say so when only the code differs (same release number): the case a static release number used to hide."""
+    same_release = isinstance(then, str) and then.split("+")[0] == now.split("+")[0]
+    return " (same release, other code: its source changed since)" if same_release else ""
 
 
 def header_problem(doc: Any, kind: str, settings: Mapping[str, Any], path: str | Path) -> str | None:
@@ -184,9 +194,9 @@ def header_problem(doc: Any, kind: str, settings: Mapping[str, Any], path: str |
         )
     if doc.get("format_version") != FORMAT_VERSION:
         return f"has journal format {doc.get('format_version')!r}, this pendulab writes {FORMAT_VERSION}"
-    version = doc.get("pendulab_version")
-    if version != __version__:
-        return f"was written by pendulab {version}, this is pendulab {__version__}"
+    version, now_version = doc.get("pendulab_version"), source_version()
+    if version != now_version:
+        return f"was written by pendulab {version}, this is pendulab {now_version}{_code_changed(version, now_version)}"
     stored = doc.get("settings")
     head = {k: doc.get(k) for k in ("format", "format_version", "kind", "pendulab_version", "settings")}
     if doc.get("header_sha256") != digest(head):
@@ -262,7 +272,7 @@ class Journal:
         self.path = None if path is None else Path(path)
         self.kind = str(kind)
         self.settings: dict[str, Any] = _plain(dict(settings))
-        self.version = __version__
+        self.version = source_version()
         self.records: dict[str, Any] = {}
         self.meta: dict[str, Any] = {}
         self.notices: list[str] = []

@@ -8,7 +8,10 @@ in that window surfaced as a traceback. A package lists its public names with th
 Some public names are also submodule names (the function ``pendulab.ensemble`` and the package
 ``pendulab.ensemble``; ``pendulab.integrate.simulate``). Importing such a submodule makes the import system
 bind the submodule over the name; the installed module class ignores exactly that binding, so the name
-keeps meaning the public object however the modules were imported.
+keeps meaning the public object however the modules were imported. A public function named like a *package*
+(``pendulab.ensemble``) carries the package's dotted name as its ``__name__``: ``import pendulab.ensemble.flipmap
+as fm`` reaches the function first and then finds the submodule through that name
+(``tests/reliability/test_lazy_heavy_imports.py`` imports every module so).
 """
 
 from __future__ import annotations

@@ -232,6 +232,13 @@ def ensemble(
     )
 
 
+# ``pendulab.ensemble`` is this function (the public name) and also the package that holds it. ``import
+# pendulab.ensemble.flipmap as fm`` fetches the attribute ``ensemble`` of ``pendulab`` -- this function -- and then
+# ``flipmap`` of it; failing that, Python looks for the module named ``<its __name__>.flipmap`` in sys.modules. Named
+# as its package, the function lets that fallback find every submodule (errors and signatures use __qualname__).
+ensemble.__name__ = "pendulab.ensemble"
+
+
 def _fallback(
     model: Model,
     X0: np.ndarray,

@@ -254,12 +254,20 @@ class RunRequest:
         ValueError
             The run has no feedback, or the feedback returned a wrong shape or
             a non-finite torque.
+        SimulationError
+            ``x`` is not finite: the integration diverged (e.g. a fixed step too long for stiff springs) before
+            the feedback was due, so the run fails as a run; the feedback is not called with that state.
         """
         if self.feedback is None:
             raise ValueError("this run has no feedback; use the input schedule")
         # Every family's per-interval loop passes here: the wall-time budget holds for all of them.
         self.check_budget(t, None)
-        value = self.feedback(t, np.array(x, dtype=float))
+        state = np.array(x, dtype=float)
+        if not np.isfinite(state).all():
+            # Otherwise the feedback turns the diverged state into a NaN torque and the run's failure is reported
+            # as the caller's bad feedback (ValueError) instead of the integration's (found by the property fuzz).
+            raise self.fail(t, "the state became non-finite before the feedback was sampled (the integration diverged)")
+        value = self.feedback(t, state)
         try:
             return self.model.check_input(np.asarray(value, dtype=float).reshape(self.model.nu), "u(t, x)")
         except (TypeError, ValueError) as exc:  # TypeError: not numbers at all (e.g. a dict)

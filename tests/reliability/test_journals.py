@@ -26,11 +26,18 @@ import pytest
 
 import pendulab
 from pendulab._journal import JournalError, JournalWarning, header
+from pendulab._version import source_version
 from pendulab.cli import main
 
-#: One record edited / missing a field (that record re-runs); another version / old layout / truncated (all re-run).
-TAMPERS = ("edit", "drop_field", "version", "legacy", "truncate")
+#: One record edited / missing a field (that record re-runs); another version / the same release with other code /
+#: old layout / truncated (all re-run).
+TAMPERS = ("edit", "drop_field", "version", "code", "legacy", "truncate")
 ONE_RECORD = ("edit", "drop_field")
+
+
+#: The version a tampered journal claims: an older release; this release run by other code (an edited checkout), the
+#: case a static release number used to hide (a changed controller constant read back as this code's scores).
+_OTHER = {"version": "0.0.1", "code": f"{pendulab.__version__}+src.{'0' * 16}"}
 
 
 def _tamper(path: Path, how: str, edit: Any, field: str) -> str:
@@ -41,8 +48,8 @@ def _tamper(path: Path, how: str, edit: Any, field: str) -> str:
         edit(doc["records"][key]["data"])
     elif how == "drop_field":
         del doc["records"][key]["data"][field]
-    elif how == "version":  # a consistent journal of another pendulab: only the version differs
-        doc.update(header(doc["kind"], doc["settings"], version="0.0.1"))
+    elif how in ("version", "code"):  # a consistent journal of another pendulab: only the version differs
+        doc.update(header(doc["kind"], doc["settings"], version=_OTHER[how]))
     elif how == "legacy":  # what pendulab wrote before journals carried a version and hashes
         doc = {**doc["settings"], "records": [e["data"] for e in doc["records"].values()]}
     elif how == "truncate":
@@ -58,6 +65,7 @@ def _expected_notice(how: str, key: str, field: str) -> str:
         "edit": f"record {key} edited by hand or damaged",
         "drop_field": f"record {key} incomplete (lacks field {field!r})",
         "version": "was written by pendulab 0.0.1, this is pendulab",
+        "code": f"was written by pendulab {_OTHER['code']}, this is pendulab {source_version()} (same release, other code",
         "legacy": "carries no pendulab version or integrity hash",
         "truncate": "is not valid JSON (truncated or damaged",
     }[how]
@@ -372,8 +380,8 @@ def _tamper_npz(path: Path, how: str) -> None:
         arrays["values"][1] = 0.5 if math.isnan(arrays["values"][1]) else arrays["values"][1] + 0.5
     elif how == "drop_field":  # the first block's hash is gone: that block cannot be trusted
         del doc["records"]["0-6"]
-    elif how == "version":
-        doc.update(header(doc["kind"], doc["settings"], version="0.0.1"))
+    elif how in ("version", "code"):
+        doc.update(header(doc["kind"], doc["settings"], version=_OTHER[how]))
     elif how == "legacy":
         arrays["identity"] = np.str_(json.dumps(doc["settings"]))
         del arrays["journal"]
