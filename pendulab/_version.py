@@ -26,12 +26,17 @@ def source_digest(root: Path) -> str:
         64 hex digits; equal trees give equal digests, any file edited, added, removed or renamed gives another.
     """
     import hashlib
+    import os
 
+    files = []
+    for folder, subfolders, names in os.walk(root):
+        subfolders[:] = [d for d in subfolders if d != "__pycache__"]
+        rel = Path(folder).relative_to(root)
+        files += [(rel / n).as_posix() for n in names if os.path.splitext(n)[1] in SOURCE_SUFFIXES]
     total = hashlib.sha256()
-    files = sorted(p for p in root.rglob("*") if p.suffix in SOURCE_SUFFIXES and "__pycache__" not in p.parts and p.is_file())
-    for path in files:
-        total.update(path.relative_to(root).as_posix().encode() + b"\0")
-        total.update(hashlib.sha256(path.read_bytes()).digest())
+    for name in sorted(files):
+        total.update(name.encode() + b"\0")
+        total.update(hashlib.sha256((root / name).read_bytes()).digest())
     return total.hexdigest()
 
 
