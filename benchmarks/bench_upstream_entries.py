@@ -21,9 +21,9 @@ such). Each entry comes in up to three **variants** (``--variants``):
   how ``run_v3``/``run_v3_hardware`` treat an upstream object themselves.
 
 Protocols (``--protocols``): ``v3`` (:func:`pendulab.evaluate.realai.v3.run_v3` as it is), ``v3-legacy`` (the same loop
-with the reset schedule the published simulation runs drew, :func:`legacy_schedule`, and the entry clipped only by the
-plant's 6 N.m as upstream's simulator did), ``v3-hardware`` (:func:`~pendulab.evaluate.realai.v3_hardware.run_v3_hardware`,
-``--allowance`` 0.5 N.m by default).
+with the reset schedule the published simulation runs drew, ``schedule="published"``, and the entry clipped only by
+the plant's 6 N.m as upstream's simulator did, ``passive_limit=6``), ``v3-hardware``
+(:func:`~pendulab.evaluate.realai.v3_hardware.run_v3_hardware`, ``--allowance`` 0.5 N.m by default).
 
 How an entry is driven: upstream's protocols (simulation and hardware alike) wrap the entry in
 ``GlobalPolicyTestingControllerV2``, which calls the entry's **raw** ``get_control_output_(x, t)`` (no filter, no
@@ -91,7 +91,8 @@ CANNOT_RUN = {
     ),
 }
 SEEDS_V3 = {"pendubot": [333], "acrobot": [777]}
-#: Seeds whose legacy schedule matches the published simulation runs' reset times (see :func:`legacy_schedule`).
+#: Seeds whose published-draw schedule (``reset_schedule(seed, schedule="published")``) matches the published
+#: simulation runs' reset times.
 LEGACY_SEEDS = {"pendubot": [777], "acrobot": [333]}
 
 
@@ -281,41 +282,6 @@ class RawEntry:
         return np.asarray(self.controller.get_control_output_(np.asarray(x, dtype=float), t), dtype=float).reshape(-1)
 
 
-def legacy_schedule(seed: int, n_resets: int = 15, t_max: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
-    """The reset schedule as the *published* ICRA 2025 simulation runs drew it (an older GlobalPolicyTestingControllerV2).
-
-    The published runs' reset times (read off the timeseries figures in real_ai_gym_leaderboard
-    ``data/<task>/simulation_icra2025/<entry>/timeseries.png``) match ``np.random.seed(777)`` for pendubot and
-    ``np.random.seed(333)`` for acrobot (MC-PILCO's runs, to the figure's 0.1 s resolution) when the wrapper first
-    draws ``uniform(0, 2 pi, (n_disturbances, 4))`` states (60 numbers), not the ``(10 n + 1, 4)`` of upstream's
-    current code (604 numbers) that :func:`pendulab.evaluate.realai.v3_definition.reset_schedule` follows. Rows past
-    ``n_resets`` are padded (never used: the last reset time is ``inf``).
-    """
-    rs = np.random.RandomState(int(seed))
-    states = rs.uniform(0.0, 2 * np.pi, (n_resets, 4)) - np.pi
-    states.T[2:] *= 0.0
-    avg = t_max / float(n_resets + 1)
-    times = np.linspace(avg, t_max - avg, n_resets) + 2.0 * (rs.rand(n_resets) - 0.5)
-    states = np.vstack([states, np.zeros((10 * n_resets + 1 - n_resets, 4))])
-    return states, np.append(times, [np.inf], axis=0)
-
-
-@contextlib.contextmanager
-def _schedule(kind: str):
-    """``legacy``: run_v3 draws its schedule with :func:`legacy_schedule` (patched for the duration)."""
-    import pendulab.evaluate.realai.v3 as v3mod
-
-    if kind != "legacy":
-        yield
-        return
-    saved = v3mod.reset_schedule
-    v3mod.reset_schedule = lambda seed, *a, **k: legacy_schedule(seed)
-    try:
-        yield
-    finally:
-        v3mod.reset_schedule = saved
-
-
 def case_id(variant: str, entry: str, task: str, protocol: str, seed: int, allowance: float) -> str:
     tail = f"_a{allowance:g}" if protocol == "v3-hardware" else ""
     return f"{variant}_{entry}_{task}_{protocol}_s{seed}{tail}"
@@ -328,7 +294,7 @@ def run_case(
     from pendulab.control.realai.adapter import from_realai
     from pendulab.evaluate.realai.leaderboard_published import PUBLISHED_HARDWARE as PUBLISHED_HW_BEST
     from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
-    from pendulab.evaluate.realai.v3 import ProtocolController, run_v3
+    from pendulab.evaluate.realai.v3 import run_v3
     from pendulab.evaluate.realai.v3_definition import PLANT_LIMIT
     from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
 
@@ -363,7 +329,7 @@ def run_case(
         ctrl, meta = load_entry(upstream, variant, entry, task)
     load_s = time.perf_counter() - t0
     # hw-adapter: the upstream object handed to pendulab as is, so run_v3/run_v3_hardware wrap it themselves
-    # (from_realai(entry, task=task): get_control_output with the entry's filter, passive torque dropped, init per run)
+    # (pendulab.evaluate.realai.v3.protocol_entry: RawEntry, get_control_output_ raw, clipped to the rules, timed)
     wrapped = ctrl if variant == "hw-adapter" else from_realai(RawEntry(ctrl), task="full", sample_time=0.002)
     label = f"{LABELS[entry]} ({variant})"
     if protocol == "v3":
@@ -373,10 +339,7 @@ def run_case(
     elif protocol == "v3-legacy":
         # the published simulation runs exactly: their schedule draw, and the entry's torque clipped only by the
         # simulated plant's [6, 6] (upstream's Simulator clips everything to mpar_nolim; the [6, 0] rule is not enforced)
-        proto = ProtocolController(task, wrapped)
-        proto.limit[:] = PLANT_LIMIT
-        with _schedule("legacy"):
-            res = run_v3(task, proto, label, seed=seed, progress=progress)
+        res = run_v3(task, wrapped, label, seed=seed, progress=progress, passive_limit=PLANT_LIMIT, schedule="published")
     else:
         res = run_v3_hardware(task, wrapped, label, seed=seed, passive_allowance=allowance, progress=progress)
     if isinstance(ctrl, AcadosProxy):

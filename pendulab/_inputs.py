@@ -339,6 +339,8 @@ _DECLARED: tuple[Input, ...] = (
     _r("torque", "a joint torque (an input's value or amplitude)", "N.m", -1e4, 1e4),
     # = pendulab.evaluate.realai.v3_hardware.PASSIVE_ALLOWANCE: the hardware rules' motor-friction allowance.
     _r("passive_allowance", "torque the controller may put on the passive joint (hardware rules)", "N.m", 0.0, 0.5),
+    # 0 is the v3 simulation rule; upstream's simulator clipped entries only to the plant's 6 N.m (published runs).
+    _r("passive_limit", "torque a v3 entry may put on the passive joint (0: the rules; 6: upstream simulator)", "N.m", 0.0, 6.0),
     _r("frequency", "frequency of a sinusoidal input", "Hz", 0.0, 1e4, open_low=True),
     _r("horizon", "prediction or planning horizon", "s", 0.0, 30.0, open_low=True),
     _r("measurement_noise", "standard deviation of the measurement noise (angles rad, rates rad/s)", "", 0.0, 100.0),

@@ -105,6 +105,24 @@ def test_reset_schedule_matches_upstream_draw_order() -> None:
         reset_schedule(-1)
 
 
+def test_published_schedule_is_the_competition_wrappers_draw() -> None:
+    """The published ICRA 2025 runs' schedule: the competition-time wrapper drew (n, 4) states, then the times."""
+    np.random.seed(777)
+    states = np.random.uniform(0.0, 2 * np.pi, (15, 4)) - np.pi
+    states.T[2:] *= 0.0
+    times = np.linspace(60 / 16, 60 - 60 / 16, 15) + 2.0 * (np.random.rand(15) - 0.5)
+    s, t = reset_schedule(777, schedule="published")
+    np.testing.assert_array_equal(s[:15], states)
+    np.testing.assert_array_equal(t[:15], times)
+    assert s.shape == reset_schedule(777)[0].shape and not s[15:].any()  # rows past the resets: never reached
+    assert not np.array_equal(t, reset_schedule(777)[1])  # another draw than upstream's current code
+    res = run_v3("pendubot", DampingEntry(0), seed=777, n_steps=10, schedule="published")
+    np.testing.assert_array_equal(res.reset_times, times)
+    assert res.to_dict()["simulation"]["schedule"] == "published"
+    with pytest.raises(ValueError, match="schedule must be one of"):
+        reset_schedule(777, schedule="legacy")
+
+
 def test_uptime_formula_and_published_scores() -> None:
     t = np.arange(N_STEPS_V3) * 0.002
     h = np.where((t >= 10.0) & (t < 30.0), 0.49, 0.0)

@@ -79,6 +79,8 @@ __all__ = [
     "PUBLISHED_V3",
     "V3Result",
     "ProtocolController",
+    "RawEntry",
+    "protocol_entry",
     "reset_schedule",
     "uptime",
     "count_swingups",
@@ -87,7 +89,7 @@ __all__ = [
 ]
 
 
-@checked(passive_limit="passive_allowance")
+@checked()
 class ProtocolController:
     """A pendulab sampled controller as an upstream entry: ``get_control_output_(x_rel, t) -> (tau1, tau2)``.
 
@@ -104,7 +106,7 @@ class ProtocolController:
         Reset once, now.
     passive_limit : float
         Torque the passive joint may get [N.m] (0: the simulation rules; the ICRA 2025 hardware rules allow 0.5 N.m
-        to compensate motor friction, :mod:`.v3_hardware`).
+        to compensate motor friction, :mod:`.v3_hardware`; upstream's simulator enforced only the plant's 6 N.m).
     gap : float
         A call more than this after the previous one follows a reset: the controller samples at once [s] (the
         hardware loop's intervals reach 3.7 ms, so it widens this).
@@ -129,9 +131,7 @@ class ProtocolController:
             raise ValueError(f"controller.sample_time must be a positive multiple of {DT} s, got {h!r}")
         self.controller = controller
         self.ratio = ratio
-        self.limit = np.zeros(len(INPUT_NAMES))
-        self.limit[TASKS[task]] = TORQUE_LIMIT
-        self.limit[1 - TASKS[task]] = float(passive_limit)
+        self.limit = _entry_limits(task, passive_limit)
         self.gap = float(gap)
         self.call_times: list[float] = []
         self._held = np.zeros(len(INPUT_NAMES))
@@ -166,6 +166,118 @@ class ProtocolController:
         return self._held.copy()
 
 
+def _entry_limits(task: str, passive_limit: float) -> np.ndarray:
+    """(tau1, tau2) bounds of an entry's output [N.m]: the task's 6 N.m on the driven joint, ``passive_limit`` on the other."""
+    limit = np.zeros(len(INPUT_NAMES))
+    limit[TASKS[task]] = TORQUE_LIMIT
+    limit[1 - TASKS[task]] = float(passive_limit)
+    return limit
+
+
+@checked()
+class RawEntry:
+    """An upstream-style entry called raw, as upstream's ``GlobalPolicyTestingControllerV2`` calls it, under the rules.
+
+    ``get_control_output_(x_rel, t)`` is called on every loop step (upstream's wrapper neither filters nor calls
+    ``init``/``reset``); its wall time is recorded in :attr:`call_times` and its output clipped to the protocol's
+    limits, as a pendulab controller's is (:class:`ProtocolController`).
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task (which joint is driven).
+    entry : object
+        Has ``get_control_output_(x_rel, t) -> (tau1, tau2)``.
+    passive_limit : float
+        Torque the passive joint may get [N.m].
+
+    Raises
+    ------
+    ValueError
+        Unknown task.
+    TypeError
+        ``entry`` has no ``get_control_output_``.
+    """
+
+    def __init__(self, task: str, entry: Any, *, passive_limit: float = 0.0) -> None:
+        check_task(task)
+        if not callable(getattr(entry, "get_control_output_", None)):
+            raise TypeError(f"entry must have get_control_output_(x_rel, t), got {type(entry).__name__}")
+        self.entry = entry
+        self.limit = _entry_limits(task, passive_limit)
+        self.call_times: list[float] = []
+
+    def get_control_output_(self, x: np.ndarray, t: float) -> np.ndarray:
+        """(tau1, tau2) [N.m] of the entry at upstream state ``x`` (``q2`` relative), clipped to the limits."""
+        t0 = time.perf_counter()
+        u = self.entry.get_control_output_(x, t)
+        self.call_times.append(time.perf_counter() - t0)
+        return np.clip(_torque_pair(u, self.entry, t), -self.limit, self.limit)
+
+
+def _torque_pair(u: Any, entry: Any, t: float) -> np.ndarray:
+    """An entry's output as a finite (tau1, tau2) pair, or a ValueError naming the entry and the time."""
+    try:
+        pair = np.asarray(u, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        pair = np.empty(0)
+    if pair.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(pair)):
+        raise ValueError(
+            f"entry {type(entry).__name__} returned {u!r} at t = {t:.6g} s; expected two finite torques (tau1, tau2) [N.m]"
+        )
+    return pair
+
+
+@checked()
+def protocol_entry(task: str, entry: Any, *, passive_limit: float = 0.0, gap: float = 1.5 * DT) -> ProtocolController | RawEntry:
+    """The one way an entry enters a v3 protocol: timed, and its torques clipped to the rules.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+    entry : ProtocolController, RawEntry, SampledController or upstream controller
+        A protocol wrapper (kept: it is one); an object with ``get_control_output_`` (every upstream
+        ``AbstractController`` has it) -> :class:`RawEntry`, called raw as upstream's wrapper does; an object with
+        only upstream's public interface (``init``, ``get_control_output``, ``reset``) -> through
+        :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms; a pendulab controller -> :class:`ProtocolController`.
+    passive_limit : float
+        Torque the passive joint may get [N.m] (the rules: 0 in simulation, up to 0.5 on hardware).
+    gap : float
+        A call this long after the previous one follows a reset [s] (:class:`ProtocolController`).
+
+    Returns
+    -------
+    ProtocolController or RawEntry
+        Records ``call_times``. The runners clip its output to the same limits again
+        (``_entry_torque``), so a wrapper built elsewhere with wider limits cannot break the rules either.
+
+    Raises
+    ------
+    ValueError
+        Unknown task, or a controller sample time that is not a multiple of 2 ms.
+    TypeError
+        ``entry`` is none of these.
+    """
+    if isinstance(entry, (ProtocolController, RawEntry)):
+        return entry
+    if hasattr(entry, "get_control_output_"):
+        return RawEntry(task, entry, passive_limit=passive_limit)
+    ctrl = from_realai(entry, task=task) if is_realai_controller(entry) else entry
+    return ProtocolController(task, ctrl, passive_limit=passive_limit, gap=gap)
+
+
+def _entry_torque(proto: ProtocolController | RawEntry, x_rel: np.ndarray, t: float, limit: np.ndarray) -> np.ndarray:
+    """The entry's torques at upstream state ``x_rel``, checked and clipped to the protocol's ``limit`` (2,) [N.m].
+
+    Raises
+    ------
+    ValueError
+        The entry returned something other than two finite torques.
+    """
+    return np.clip(_torque_pair(proto.get_control_output_(x_rel, t), proto, t), -limit, limit)
+
+
 def _gravity_compensation(model: Model) -> Callable[[np.ndarray], np.ndarray]:
     """``-G(q)`` of upstream's plant (joint torques holding the configuration), from pendulab's parameters."""
     p = model.params
@@ -189,6 +301,8 @@ def run_v3(
     n_steps: int = N_STEPS_V3,
     progress: Callable[[int, int], None] | None = None,
     plant: IdentifiedPlant | None = None,
+    passive_limit: float = 0.0,
+    schedule: str = "current",
 ) -> V3Result:
     """Run an entry through the v3 protocol on pendulab's model and score it.
 
@@ -198,9 +312,10 @@ def run_v3(
         Leaderboard task.
     entry : SampledController or object with ``get_control_output_(x_rel, t)``
         A pendulab controller (wrapped in :class:`ProtocolController`) or an upstream-style entry
-        (relative angles, returns (tau1, tau2)), called raw as upstream's v3 calls its entry; an object with
-        only upstream's public interface (``init``, ``get_control_output``, ``reset``) runs through
-        :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms.
+        (relative angles, returns (tau1, tau2)), called raw as upstream's v3 calls its entry (:class:`RawEntry`);
+        an object with only upstream's public interface (``init``, ``get_control_output``, ``reset``) runs
+        through :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms (:func:`protocol_entry`). Whatever
+        the kind, its torques are clipped to the rules and its calls timed.
     name : str
         Controller name for the result.
     seed : int
@@ -212,6 +327,12 @@ def run_v3(
     plant : IdentifiedPlant, optional
         Simulate an identified robot (``pendulab identify``) instead of the nominal plant
         (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
+    passive_limit : float
+        Torque the entry may put on the passive joint [N.m]. The rules: 0 (default). Upstream's simulator enforced
+        only the plant's 6 N.m, so its published runs are reproduced with 6.
+    schedule : {"current", "published"}
+        How the resets are drawn from ``seed`` (:func:`reset_schedule`): upstream's current code, or as the
+        published ICRA 2025 simulation runs drew them (seed 777 pendubot, 333 acrobot reproduce those runs).
 
     Returns
     -------
@@ -227,13 +348,9 @@ def run_v3(
     """
     check_task(task)
     n_steps = bounded_int("n_steps", n_steps, low=1, high=N_STEPS_V3, why="the protocol runs 30000 steps of 2 ms")
-    states, times = reset_schedule(seed)
-    if hasattr(entry, "get_control_output_"):
-        proto = entry
-    elif is_realai_controller(entry):
-        proto = ProtocolController(task, from_realai(entry, task=task))
-    else:
-        proto = ProtocolController(task, entry)
+    states, times = reset_schedule(seed, schedule=schedule)
+    proto = protocol_entry(task, entry, passive_limit=passive_limit)
+    limit = _entry_limits(task, passive_limit)
     model = protocol_model(task, plant)
     grav = _gravity_compensation(model)
     kp, ki, kd = PID_GAINS
@@ -276,7 +393,7 @@ def run_v3(
             u = pid(xr) + grav(xr)
             st["timer"] += t - st["last_t"]
         else:
-            u = np.asarray(proto.get_control_output_(xr, t), dtype=float)
+            u = _entry_torque(proto, xr, t, limit)
         st["last_t"] = t
         # Simulator.get_real_applied_u: responsiveness 1 (last + 1 (u - last)), then the plant's [6, 6] clip.
         nu = np.clip(last_u + 1.0 * (u - last_u), -PLANT_LIMIT, PLANT_LIMIT)
@@ -293,7 +410,7 @@ def run_v3(
     threshold = HEIGHT_FRACTION * (prm.L1 + prm.L2)
     h = _end_height(model, x)
     up = uptime(t, h, threshold)
-    calls = np.asarray(getattr(proto, "call_times", []), dtype=float)
+    calls = np.asarray(proto.call_times, dtype=float)
     return V3Result(
         task=task,
         controller=name,
@@ -312,6 +429,8 @@ def run_v3(
         wall_time=time.perf_counter() - t_wall,
         plant=plant_label(plant),
         link_lengths=(prm.L1, prm.L2),
+        passive_limit=float(passive_limit),
+        schedule=schedule,
     )
 
 
@@ -324,6 +443,7 @@ def v3_score(
     progress: Callable[[int, int], None] | None = None,
     out: str | Path | None = None,
     plant: IdentifiedPlant | None = None,
+    schedule: str = "current",
 ) -> V3Result:
     """Score a controller on the RealAIGym v3 simulation protocol (60 s, 15 random resets, uptime / 60).
 
@@ -344,6 +464,8 @@ def v3_score(
     plant : IdentifiedPlant, optional
         Simulate an identified robot (``pendulab identify``) instead of the nominal plant
         (:func:`~pendulab.evaluate.realai.plant.protocol_params`); the controller keeps its design model.
+    schedule : {"current", "published"}
+        Reset draw (:func:`reset_schedule`); ``"published"`` with seed 333 / 777 is the published runs' schedule.
 
     Returns
     -------
@@ -363,7 +485,7 @@ def v3_score(
         raise TypeError(f"task must be a leaderboard task name (one of {list(TASKS)}), got {type(task).__name__}")
     task = check_task(short_name(task))
     name, ctrl = resolve_controller(task, controller)
-    result = run_v3(task, ctrl, name, seed=seed, progress=progress, plant=plant)
+    result = run_v3(task, ctrl, name, seed=seed, progress=progress, plant=plant, schedule=schedule)
     if out is not None:
         from .v3_figure import plot_v3
 

@@ -58,7 +58,6 @@ import numpy as np
 from ..._inputs import checked
 from ..._io import atomic_write_text
 from ...control.feedback import SampledController, full_input
-from ...control.realai.adapter import from_realai, is_realai_controller
 from ...control.realai.spec import DT, HEIGHT_FRACTION, TASKS, TORQUE_LIMIT, check_task, leaderboard_model
 from ...identify.sensing import SensingModel, c1_sensing, ma1_coefficients
 from ...model.model import INPUT_NAMES
@@ -68,7 +67,7 @@ from ...model.robot import COULOMB_SHARPNESS
 from .controllers import RATE_BOUNDED, resolve_controller
 from .leaderboard_published import PUBLISHED_HARDWARE
 from .plant import plant_label, protocol_model
-from .v3 import ProtocolController, _gravity_compensation, v3_score
+from .v3 import _entry_limits, _entry_torque, _gravity_compensation, protocol_entry, v3_score
 from .v3_definition import count_swingups, reset_schedule, uptime
 from .v3_result import V3Result
 
@@ -191,7 +190,7 @@ class V3HardwareResult(V3Result):
             "loop_intervals": {"mean": float(iv.mean()) if iv.size else None, "max": float(iv.max()) if iv.size else None},
             "t_final": T_FINAL_HW,
             "loop_torque_limit": [LOOP_LIMIT, LOOP_LIMIT],
-            "entry_torque_limit": [TORQUE_LIMIT if i == TASKS[self.task] else self.passive_allowance for i in range(2)],
+            "entry_torque_limit": [TORQUE_LIMIT if i == TASKS[self.task] else self.passive_limit for i in range(2)],
             "n_resets": N_RESETS_HW,
             "reset_length": RESET_LENGTH_HW,
             "pid": {"gains": list(PID_GAINS_HW), "dt": PID_DT_HW, "pos_contribution_limit": PID_POS_LIMIT},
@@ -352,12 +351,9 @@ def run_v3_hardware(
         raise TypeError(f"sensing must be a SensingModel (pendulab.identify.sensing), got {type(sensing).__name__}")
     states, times = reset_schedule(seed, N_RESETS_HW, T_FINAL_HW)
     times = times.copy()
-    if hasattr(entry, "get_control_output_"):
-        proto = entry
-    else:
-        ctrl = from_realai(entry, task=task) if is_realai_controller(entry) else entry
-        # a reset interrupts the entry for at least 1 s; an overrun of the loop (<= 3.7 ms) does not
-        proto = ProtocolController(task, ctrl, passive_limit=allowance, gap=0.5 * RESET_LENGTH_HW)
+    # a reset interrupts the entry for at least 1 s; an overrun of the loop (<= 3.7 ms) does not
+    proto = protocol_entry(task, entry, passive_limit=allowance, gap=0.5 * RESET_LENGTH_HW)
+    limit = _entry_limits(task, allowance)
     model = protocol_model(task, plant)
     f = to_python(model.functions["rhs"])
     p = [float(v) for v in model.p]
@@ -417,7 +413,7 @@ def run_v3_hardware(
             u = np.clip([u1, u2], -LOOP_LIMIT, LOOP_LIMIT) + grav(xr)
             timer += t - last_t
         else:
-            u = np.asarray(proto.get_control_output_(xr, t), dtype=float)
+            u = _entry_torque(proto, xr, t, limit)
         last_t = t
         cmd = np.clip(u, -LOOP_LIMIT, LOOP_LIMIT)
         # the motor's 12-bit torque and the reading's noise: the identified plant's input was the reading
@@ -449,7 +445,7 @@ def run_v3_hardware(
     threshold = HEIGHT_FRACTION * (prm.L1 + prm.L2)
     h_meas = -prm.L1 * np.cos(y_arr[:, 0]) - prm.L2 * np.cos(y_arr[:, 1])
     up = uptime(t_arr, h_meas, threshold)
-    calls = np.asarray(getattr(proto, "call_times", []), dtype=float)
+    calls = np.asarray(proto.call_times, dtype=float)
     n_sched = N_RESETS_HW + limit_resets
     return V3HardwareResult(
         task=task,
@@ -473,6 +469,7 @@ def run_v3_hardware(
         stopped_at=stopped_at,
         limit_resets=limit_resets,
         passive_allowance=allowance,
+        passive_limit=allowance,
         sensing=sensing.to_dict(),
     )
 

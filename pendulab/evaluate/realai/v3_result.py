@@ -56,6 +56,10 @@ class V3Result:
         The simulated plant (:func:`~pendulab.evaluate.realai.plant.plant_label`).
     link_lengths : tuple of float
         L1, L2 of the simulated plant [m] (the end-effector height).
+    passive_limit : float
+        Torque the entry was allowed on the passive joint [N.m] (0: the rules).
+    schedule : str
+        How the resets were drawn from ``seed`` (:func:`~.v3_definition.reset_schedule`).
     """
 
     task: str
@@ -75,6 +79,8 @@ class V3Result:
     wall_time: float = 0.0
     plant: str = "nominal"
     link_lengths: tuple[float, float] | None = None
+    passive_limit: float = 0.0
+    schedule: str = "current"
 
     @property
     def height(self) -> np.ndarray:
@@ -149,9 +155,10 @@ class V3Result:
                 "dt": DT,
                 "t_final": T_FINAL_V3,
                 "plant_torque_limit": [PLANT_LIMIT, PLANT_LIMIT],
-                "entry_torque_limit": [TORQUE_LIMIT if i == TASKS[self.task] else 0.0 for i in range(2)],
+                "entry_torque_limit": [TORQUE_LIMIT if i == TASKS[self.task] else self.passive_limit for i in range(2)],
                 "n_resets": N_RESETS,
                 "reset_length": RESET_LENGTH,
+                "schedule": self.schedule,
                 "upstream": "dfki-ric-underactuated-lab/double_pendulum@1e8544e leaderboard/*/simulation_v3",
                 "plant": self.plant,
             },
