@@ -208,7 +208,25 @@ class RawEntry:
         self.call_times: list[float] = []
 
     def get_control_output_(self, x: np.ndarray, t: float) -> np.ndarray:
-        """(tau1, tau2) [N.m] of the entry at upstream state ``x`` (``q2`` relative), clipped to the limits."""
+        """The entry's torques, clipped to the limits, upstream's call.
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            Upstream state ``(q1, q2, dq1, dq2)``, ``q2`` relative [rad, rad/s].
+        t : float
+            Time [s].
+
+        Returns
+        -------
+        ndarray, shape (2,)
+            (tau1, tau2) [N.m].
+
+        Raises
+        ------
+        ValueError
+            The entry returned something other than two finite torques.
+        """
         t0 = time.perf_counter()
         u = self.entry.get_control_output_(x, t)
         self.call_times.append(time.perf_counter() - t0)

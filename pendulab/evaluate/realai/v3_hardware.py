@@ -126,6 +126,8 @@ class V3HardwareResult(V3Result):
         Inherited from :class:`~.v3_result.V3Result`, with ``t``, ``x`` and ``u`` as above.
     call_times, wall_time, plant, intervals, link_lengths : see V3Result
         Inherited from :class:`~.v3_result.V3Result`.
+    passive_limit, schedule : see V3Result
+        Inherited; ``passive_limit`` equals ``passive_allowance``; ``schedule`` is ``"current"`` (10 resets).
     measured : ndarray, shape (N, 4)
         What the controller saw: quantized angles, noisy rates (pendulab's absolute state) [rad, rad/s].
     stopped_at : float or None
