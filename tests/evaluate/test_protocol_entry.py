@@ -117,3 +117,22 @@ def test_protocol_entry_keeps_wrappers_and_wraps_the_rest():
     assert isinstance(protocol_entry("pendubot", Sampled()), ProtocolController)
     with pytest.raises(TypeError, match="SampledController"):
         protocol_entry("pendubot", object())
+
+
+def test_a_diverged_state_is_the_runs_failure_not_the_entrys():
+    """The class of tests/integrate/test_feedback_divergence.py in the protocol loop: the entry never sees NaN."""
+    from pendulab.evaluate.realai.v3 import _entry_limits, _entry_torque
+
+    seen: list[np.ndarray] = []
+
+    class Echo:
+        def get_control_output_(self, x, t):
+            seen.append(np.array(x))
+            return np.array([x[0], 0.0])
+
+    proto = protocol_entry("pendubot", Echo())
+    limit = _entry_limits("pendubot", 0.0)
+    assert np.array_equal(_entry_torque(proto, np.array([0.5, 0.0, 0.0, 0.0]), 0.1, limit), [0.5, 0.0])
+    with pytest.raises(ValueError, match=r"non-finite state at t = 0.2 s \(before the entry was called\)"):
+        _entry_torque(proto, np.array([np.nan, 0.0, 0.0, 0.0]), 0.2, limit)
+    assert len(seen) == 1

@@ -291,8 +291,11 @@ def _entry_torque(proto: ProtocolController | RawEntry, x_rel: np.ndarray, t: fl
     Raises
     ------
     ValueError
-        The entry returned something other than two finite torques.
+        The state is not finite (the run diverged: the entry is not called, so it is not blamed for the NaN
+        torques such a state gives), or the entry returned something other than two finite torques.
     """
+    if not np.all(np.isfinite(x_rel)):
+        raise ValueError(f"the v3 run produced a non-finite state at t = {t:.6g} s (before the entry was called)")
     return np.clip(_torque_pair(proto.get_control_output_(x_rel, t), proto, t), -limit, limit)
 
 
