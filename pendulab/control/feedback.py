@@ -596,7 +596,7 @@ class ControllerOutputError(ValueError):
     """A controller returned a command that is not a finite torque per driven input (never applied)."""
 
 
-def full_input(controller: SampledController, u: Any, t: float | None = None) -> np.ndarray:
+def full_input(controller: SampledController, u: Any, t: float | None = None, *, who: str | None = None) -> np.ndarray:
     """Check a controller output and scatter it into (tau1, tau2), zeros elsewhere.
 
     Every runner that applies a controller's command (simulate's feedback, co-simulation, the
@@ -611,6 +611,8 @@ def full_input(controller: SampledController, u: Any, t: float | None = None) ->
         The controller's torques [N.m].
     t : float, optional
         Time of the command [s], for the message.
+    who : str, optional
+        The name the message gives the controller (default its class's; a wrapper names what it wraps).
 
     Returns
     -------
@@ -624,14 +626,14 @@ def full_input(controller: SampledController, u: Any, t: float | None = None) ->
     """
     names = tuple(controller.input_names)
     when = "" if t is None else f" at t = {t:.6g} s"
+    who = type(controller).__name__ if who is None else who
     try:
         values = np.asarray(u, dtype=float).reshape(-1)
     except (TypeError, ValueError) as exc:
-        raise ControllerOutputError(f"{type(controller).__name__} returned {u!r}{when}: not torques ({exc})") from exc
+        raise ControllerOutputError(f"{who} returned {u!r}{when}: not torques ({exc})") from exc
     if values.shape != (len(names),) or not np.isfinite(values).all():
         raise ControllerOutputError(
-            f"{type(controller).__name__} returned {values.tolist()!r}{when}; expected {len(names)} finite torque(s) "
-            f"[N.m] for {list(names)}"
+            f"{who} returned {values.tolist()!r}{when}; expected {len(names)} finite torque(s) [N.m] for {list(names)}"
         )
     full = np.zeros(len(INPUT_NAMES))
     for name, value in zip(names, values, strict=True):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pendulab.control.feedback import ControllerOutputError
 from pendulab.evaluate.realai.v3 import ProtocolController, RawEntry, protocol_entry, run_v3
 from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
 from pendulab.identify.sensing import c1_sensing
@@ -101,13 +102,19 @@ def test_upstream_simulator_mode_passes_the_plant_limit():
 
 
 @pytest.mark.parametrize("bad", [[1.0], [np.nan, 0.0], "ab", None, [[1.0, 2.0]] * 2])
-def test_an_entry_returning_anything_but_two_finite_torques_is_named(bad):
-    class Bad:
+@pytest.mark.parametrize("kind", ["raw", "sampled"])
+def test_an_entry_returning_anything_but_its_finite_torques_is_named(bad, kind):
+    class BadRaw:
         def get_control_output_(self, x, t):
             return bad
 
-    with pytest.raises(ValueError, match=r"entry Bad returned .* at t = 0 s; expected two finite torques"):
-        run_v3("pendubot", Bad(), seed=0, n_steps=10)
+    class BadSampled(Sampled):
+        def __call__(self, t, x):
+            return bad
+
+    entry = BadRaw() if kind == "raw" else BadSampled()
+    with pytest.raises(ControllerOutputError, match=rf"{type(entry).__name__} returned .* at t = 0 s[:;]"):
+        run_v3("pendubot", entry, seed=0, n_steps=10)
 
 
 def test_protocol_entry_keeps_wrappers_and_wraps_the_rest():

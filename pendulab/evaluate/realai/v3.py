@@ -199,6 +199,9 @@ class RawEntry:
         ``entry`` has no ``get_control_output_``.
     """
 
+    #: An upstream entry commands both joints, (tau1, tau2), for :func:`~pendulab.control.feedback.full_input`.
+    input_names: tuple[str, ...] = tuple(INPUT_NAMES)
+
     def __init__(self, task: str, entry: Any, *, passive_limit: float = 0.0) -> None:
         check_task(task)
         if not callable(getattr(entry, "get_control_output_", None)):
@@ -224,26 +227,13 @@ class RawEntry:
 
         Raises
         ------
-        ValueError
-            The entry returned something other than two finite torques.
+        ControllerOutputError
+            The entry returned something other than two finite torques (a ``ValueError``).
         """
         t0 = time.perf_counter()
         u = self.entry.get_control_output_(x, t)
         self.call_times.append(time.perf_counter() - t0)
-        return np.clip(_torque_pair(u, self.entry, t), -self.limit, self.limit)
-
-
-def _torque_pair(u: Any, entry: Any, t: float) -> np.ndarray:
-    """An entry's output as a finite (tau1, tau2) pair, or a ValueError naming the entry and the time."""
-    try:
-        pair = np.asarray(u, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        pair = np.empty(0)
-    if pair.shape != (len(INPUT_NAMES),) or not np.all(np.isfinite(pair)):
-        raise ValueError(
-            f"entry {type(entry).__name__} returned {u!r} at t = {t:.6g} s; expected two finite torques (tau1, tau2) [N.m]"
-        )
-    return pair
+        return np.clip(full_input(self, u, t, who=type(self.entry).__name__), -self.limit, self.limit)
 
 
 @checked()
@@ -286,17 +276,18 @@ def protocol_entry(task: str, entry: Any, *, passive_limit: float = 0.0, gap: fl
 
 
 def _entry_torque(proto: ProtocolController | RawEntry, x_rel: np.ndarray, t: float, limit: np.ndarray) -> np.ndarray:
-    """The entry's torques at upstream state ``x_rel``, checked and clipped to the protocol's ``limit`` (2,) [N.m].
+    """The entry's torques at upstream state ``x_rel``, clipped to the protocol's ``limit`` (2,) [N.m].
 
     Raises
     ------
     ValueError
         The state is not finite (the run diverged: the entry is not called, so it is not blamed for the NaN
-        torques such a state gives), or the entry returned something other than two finite torques.
+        torques such a state gives), or the entry returned something other than two finite torques (both
+        wrappers check their output with :func:`~pendulab.control.feedback.full_input`).
     """
     if not np.all(np.isfinite(x_rel)):
         raise ValueError(f"the v3 run produced a non-finite state at t = {t:.6g} s (before the entry was called)")
-    return np.clip(_torque_pair(proto.get_control_output_(x_rel, t), proto, t), -limit, limit)
+    return np.clip(proto.get_control_output_(x_rel, t), -limit, limit)
 
 
 def _gravity_compensation(model: Model) -> Callable[[np.ndarray], np.ndarray]:
