@@ -13,6 +13,12 @@ with the next run of the chunk (time 0, new state and parameters, cooldowns rese
 go on where they stopped. Lanes with no run left idle (target = their current time). Recorded
 (non-terminal) events are ``nt_event_batch`` with a callback that stores the first crossing
 time of the lane's current run.
+
+**Streaming.** That stepped loop stops the batch once per finished run. Without an output grid or
+recorded events a chunk first streams its runs through the lanes instead: every terminal event's
+callback records the run and refills its lane without stopping the batch (:mod:`.stream`, which
+says how the time axis and the horizon are kept exact); only the runs still going near ``t_final``
+are finished by the stepped loop. The results are the same doubles (the flip map: every cell).
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from ..integrate.taylor.translate import used_parameter_count
 from ..model.builders import build_elastic, build_rigid
 from ..model.model import model_functions
 from .events import EventPlan
+from .stream import CLOCK_EVENT, Stream, Terminal
 
 __all__ = [
     "BatchKey",
@@ -61,8 +68,12 @@ SIMD_ENV = "PENDULAB_SIMD_SIZE"
 MAX_BATCH_SIZE = 64
 #: Batch steps per propagation slice: budgets and the stop flag are checked between slices.
 SLICE_STEPS = 2000
+#: Target time of the streaming phase's propagations: never reached (the runs' clocks end them).
+_FAR_TIME = 1e300
 #: Internal event indices of the elastic model's spring-collapse events (r1 = 0, r2 = 0).
 _SPRING_EVENTS = {-10: 1, -11: 2}
+#: Name of the run clock's state variable (not a state name of any model).
+_CLOCK_NAME = "pendulab_run_clock"
 
 
 class ChunkStoppedError(Exception):
@@ -258,23 +269,29 @@ def build(key: BatchKey) -> _Built:
                 expr = ev_exprs[arg]
             d = {0: hy.event_direction.any, 1: hy.event_direction.positive, -1: hy.event_direction.negative}[direction]
             if plan.terminal[k]:
-                t_events.append(hy.t_event_batch(expr, direction=d))
+                t_events.append(hy.t_event_batch(expr, direction=d, callback=Terminal(k)))
                 t_index.append(k)
             else:
                 nt_events.append(hy.nt_event_batch(expr, _Recorder(k), direction=d))
                 nt_index.append(k)
         if key.kind == "elastic":  # a spring through zero length ends its run as failed (simulate's rule)
             for k, j in _SPRING_EVENTS.items():
-                t_events.append(hy.t_event_batch(xs[1 + j], direction=hy.event_direction.negative))
+                t_events.append(hy.t_event_batch(xs[1 + j], direction=hy.event_direction.negative, callback=Terminal(k)))
                 t_index.append(k)
         S = key.batch_size
         # heyoka sizes the parameters by the highest index used (structural zeros can remove the last ones).
         events_used = [ev.expression for ev in (*t_events, *nt_events)]
         n_used = used_parameter_count([rhs for _, rhs in ode.sys] + events_used)
+        # Each run's own clock (module pendulab.ensemble.stream): rate and end are the last two parameters.
+        clock = hy.make_vars(_CLOCK_NAME)
+        t_events.append(
+            hy.t_event_batch(clock - hy.par[n_used + 1], direction=hy.event_direction.positive, callback=Terminal(CLOCK_EVENT))
+        )
+        t_index.append(CLOCK_EVENT)
         template = hy.taylor_adaptive_batch(
-            ode.sys,
-            np.zeros((len(names), S)),
-            pars=np.zeros((n_used, S)),
+            [*ode.sys, (clock, hy.par[n_used])],
+            np.zeros((len(names) + 1, S)),
+            pars=np.zeros((n_used + 2, S)),
             tol=key.tol,
             t_events=t_events,
             nt_events=nt_events,
@@ -320,8 +337,11 @@ def _translate_events(hy: Any, g: Any, key: BatchKey, names: tuple[str, ...], n_
 
 def _pars(built: _Built, P: np.ndarray, nu: int) -> np.ndarray:
     """Runtime parameters (n_par, m) of the runs' parameter rows ``P`` (m, np); one evaluation per distinct row."""
-    uniq, inv = np.unique(P, axis=0, return_inverse=True)
-    inv = np.asarray(inv).reshape(-1)
+    if (P == P[:1]).all():  # one parameter set (the flip map): np.unique's row sort cost 4 ms per chunk
+        uniq, inv = P[:1], np.zeros(len(P), dtype=np.intp)
+    else:
+        uniq, inv = np.unique(P, axis=0, return_inverse=True)
+        inv = np.asarray(inv).reshape(-1)
     n_par = nu + built.ode.n_derived + built.n_ev_derived
     cols = np.zeros((n_par, len(uniq)))
     for j, row in enumerate(uniq):
@@ -333,6 +353,11 @@ def _pars(built: _Built, P: np.ndarray, nu: int) -> np.ndarray:
 
 def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkOut:
     """Integrate one chunk of runs with one batch integrator (see the module docstring).
+
+    Without an output grid or recorded events the runs first stream through the lanes
+    (:mod:`pendulab.ensemble.stream`: refilled inside event callbacks, the batch never stops for a
+    finished run); the runs still going near ``t_final`` are finished exactly by the stepped loop,
+    which otherwise runs every run.
 
     Parameters
     ----------
@@ -352,24 +377,135 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     ChunkStoppedError
         ``stop()`` returned True.
     """
-    hy = heyoka_module()
     built = build(task.key)
     with built.lock:
         ta = copy.copy(built.template)
-    S = ta.batch_size
     m, nx = task.x0.shape
-    n_ev = len(task.key.events.names)
-    pars_all = _pars(built, task.p, built.ode.n_inputs)[: ta.pars.shape[0]]
-    x_final = np.full((m, nx), np.nan)
-    t_end = np.full(m, np.nan)
-    status = np.full(m, STATUS_PENDING, dtype=np.int8)
-    messages: dict[int, str] = {}
-    ev_times = np.full((n_ev, m), np.nan)
-    term_ev = np.full(m, -1, dtype=np.int64)
-    t_eval = task.t_eval
-    X = np.full((m, len(t_eval), nx), np.nan) if t_eval is not None else None
-    # The bookkeeping between two event stops is per-lane Python and, on the flip map, cost as much as
-    # the integration itself (one stop per finished run): it works on plain lists and on the
+    out = _Outcomes(task, len(task.key.events.names), nx)
+    pars_all = _pars(built, task.p, built.ode.n_inputs)[: ta.pars.shape[0] - 2]
+    if task.t_eval is None and not built.nt_index:
+        starts = _stream(ta, task, pars_all, out, stop)
+    else:
+        starts = [(r, task.x0[r], 0.0, 0.0, 0) for r in range(m)]
+    if starts:
+        _stepped(ta, built, task, pars_all, out, starts, stop)
+    out.check_finite()
+    return ChunkOut(task.index, out.x_final, out.t_end, out.status, out.messages, out.ev_times, out.term_ev, out.X, out.n_steps)
+
+
+class _Outcomes:
+    """Per-run result arrays of one chunk, and the rules that fill them."""
+
+    def __init__(self, task: ChunkTask, n_events: int, nx: int) -> None:
+        m = len(task.x0)
+        self.x_final = np.full((m, nx), np.nan)
+        self.t_end = np.full(m, np.nan)
+        self.status = np.full(m, STATUS_PENDING, dtype=np.int8)
+        self.messages: dict[int, str] = {}
+        self.ev_times = np.full((n_events, m), np.nan)
+        self.term_ev = np.full(m, -1, dtype=np.int64)
+        t_eval = task.t_eval
+        self.X = np.full((m, len(t_eval), nx), np.nan) if t_eval is not None else None
+        self.n_steps = 0
+
+    def fail(self, r: int, t: float, why: str) -> None:
+        self.status[r] = STATUS_FAILED
+        self.messages[r] = f"method 'taylor' (ensemble) failed at t = {t!r}: {why}"
+
+    def terminal(self, r: int, k: int, t: float, x: np.ndarray) -> None:
+        """Run ``r`` ended by terminal event ``k`` at ``t`` in state ``x``."""
+        if k in _SPRING_EVENTS:
+            self.fail(r, t, f"spring length r{_SPRING_EVENTS[k]} reached 0 m (a bob passed through its joint)")
+        else:
+            self.status[r] = STATUS_EVENT
+            self.term_ev[r] = k
+            self.ev_times[k, r] = t
+        self.end(r, t, x)
+
+    def end(self, r: int, t: float, x: np.ndarray) -> None:
+        """Final state and time of run ``r`` (checked for finiteness by :meth:`check_finite`)."""
+        self.x_final[r] = x
+        self.t_end[r] = t
+
+    def check_finite(self) -> None:
+        """A run that ended in a non-finite state fails (one vectorised check for the chunk)."""
+        for r in np.flatnonzero(~np.isfinite(self.x_final).all(axis=1) & (self.status != STATUS_FAILED)):
+            self.fail(int(r), float(self.t_end[r]), "the state became non-finite")
+
+
+def _stream(ta: Any, task: ChunkTask, pars_all: np.ndarray, out: _Outcomes, stop: Callable[[], bool] | None) -> list:
+    """Streaming phase (:mod:`.stream`); returns the runs to finish in the stepped loop, as its starts."""
+    hy = heyoka_module()
+    nf = hy.taylor_outcome.err_nf_state
+    stream = Stream(ta, task.x0, pars_all, float(task.t_final), out.terminal)
+    callbacks = [ev.callback for ev in ta.t_events]
+    for cb in callbacks:
+        cb.stream = stream
+    try:
+        S = ta.batch_size
+        ta.set_dtime(np.zeros(S), np.zeros(S))
+        for lane in range(S):
+            stream.fill(lane, 0.0, 0.0)
+        far = np.full(S, _FAR_TIME)
+        max_steps, deadline = int(task.max_steps), task.deadline
+        while stream.active():
+            if stop is not None and stop():
+                raise ChunkStoppedError(f"ensemble chunk {task.index} stopped")
+            before = list(stream.runs)
+            budget_left = max_steps - max(n for n, r in zip(stream.steps, before, strict=True) if r >= 0)
+            ta.propagate_until(far, max_steps=max(1, min(SLICE_STEPS, budget_left)))
+            late = deadline is not None and time.time() > deadline
+            hi, lo = (np.array(a) for a in ta.dtime)
+            for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
+                r = stream.runs[lane]
+                if r >= 0 or before[lane] >= 0:  # an idle lane's steps are no run's
+                    out.n_steps += steps
+                if r < 0:
+                    continue
+                t = stream.run_elapsed(lane, float(hi[lane]), float(lo[lane]))[0]
+                if r == before[lane]:  # a run started inside the slice is charged from the next one
+                    stream.steps[lane] += steps
+                if outcome == nf:
+                    out.fail(r, t, "the state became non-finite (err_nf_state)")
+                elif stream.steps[lane] >= max_steps:
+                    out.fail(r, t, f"step budget exhausted (max_steps = {max_steps} steps)")
+                elif late:
+                    out.fail(r, t, "wall-time budget exhausted (max_wall_time)")
+                else:
+                    continue
+                out.end(r, t, ta.state[: stream.nx, lane])
+                stream.fill(lane, float(hi[lane]), float(lo[lane]))
+                ta.reset_cooldowns(lane)
+            if late:
+                for r, x, t, _lo, _n in stream.finish:
+                    out.fail(r, t, "wall-time budget exhausted (max_wall_time)")
+                    out.end(r, t, x)
+                stream.finish.clear()
+                _fail_unstarted(out, task, stream.next_run)
+                break
+    finally:
+        for cb in callbacks:
+            cb.stream = None
+    return stream.finish
+
+
+def _fail_unstarted(out: _Outcomes, task: ChunkTask, first: int) -> None:
+    """Runs not started when the wall-time budget ran out fail at once."""
+    for r in range(first, len(task.x0)):
+        out.fail(r, 0.0, "wall-time budget exhausted (max_wall_time) before the run started")
+        out.t_end[r] = 0.0
+        out.x_final[r] = task.x0[r]
+
+
+def _stepped(
+    ta: Any, built: _Built, task: ChunkTask, pars_all: np.ndarray, out: _Outcomes, starts: list, stop: Callable[[], bool] | None
+) -> None:
+    """The stepped loop: every lane's end stops the batch; ``starts`` are (run, state, t hi, t lo, steps)."""
+    hy = heyoka_module()
+    S = ta.batch_size
+    nx = task.x0.shape[1]
+    npar = pars_all.shape[0]
+    # The bookkeeping between two event stops is per-lane Python: it works on plain lists and on the
     # integrator's own state and parameter buffers (heyoka returns them as writable views), and only
     # the lanes whose outcome ends their run take the slow branch.
     state, pars = ta.state, ta.pars
@@ -379,46 +515,44 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
     ptr = np.zeros(S, dtype=np.int64)
     for ev in ta.nt_events if built.nt_index else ():
         cb = ev.callback
-        cb.times, cb.lane_run = ev_times, lane_run
+        cb.times, cb.lane_run = out.ev_times, lane_run
     target = np.empty(S)
     times = np.zeros(S)
-    next_run = 0
+    lows = np.zeros(S)
+    queue = iter(starts)
     t_index = built.t_index
     outcome_names = hy.taylor_outcome
     time_limit, nf, step_limit = outcome_names.time_limit, outcome_names.err_nf_state, outcome_names.step_limit
     going_on = (outcome_names.success, step_limit)
-    n_steps = 0
     has_events = bool(built.nt_index or built.t_index)
     max_steps, deadline = int(task.max_steps), task.deadline
-    t_final, x0 = float(task.t_final), task.x0
+    t_final, t_eval, X = float(task.t_final), task.t_eval, out.X
+    benign = (task.x0[0], pars_all[:, 0])
 
     def fill(lane: int) -> None:
-        nonlocal next_run
-        if next_run < m:
-            r = next_run
-            next_run += 1
+        start = next(queue, None)
+        if start is not None:
+            r, x, t_hi, t_lo, steps = start
             runs[lane] = lane_run[lane] = r
-            lane_steps[lane] = 0
-            times[lane] = 0.0
+            lane_steps[lane] = steps
+            times[lane], lows[lane] = t_hi, t_lo
             target[lane] = t_final
-            state[:, lane] = x0[r]
-            pars[:, lane] = pars_all[:, r]
-            if has_events:
-                ta.reset_cooldowns(lane)
+            state[:nx, lane] = x
+            pars[:npar, lane] = pars_all[:, r]
             ptr[lane] = 0
         else:  # idle: a benign finite state and parameters, no time to go
             runs[lane] = lane_run[lane] = -1
             target[lane] = times[lane]
-            state[:, lane] = x0[0]
-            pars[:, lane] = pars_all[:, 0]
-
-    def fail(r: int, t: float, why: str) -> None:
-        status[r] = STATUS_FAILED
-        messages[r] = f"method 'taylor' (ensemble) failed at t = {t!r}: {why}"
+            lows[lane] = 0.0
+            state[:nx, lane], pars[:npar, lane] = benign
+        state[nx, lane] = 0.0  # the run clock stands still here (rate 0, end never reached)
+        pars[npar, lane], pars[npar + 1, lane] = 0.0, 1.0
+        if has_events:
+            ta.reset_cooldowns(lane)
 
     for lane in range(S):
         fill(lane)
-    ta.set_time(times)
+    ta.set_dtime(times, lows)
     while any(r >= 0 for r in runs):
         if stop is not None and stop():
             raise ChunkStoppedError(f"ensemble chunk {task.index} stopped")
@@ -427,50 +561,46 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
         res = ta.propagate_until(target, max_steps=max(1, min(SLICE_STEPS, budget_left)), c_output=X is not None)
         times[:] = ta.time
         if X is not None:
-            _record_grid(res[0], t_eval, times, lane_run, ptr, X)
+            _record_grid(res[0], t_eval, times, lane_run, ptr, X, nx)
         late = deadline is not None and time.time() > deadline
         refill = []
         for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
-            n_steps += steps
+            out.n_steps += steps
             r = runs[lane]
             if r < 0:
                 continue
             lane_steps[lane] += steps
+            t = float(times[lane])
             if outcome in going_on:
                 if lane_steps[lane] >= max_steps:
-                    fail(r, float(times[lane]), f"step budget exhausted (max_steps = {max_steps} steps)")
+                    out.fail(r, t, f"step budget exhausted (max_steps = {max_steps} steps)")
                 elif late:
-                    fail(r, float(times[lane]), "wall-time budget exhausted (max_wall_time)")
+                    out.fail(r, t, "wall-time budget exhausted (max_wall_time)")
                 else:
                     continue
+                out.end(r, t, state[:nx, lane])
             elif outcome == time_limit:
-                status[r] = STATUS_OK
+                out.status[r] = STATUS_OK
+                out.end(r, t, state[:nx, lane])
             elif _TERMINAL_MIN < (o := int(outcome)) < 0:
-                k = t_index[-o - 1]
-                if k in _SPRING_EVENTS:
-                    j = _SPRING_EVENTS[k]
-                    fail(r, float(times[lane]), f"spring length r{j} reached 0 m (a bob passed through its joint)")
-                else:
-                    status[r] = STATUS_EVENT
-                    term_ev[r] = k
-                    ev_times[k, r] = times[lane]
+                out.terminal(r, t_index[-o - 1], t, state[:nx, lane])
             elif o >= 0:  # a terminal event whose callback let the run go on (not used here)
                 continue
             else:
                 why = "the state became non-finite (err_nf_state)" if outcome == nf else f"heyoka outcome {outcome}"
-                fail(r, float(times[lane]), why)
-            end_state = state[:, lane]
-            if status[r] != STATUS_FAILED and not np.isfinite(end_state).all():
-                fail(r, float(times[lane]), "the state became non-finite")
-            x_final[r] = end_state
-            t_end[r] = times[lane]
+                out.fail(r, t, why)
+                out.end(r, t, state[:nx, lane])
             refill.append(lane)
-        if late:  # runs not started yet fail at once: the budget is spent
-            while next_run < m:
-                fail(next_run, 0.0, "wall-time budget exhausted (max_wall_time) before the run started")
-                t_end[next_run] = 0.0
-                x_final[next_run] = x0[next_run]
-                next_run += 1
+        if late:  # runs not started (or not resumed) yet fail at once: the budget is spent
+            for r, x, t_hi, _lo, _n in queue:
+                out.fail(
+                    r,
+                    t_hi,
+                    "wall-time budget exhausted (max_wall_time) before the run started"
+                    if t_hi == 0.0
+                    else "wall-time budget exhausted (max_wall_time)",
+                )
+                out.end(r, t_hi, x)
         for lane in refill:
             fill(lane)
         if refill:
@@ -479,12 +609,13 @@ def run_chunk(task: ChunkTask, stop: Callable[[], bool] | None = None) -> ChunkO
             # depend on which runs share the batch, so a run's result changed at the last bit with the
             # chunking (a resumed flip map differed from an uninterrupted one by 1 ulp).
             hi, lo = (np.array(a) for a in ta.dtime)
-            hi[refill], lo[refill] = times[refill], 0.0
+            hi[refill], lo[refill] = times[refill], lows[refill]
             ta.set_dtime(hi, lo)
-    return ChunkOut(task.index, x_final, t_end, status, messages, ev_times, term_ev, X, n_steps)
 
 
-def _record_grid(co: Any, t_eval: np.ndarray, times: np.ndarray, lane_run: np.ndarray, ptr: np.ndarray, X: np.ndarray) -> None:
+def _record_grid(
+    co: Any, t_eval: np.ndarray, times: np.ndarray, lane_run: np.ndarray, ptr: np.ndarray, X: np.ndarray, nx: int
+) -> None:
     """Dense output of the last propagation at the grid points each lane passed."""
     stops = np.searchsorted(t_eval, times, side="right")
     counts = np.where(lane_run >= 0, stops - ptr, 0)
@@ -497,5 +628,5 @@ def _record_grid(co: Any, t_eval: np.ndarray, times: np.ndarray, lane_run: np.nd
     vals = co(tm)  # (mmax, nx, S)
     for lane in np.flatnonzero(counts > 0):
         r = lane_run[lane]
-        X[r, ptr[lane] : stops[lane]] = vals[: counts[lane], :, lane]
+        X[r, ptr[lane] : stops[lane]] = vals[: counts[lane], :nx, lane]
         ptr[lane] = stops[lane]

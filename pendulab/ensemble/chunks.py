@@ -15,7 +15,7 @@ from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 import numpy as np
 
 from .batch import BatchKey, ChunkOut, ChunkStoppedError, ChunkTask, build, run_chunk
-from .pool import _sigint_blocked, completed, ignore_sigint, shutdown_now
+from .pool import completed, ignore_sigint, shutdown_now, sigint_blocked
 
 __all__ = ["local_chunk_size", "shared_workers"]
 
@@ -155,7 +155,7 @@ def _run_local(tasks: list[ChunkTask], threads: int, report: Callable[[int | Non
         if isinstance(pool, ThreadPoolExecutor):
             futures = {pool.submit(run_chunk, t, stop.is_set): t for t in tasks}
         else:
-            with _sigint_blocked():  # workers are forked in the first submit; ignore_sigint unblocks it in them
+            with sigint_blocked():  # workers are forked in the first submit; ignore_sigint unblocks it in them
                 futures = {pool.submit(run_chunk, t): t for t in tasks}
         for f in completed(futures):
             t = futures[f]

@@ -30,7 +30,7 @@ from typing import Any, TypeVar
 
 from .._inputs import checked
 
-__all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed"]
+__all__ = ["map_runs", "default_workers", "ignore_sigint", "shutdown_now", "completed", "sigint_blocked"]
 
 #: Most worker processes of one map.
 MAX_WORKERS = 256
@@ -137,7 +137,7 @@ def shutdown_now(pool: Executor) -> None:
 
 
 @contextlib.contextmanager
-def _sigint_blocked() -> Iterator[None]:
+def sigint_blocked() -> Iterator[None]:
     """Hold a Ctrl-C back while workers are forked; it is raised right after, once the pool knows every worker.
 
     Two layers: SIGINT is blocked in this thread (a child forked meanwhile starts with it blocked,
@@ -243,7 +243,7 @@ def map_runs(
         ctx = multiprocessing.get_context("fork")
         pool = ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx, initializer=ignore_sigint)
         try:
-            with _sigint_blocked():  # the workers are forked in the first submit
+            with sigint_blocked():  # the workers are forked in the first submit
                 futures = {pool.submit(_run_chunk, job, todo[s : s + size]): i for i, s in enumerate(starts)}
             done = 0
             for fut in completed(futures):
