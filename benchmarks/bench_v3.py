@@ -7,7 +7,8 @@ budget), the wall time and the load average; with ``--md`` the table is appended
 The ``library`` controller's plans are built (or completed) first, with a progress bar, under
 ``./pendulab-out/plan_library`` (``pendulab.control.plan_library``); ``--build-only`` stops after that.
 ``--grow-seeds 10 11 ...`` first plays the library on those *training* seeds (disjoint from the scored ones) and adds
-the reset hand-overs it did not cover (lookup distance above ``--grow-distance``) as starts of the library.
+the reset hand-overs it did not cover (lookup distance above ``--grow-distance``) as starts of the library
+(``--ship``: to the list shipped with pendulab, which every checkout's default library includes).
 ``--schedule published`` draws the resets as the published ICRA 2025 simulation runs did (seeds 777 pendubot, 333
 acrobot are those runs' schedules; :func:`pendulab.evaluate.realai.v3_definition.reset_schedule`).
 """
@@ -36,9 +37,14 @@ def _build(task: str, build: bool = True) -> object:
         bar.close()
 
 
-def _grow(task: str, seeds: list[int], distance: float) -> int:
-    """Play the library on training ``seeds``; add the hand-overs farther than ``distance`` from every knot as starts."""
+def _grow(task: str, seeds: list[int], distance: float, ship: bool = False) -> int:
+    """Play the library on training ``seeds``; add the hand-overs farther than ``distance`` from every knot as starts.
+
+    The starts go to the library's local list (``./pendulab-out/plan_library``), or with ``ship`` to the list shipped
+    with pendulab (``pendulab/control/realai/plans/grown_<task>.npz``, its training seeds recorded beside them).
+    """
     from pendulab._io import atomic_path
+    from pendulab.control.plan_library import read_shipped_grown, shipped_grown_path
 
     ctrl = _build(task)
     new = []
@@ -46,12 +52,20 @@ def _grow(task: str, seeds: list[int], distance: float) -> int:
         ctrl.handovers.clear()
         v3_score(task, ctrl, seed=seed)
         new += [h for h in ctrl.handovers if ctrl.library.nearest(h)[2] > distance]
-    path = ctrl.grown_starts  # the list of this library's design: no other library reads it
-    old = np.load(path) if path.exists() else np.zeros((0, 4))
-    starts = np.vstack([old, np.array(new).reshape(-1, 4)])
-    with atomic_path(path) as tmp:
-        np.save(tmp, starts)
-    print(f"{task}: {len(new)} hand-overs farther than {distance} from the library added ({len(starts)} grown starts)")
+    new_starts = np.array(new).reshape(-1, 4)
+    if ship:
+        path = shipped_grown_path(task)
+        old, old_seeds = read_shipped_grown(task, ctrl.design_digest)
+        starts = np.vstack([old, new_starts])
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, starts=starts, design=np.str_(ctrl.design_digest), seeds=np.array(old_seeds + list(seeds)))
+    else:
+        path = ctrl.grown_starts  # the list of this library's design: no other library reads it
+        old = np.load(path) if path.exists() else np.zeros((0, 4))
+        starts = np.vstack([old, new_starts])
+        with atomic_path(path) as tmp:
+            np.save(tmp, starts)
+    print(f"{task}: {len(new)} hand-overs farther than {distance} from the library added ({len(starts)} grown starts in {path})")
     return len(new)
 
 
@@ -83,6 +97,7 @@ def main() -> None:
     ap.add_argument("--cached-only", action="store_true", help="library: use the cached plans only, solve none")
     ap.add_argument("--grow-seeds", type=int, nargs="+", default=None, help="training seeds: add uncovered hand-overs")
     ap.add_argument("--grow-distance", type=float, default=0.2, help="lookup distance above which a hand-over is added")
+    ap.add_argument("--ship", action="store_true", help="--grow-seeds: add to the grown starts shipped with pendulab")
     ap.add_argument(
         "--schedule", choices=["current", "published"], default="current",
         help="reset draw: upstream's current code, or the published runs' (seed 777 pendubot / 333 acrobot)",
@@ -92,7 +107,7 @@ def main() -> None:
         if set(args.grow_seeds) & set(args.seeds):
             ap.error(f"--grow-seeds {args.grow_seeds} must not overlap the scored --seeds {args.seeds}")
         for task in args.tasks:
-            _grow(task, args.grow_seeds, args.grow_distance)
+            _grow(task, args.grow_seeds, args.grow_distance, args.ship)
     calls = []
     if "library" in args.controllers or args.build_only:
         built = {task: _build(task, not args.cached_only) for task in args.tasks}

@@ -54,6 +54,8 @@ __all__ = [
     "LIBRARY_VERSION",
     "DEFAULT_BRANCHES",
     "PlanCache",
+    "shipped_grown_path",
+    "read_shipped_grown",
     "PlanLibrary",
     "LibrarySwingUp",
     "reset_handover",
@@ -162,8 +164,12 @@ class PlanCache:
         Path
             An ``(S, 4)`` array of start states (theta1, theta2 [rad], omega1, omega2 [rad/s]) when present.
         """
-        digest = hashlib.sha256(json.dumps(self.design, sort_keys=True).encode()).hexdigest()[:20]
-        return self.directory / f"extra_starts-{digest}.npy"
+        return self.directory / f"extra_starts-{self.design_digest}.npy"
+
+    @property
+    def design_digest(self) -> str:
+        """SHA-256 (first 20 hex digits) of the design alone: names the starts grown for this design."""
+        return hashlib.sha256(json.dumps(self.design, sort_keys=True).encode()).hexdigest()[:20]
 
     def _what(self, start: np.ndarray) -> str:
         return f"the plan library in {self.directory} needs the plan from start {np.round(start, 6).tolist()}; it"
@@ -528,6 +534,8 @@ class LibrarySwingUp:
     grown_starts : Path or None
         Where starts grown for this library's design are listed (:meth:`PlanCache.grown_starts_path`): growth
         appends there, and only a library of the same design reads them.
+    design_digest : str
+        :attr:`PlanCache.design_digest` of the library's design ("" when not built by :func:`library_controller`).
     """
 
     fallback: GlobalSwingUp
@@ -538,6 +546,7 @@ class LibrarySwingUp:
     n_lookups: int = 0
     handovers: list[np.ndarray] = field(default_factory=list)
     grown_starts: Path | None = None
+    design_digest: str = ""
     _plan: tuple[int, int, float] | None = field(default=None, init=False, repr=False)
     _t_last: float | None = field(default=None, init=False, repr=False)
 
@@ -609,6 +618,54 @@ LIBRARY_BAND_BOUNDED: dict[str, bool] = {"pendubot": True, "acrobot": False}
 #: hardware protocol's 1 s PID resets hand over; a bound is given for that protocol).
 LIBRARY_REST_GRID: dict[str, int] = {"pendubot": 6, "acrobot": 6}
 DEFAULT_LIBRARY_DIR: str = "pendulab-out/plan_library"
+#: Grown starts shipped with pendulab, beside the shipped plans: ``grown_<task>.npz`` holds ``starts`` (S, 4), ``design``
+#: (:attr:`PlanCache.design_digest` of the design they were grown for) and ``seeds`` (the v3 *training* seeds whose
+#: hand-overs they are; ``benchmarks/bench_v3.py --grow-seeds ... --ship``). Shipped, every checkout builds the library
+#: its recorded scores were measured with, instead of one grown in a local cache that a fresh clone does not have.
+SHIPPED_GROWN_DIR: Path = Path(__file__).resolve().parent / "realai" / "plans"
+
+
+def shipped_grown_path(task: str) -> Path:
+    """The shipped grown starts of ``task``'s default library (:data:`SHIPPED_GROWN_DIR`).
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+
+    Returns
+    -------
+    Path
+    """
+    return SHIPPED_GROWN_DIR / f"grown_{task}.npz"
+
+
+def read_shipped_grown(task: str, design_digest: str) -> tuple[np.ndarray, list[int]]:
+    """Shipped grown starts of ``task`` when they were grown for the design ``design_digest``, else none.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+    design_digest : str
+        :attr:`PlanCache.design_digest` of the library asking.
+
+    Returns
+    -------
+    starts : ndarray, shape (S, 4)
+        (theta1, theta2 [rad], omega1, omega2 [rad/s]); S = 0 for another design or no file.
+    seeds : list of int
+        The training seeds they were grown on.
+    """
+    path = shipped_grown_path(task)
+    if not path.exists():
+        return np.zeros((0, 4)), []
+    with np.load(path, allow_pickle=False) as z:
+        if str(z["design"]) != design_digest:
+            return np.zeros((0, 4)), []
+        return np.asarray(z["starts"], dtype=float).reshape(-1, 4), [int(v) for v in z["seeds"]]
+
+
+def _valid_starts(a: np.ndarray) -> np.ndarray:
+    return a if a.ndim == 2 and a.shape[1] == 4 and np.all(np.isfinite(a)) else np.zeros((0, 4))
 
 
 @checked()
@@ -686,14 +743,15 @@ def library_controller(
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, LIBRARY_BRANCHES[task] if branches is None else branches)
+    if n_grid is None and branches is None:  # the shipped growth completes the default grid it was grown on
+        starts = np.vstack([starts, _valid_starts(read_shipped_grown(task, cache.design_digest)[0])])
     extra = cache.grown_starts_path()
     if extra.exists():
         try:
             more = np.load(extra, allow_pickle=False)
         except (OSError, ValueError, EOFError):
             more = np.zeros((0, 4))  # a damaged list only loses the grown starts; the grid stands
-        if more.ndim == 2 and more.shape[1] == 4 and np.all(np.isfinite(more)):
-            starts = np.vstack([starts, more])
+        starts = np.vstack([starts, _valid_starts(more)])
     if rest_grid is None:
         n_rest = LIBRARY_REST_GRID[task] if velocity_limit is not None else 0
     else:
@@ -718,4 +776,4 @@ def library_controller(
         velocity_limit=design.get("velocity_limit"),
         progress=progress,
     )
-    return LibrarySwingUp(fb, lib, accept=accept, grown_starts=extra)
+    return LibrarySwingUp(fb, lib, accept=accept, grown_starts=extra, design_digest=cache.design_digest)

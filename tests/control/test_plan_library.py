@@ -246,3 +246,43 @@ def test_bounded_lookup_is_the_exact_lookup_within_the_bound() -> None:
             else:
                 assert got == (-1, -1, math.inf)
     assert 0 < found < 800  # both outcomes were exercised
+
+
+def test_shipped_grown_starts_are_read_for_their_own_design_only(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(plan_library, "SHIPPED_GROWN_DIR", tmp_path)
+    grown = np.array([[2.0, -1.0, 3.0, 0.5], [0.5, 0.2, -4.0, 1.0]])
+    with open(tmp_path / "grown_acrobot.npz", "wb") as fh:
+        np.savez(fh, starts=grown, design=np.str_("abc123"), seeds=np.array([30, 31]))
+    starts, seeds = plan_library.read_shipped_grown("acrobot", "abc123")
+    np.testing.assert_array_equal(starts, grown)
+    assert seeds == [30, 31]
+    other, no_seeds = plan_library.read_shipped_grown("acrobot", "another design")  # grown for another library
+    assert other.shape == (0, 4) and no_seeds == []
+    assert plan_library.read_shipped_grown("pendubot", "abc123")[0].shape == (0, 4)  # no file for that task
+
+
+def test_shipped_growth_completes_only_the_default_grid(tiny, tmp_path, monkeypatch) -> None:
+    # Starts grown on the default library's hand-overs mean nothing to another grid: a library built on its own
+    # grid (n_grid / branches given) ignores them; the default grid takes them, after its own starts.
+    ctrl, _ = tiny
+    grown = np.array([[1.0, 1.0, 0.0, 0.0]])
+    monkeypatch.setattr(plan_library, "SHIPPED_GROWN_DIR", tmp_path)
+    with open(tmp_path / "grown_pendubot.npz", "wb") as fh:
+        np.savez(fh, starts=grown, design=np.str_(ctrl.design_digest), seeds=np.array([30]))
+    seen = []
+
+    def spy(fb, task, starts, *args, **kwargs):
+        seen.append(np.array(starts))
+        raise RuntimeError("stop before solving")
+
+    monkeypatch.setattr(plan_library, "build_library", spy)
+    empty = tmp_path / "cache"
+    for kw in ({"n_grid": 1, "branches": ((0, 0),)}, {}):
+        with pytest.raises(RuntimeError, match="stop before solving"):
+            library_controller("pendubot", directory=empty, **kw)
+    own, default = seen
+    assert len(ctrl.design_digest) == 20
+    assert not any(np.array_equal(row, grown[0]) for row in own)
+    np.testing.assert_array_equal(default[-1:], grown)
+    grid = library_starts(ctrl.fallback.model, plan_library.LIBRARY_GRID["pendubot"], plan_library.LIBRARY_BRANCHES["pendubot"])
+    np.testing.assert_array_equal(default[:-1], grid)
