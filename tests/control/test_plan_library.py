@@ -286,3 +286,11 @@ def test_shipped_growth_completes_only_the_default_grid(tiny, tmp_path, monkeypa
     np.testing.assert_array_equal(default[-1:], grown)
     grid = library_starts(ctrl.fallback.model, plan_library.LIBRARY_GRID["pendubot"], plan_library.LIBRARY_BRANCHES["pendubot"])
     np.testing.assert_array_equal(default[:-1], grid)
+
+
+def test_the_unbounded_library_takes_its_task_tube(tiny, monkeypatch) -> None:
+    ctrl, d = tiny
+    assert ctrl.replan_error == plan_library.LIBRARY_REPLAN_ERROR["pendubot"]
+    monkeypatch.setitem(plan_library.LIBRARY_REPLAN_ERROR, "pendubot", 0.3)
+    again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d, build=False)
+    assert again.replan_error == 0.3
