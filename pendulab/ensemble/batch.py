@@ -593,13 +593,8 @@ def _stepped(
             refill.append(lane)
         if late:  # runs not started (or not resumed) yet fail at once: the budget is spent
             for r, x, t_hi, _lo, _n in queue:
-                out.fail(
-                    r,
-                    t_hi,
-                    "wall-time budget exhausted (max_wall_time) before the run started"
-                    if t_hi == 0.0
-                    else "wall-time budget exhausted (max_wall_time)",
-                )
+                why = "wall-time budget exhausted (max_wall_time)"
+                out.fail(r, t_hi, f"{why} before the run started" if t_hi == 0.0 else why)
                 out.end(r, t_hi, x)
         for lane in refill:
             fill(lane)

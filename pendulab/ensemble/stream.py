@@ -6,7 +6,7 @@ stepped loop of :func:`pendulab.ensemble.batch.run_chunk` stopped once per finis
 of its time between steps. Here every terminal event has a callback (:class:`Terminal`) that records the
 run's end and puts the lane's next run in place, and returns True: the batch never stops for it.
 
-Two things heyoka forbids or does differently inside a callback, and how they are handled:
+Two obstacles, and how they are handled:
 
 * **A callback may not change the time.** A lane's runs follow each other on its time axis; each run
   keeps its start time ``t0`` (double length, hi + lo) and its elapsed time is computed exactly
@@ -42,7 +42,7 @@ CLOCK_MAX = 2.0**-30
 
 
 def clock_settings(t_final: float) -> tuple[float, float]:
-    """Clock rate and end value of runs of horizon ``t_final`` [s] (both exact powers-of-two scalings).
+    """Clock rate (a power of two, so the clock's increments are exact) and end value for runs of horizon ``t_final`` [s].
 
     Parameters
     ----------
