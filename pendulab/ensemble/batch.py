@@ -42,7 +42,7 @@ from ..integrate.taylor.translate import used_parameter_count
 from ..model.builders import build_elastic, build_rigid
 from ..model.model import model_functions
 from .events import EventPlan
-from .stream import CLOCK_EVENT, Stream, Terminal
+from .stream import CLOCK_EVENT, CLOCK_STILL, Stream, Terminal
 
 __all__ = [
     "BatchKey",
@@ -428,7 +428,17 @@ class _Outcomes:
         self.t_end[r] = t
 
     def check_finite(self) -> None:
-        """A run that ended in a non-finite state fails (one vectorised check for the chunk)."""
+        """A run that ended in a non-finite state fails (one vectorised check for the chunk).
+
+        Raises
+        ------
+        RuntimeError
+            A run was left without an outcome (a defect of the chunk's loops, named instead of reported as a
+            non-finite state).
+        """
+        pending = np.flatnonzero(self.status == STATUS_PENDING)
+        if pending.size:
+            raise RuntimeError(f"ensemble chunk left runs {pending.tolist()} without an outcome")
         for r in np.flatnonzero(~np.isfinite(self.x_final).all(axis=1) & (self.status != STATUS_FAILED)):
             self.fail(int(r), float(self.t_end[r]), "the state became non-finite")
 
@@ -456,6 +466,7 @@ def _stream(ta: Any, task: ChunkTask, pars_all: np.ndarray, out: _Outcomes, stop
             ta.propagate_until(far, max_steps=max(1, min(SLICE_STEPS, budget_left)))
             late = deadline is not None and time.time() > deadline
             hi, lo = (np.array(a) for a in ta.dtime)
+            ended = []
             for lane, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
                 r = stream.runs[lane]
                 if r >= 0 or before[lane] >= 0:  # an idle lane's steps are no run's
@@ -474,15 +485,17 @@ def _stream(ta: Any, task: ChunkTask, pars_all: np.ndarray, out: _Outcomes, stop
                 else:
                     continue
                 out.end(r, t, ta.state[: stream.nx, lane])
-                stream.fill(lane, float(hi[lane]), float(lo[lane]))
-                ta.reset_cooldowns(lane)
-            if late:
+                ended.append(lane)
+            if late:  # the budget is spent: the lanes' runs failed above, nothing more starts
                 for r, x, t, _lo, _n in stream.finish:
                     out.fail(r, t, "wall-time budget exhausted (max_wall_time)")
                     out.end(r, t, x)
                 stream.finish.clear()
                 _fail_unstarted(out, task, stream.next_run)
                 break
+            for lane in ended:
+                stream.fill(lane, float(hi[lane]), float(lo[lane]))
+                ta.reset_cooldowns(lane)
     finally:
         for cb in callbacks:
             cb.stream = None
@@ -546,7 +559,7 @@ def _stepped(
             lows[lane] = 0.0
             state[:nx, lane], pars[:npar, lane] = benign
         state[nx, lane] = 0.0  # the run clock stands still here (rate 0, end never reached)
-        pars[npar, lane], pars[npar + 1, lane] = 0.0, 1.0
+        pars[npar, lane], pars[npar + 1, lane] = CLOCK_STILL
         if has_events:
             ta.reset_cooldowns(lane)
 

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CLOCK_EVENT", "Terminal", "Stream", "elapsed", "clock_settings"]
+__all__ = ["CLOCK_EVENT", "CLOCK_STILL", "Terminal", "Stream", "elapsed", "clock_settings"]
 
 #: Internal event index of the run clock's end (streaming phase only).
 CLOCK_EVENT = -20
@@ -39,6 +39,8 @@ CLOCK_EVENT = -20
 SWITCH_FRACTION = 2.0**-8
 #: Largest clock value: far below any state of the pendulum, so the clock never changes heyoka's steps.
 CLOCK_MAX = 2.0**-30
+#: Clock rate and end of a lane whose clock must never end it (an idle lane, or any lane of the stepped loop).
+CLOCK_STILL = (0.0, 1.0)
 
 
 def clock_settings(t_final: float) -> tuple[float, float]:
@@ -130,7 +132,7 @@ class Stream:
         # rate and end), so a refill inside a callback is two assignments.
         self.x0 = np.column_stack([x0, np.zeros(self.m)])
         self.pars = np.vstack([pars, np.full((2, self.m), [[rate], [end]])]).T.copy()
-        self.idle = (self.x0[0], np.concatenate([pars[:, 0], [0.0, 1.0]]))  # benign, and its clock stands still
+        self.idle = (self.x0[0], np.concatenate([pars[:, 0], CLOCK_STILL]))  # benign, and its clock stands still
         self.record = record
         S = ta.batch_size
         self.runs = [-1] * S

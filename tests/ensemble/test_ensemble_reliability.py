@@ -135,6 +135,22 @@ def test_wall_time_budget_fails_the_rest(rigid: pl.Model) -> None:
     assert all("wall-time budget exhausted" in m for m in res.message)
 
 
+@pytest.mark.parametrize("t_eval", [None, [0.0, 5.0]])
+def test_wall_time_budget_names_every_run_of_a_chunk(rigid: pl.Model, t_eval) -> None:
+    # More runs per chunk than lanes (40 runs, 2 lanes, chunks of 10), in the streaming loop (no grid) and the stepped
+    # one: the runs in the lanes fail on the budget, the queued ones fail before they start; none is left without an
+    # outcome or reported as something else (a lane refilled after the budget ran out once read "non-finite state").
+    x0 = np.tile([1.0, 0.5, 0.0, 0.0], (40, 1))
+    res = pl.ensemble(rigid, x0, 1e12, max_steps=2**31 - 1, max_wall_time=0.2, threads=1, batch_size=2, t_eval=t_eval)
+    assert res.stats["chunk_size"] == 10 and res.status.tolist() == ["failed"] * 40
+    ends = ("wall-time budget exhausted (max_wall_time)", "before the run started")
+    assert all(m.endswith(ends) for m in res.message)
+    unstarted = np.array([m.endswith("before the run started") for m in res.message])
+    assert unstarted.sum() == 40 - 4 * 2  # each of the 4 chunks had its 2 lanes running when the budget ran out
+    assert np.all(res.t_final[unstarted] == 0.0) and np.array_equal(res.x_final[unstarted], x0[unstarted])
+    assert np.all(res.t_final[~unstarted] > 0.0)
+
+
 def test_default_step_budget_bounds_the_huge_horizon(rigid: pl.Model) -> None:
     res = pl.ensemble(rigid, [[1.0, 0.5, 0.0, 0.0]], 1e12, threads=1)
     assert res.status.tolist() == ["failed"] and "max_steps = 1000000" in res.message[0]
