@@ -49,9 +49,12 @@ import sys
 import time
 import traceback
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from pendulab.model.plant_file import IdentifiedPlant
 
 REPO = Path(__file__).resolve().parents[1]
 UPSTREAM_DEFAULT = Path(os.environ.get("REALAI_UPSTREAM", "/work/upstream_realai"))
@@ -288,9 +291,20 @@ def case_id(variant: str, entry: str, task: str, protocol: str, seed: int, allow
 
 
 def run_case(
-    upstream: Path, variant: str, entry: str, task: str, protocol: str, seed: int, allowance: float, progress: Any = None
+    upstream: Path,
+    variant: str,
+    entry: str,
+    task: str,
+    protocol: str,
+    seed: int,
+    allowance: float,
+    progress: Any = None,
+    plant: IdentifiedPlant | None = None,
 ) -> dict[str, Any]:
-    """Run one case and return its record (score, published scores, controller time, protocol details)."""
+    """Run one case and return its record (score, published scores, controller time, protocol details).
+
+    ``plant`` (an ``IdentifiedPlant``, v3-hardware only) replaces the identified C.1 as the simulated robot.
+    """
     from pendulab.control.realai.adapter import from_realai
     from pendulab.evaluate.realai.leaderboard_published import PUBLISHED_HARDWARE as PUBLISHED_HW_BEST
     from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
@@ -341,7 +355,7 @@ def run_case(
         # simulated plant's [6, 6] (upstream's Simulator clips everything to mpar_nolim; the [6, 0] rule is not enforced)
         res = run_v3(task, wrapped, label, seed=seed, progress=progress, passive_limit=PLANT_LIMIT, schedule="published")
     else:
-        res = run_v3_hardware(task, wrapped, label, seed=seed, passive_allowance=allowance, progress=progress)
+        res = run_v3_hardware(task, wrapped, label, seed=seed, passive_allowance=allowance, progress=progress, plant=plant)
     if isinstance(ctrl, AcadosProxy):
         wt = np.asarray(ctrl.worker_times)
         ctrl.close()
@@ -370,6 +384,7 @@ def run_case(
         published_sim=PUBLISHED_SIM[task].get(entry),
         published_hw_best=PUBLISHED_HW_BEST[task].get(entry),
         published_hw_mean=PUBLISHED_HW_MEAN[task].get(entry),
+        plant=None if plant is None else {"params": plant.params, "what_if": plant.meta.get("what_if")},
         status="ok",
         recorded=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     )
@@ -532,11 +547,23 @@ def main() -> None:
     ap.add_argument("--force", action="store_true", help="rerun recorded cases")
     ap.add_argument("--report", action="store_true", help="only print the tables of the recorded cases")
     ap.add_argument("--figure", type=Path, help="only draw simulated against published hardware score (PNG)")
+    ap.add_argument(
+        "--plant",
+        help="plant file of the simulated robot in v3-hardware (a what-if robot, IdentifiedPlant.with_params); "
+        "needs --protocols v3-hardware and an --out of its own, so its cases never mix with the identified robot's",
+    )
     ap.add_argument("--acados-worker", metavar="CON_FILE", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.acados_worker:
         acados_worker(args.acados_worker)
         return
+    plant = None
+    if args.plant is not None:
+        from pendulab.model.plant_file import load_plant
+
+        if args.protocols != ["v3-hardware"] or args.out == ap.get_default("out"):
+            ap.error("--plant needs --protocols v3-hardware and an --out directory of its own")
+        plant = load_plant(args.plant)
     args.out.mkdir(parents=True, exist_ok=True)
     if args.report:
         print(report(args.out))
@@ -579,7 +606,7 @@ def main() -> None:
             bar.refresh()
 
         try:
-            rec = run_case(args.upstream, variant, entry, task, protocol, seed, allowance, progress)
+            rec = run_case(args.upstream, variant, entry, task, protocol, seed, allowance, progress, plant)
         except Exception as exc:  # recorded, not fatal: the report says which entry failed and why
             rec = {
                 "case": cid,

@@ -2,8 +2,8 @@
 
 Run: ``python benchmarks/bench_v3_hardware.py [--tasks pendubot acrobot] [--controllers best global replan library]
 [--seeds-pendubot 333] [--seeds-acrobot 777] [--allowance 0 0.5] [--md benchmarks/results/v3_hardware.md]
-[--sensing] [--velocity-limit 16]``. One Markdown row per (task, controller, passive allowance): the score per seed,
-the mean, swing-ups, limit resets and safety stops, the largest measured joint rate, the controller's per-call
+[--sensing] [--velocity-limit 16] [--plant FILE]``. One Markdown row per (task, controller, passive allowance): the
+score per seed, the mean, swing-ups, limit resets and safety stops, the largest measured joint rate, the controller's per-call
 time (median / max over all calls; the loop's period is 2 ms) and the wall time. With the 0.5 N.m allowance
 pendulab's controllers run wrapped in :class:`~pendulab.evaluate.realai.v3_hardware.FrictionCompensated` (the
 identified C.1 friction, compensated on both joints from the measured rates), as the hardware teams used the
@@ -13,12 +13,18 @@ does (both through :func:`~pendulab.evaluate.realai.v3_hardware.hardware_entry`,
 finished case is kept in ``./pendulab-out/bench_v3_hardware/`` and a re-run reuses it. ``--sensing`` prints the
 measured sensing and timing table (``docs/realai_v3.md``). With ``--md`` the rows
 are appended to that file as a dated section.
+
+``--plant FILE`` simulates another robot (a plant file, e.g. a what-if copy of the identified C.1 written with
+``save_plant(load_plant("c1").with_params(cf1=0.033), FILE)``) while the controllers stay as they are designed for
+the identified C.1 (their models and friction compensation): a sensitivity study of the protocol to the robot.
+Its cases are kept apart (the file's parameters are part of each case's name).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import hashlib
 import json
 import os
 import time
@@ -29,6 +35,7 @@ import numpy as np
 from pendulab._io import atomic_write_text
 from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, PUBLISHED_HARDWARE, hardware_entry, run_v3_hardware
 from pendulab.identify.sensing import c1_sensing
+from pendulab.model.plant_file import IdentifiedPlant, load_plant
 
 
 def sensing_table() -> list[str]:
@@ -57,14 +64,25 @@ def sensing_table() -> list[str]:
 CASES = Path("pendulab-out/bench_v3_hardware")
 
 
-def _run(task: str, name: str, seed: int, allowance: float, velocity_limit: float | None) -> dict[str, object]:
-    path = CASES / f"{task}-{name}-seed{seed}-allowance{allowance:g}-vmax{velocity_limit or 0:g}.json"
+def plant_tag(plant: IdentifiedPlant | None) -> str:
+    """The part of a case's name that tells the simulated robot: empty for the identified C.1, else its digest."""
+    if plant is None or plant.params == load_plant("c1").params:
+        return ""
+    digest = hashlib.sha256(json.dumps(plant.params, sort_keys=True).encode()).hexdigest()[:10]
+    return f"-plant{digest}"
+
+
+def _run(
+    task: str, name: str, seed: int, allowance: float, velocity_limit: float | None, plant: IdentifiedPlant | None = None
+) -> dict[str, object]:
+    path = CASES / f"{task}-{name}-seed{seed}-allowance{allowance:g}-vmax{velocity_limit or 0:g}{plant_tag(plant)}.json"
     if path.exists():
         rec = json.loads(path.read_text())
         rec["calls"] = np.asarray(rec["calls"], dtype=float)
         return rec
+    # The controller as designed for the identified C.1; the simulated robot may be another (--plant).
     label, ctrl, _, _ = hardware_entry(task, name, allowance, velocity_limit=velocity_limit)
-    res = run_v3_hardware(task, ctrl, label, seed=seed, passive_allowance=allowance)
+    res = run_v3_hardware(task, ctrl, label, seed=seed, passive_allowance=allowance, plant=plant)
     rec = {
         "score": res.score,
         "swingups": res.n_swingups,
@@ -73,6 +91,7 @@ def _run(task: str, name: str, seed: int, allowance: float, velocity_limit: floa
         "max_rate": res.to_dict()["max_joint_rate"],
         "calls": np.asarray(res.call_times, dtype=float).tolist(),
         "wall": res.wall_time,
+        "plant": None if plant is None else {"params": plant.params, "what_if": plant.meta.get("what_if")},
     }
     CASES.mkdir(parents=True, exist_ok=True)
     atomic_write_text(path, json.dumps(rec) + "\n")
@@ -93,9 +112,16 @@ def main() -> None:
     ap.add_argument(
         "--velocity-limit", type=float, default=PLAN_VELOCITY_LIMIT_HW, help="plans' rate bound [rad/s] (0: unbounded)"
     )
+    ap.add_argument("--plant", default=None, help="plant file of the simulated robot (default the identified C.1)")
     args = ap.parse_args()
     vmax = args.velocity_limit or None
     lines: list[str] = []
+    plant = None if args.plant is None else load_plant(args.plant)
+    if plant is not None:
+        changed = plant.meta.get("what_if") or {}
+        what = ", ".join(f"{k} {v['identified']:.4g} -> {v['value']:.4g}" for k, v in changed.items()) or "parameters of the file"
+        lines += [f"Simulated robot: `{args.plant}` ({what}); controllers as designed for the identified C.1.", ""]
+        print(lines[-2], flush=True)
     if args.sensing:
         lines += ["### Sensing and timing measured on the C.1 excitation records", "", *sensing_table(), ""]
         print("\n".join(lines), flush=True)
@@ -112,7 +138,7 @@ def main() -> None:
             for allowance in args.allowance:
                 w0 = time.perf_counter()
                 try:
-                    runs = [_run(task, name, s, allowance, vmax) for s in seeds]
+                    runs = [_run(task, name, s, allowance, vmax, plant) for s in seeds]
                 except Exception as exc:  # noqa: BLE001 - a benchmark row records why a controller failed
                     row = f"| {task} | {name} | {allowance:g} | failed: {type(exc).__name__}: {str(exc)[:80]} | | | | | | | | | |"
                     rows.append(row)

@@ -86,6 +86,55 @@ class IdentifiedPlant:
         """
         return robot_to_rigid(self.params)
 
+    def with_params(self, **changes: float) -> IdentifiedPlant:
+        """A what-if copy of this robot with some parameters replaced (a sensitivity study's plant).
+
+        The copy keeps the standard errors, offsets and structure; its ``meta["what_if"]`` records
+        every replaced parameter with the identified value it replaced, so a saved what-if plant is
+        never mistaken for the identified one.
+
+        Parameters
+        ----------
+        **changes : float
+            New values by name (:data:`~pendulab.model.robot.ROBOT_PARAM_NAMES`, SI units as
+            ``params``).
+
+        Returns
+        -------
+        IdentifiedPlant
+            The changed robot (validated as every plant).
+
+        Raises
+        ------
+        ValueError
+            An unknown name, no change at all, or a non-finite or unphysical value.
+
+        Examples
+        --------
+        >>> from pendulab.identify import load_plant
+        >>> c1 = load_plant("c1")
+        >>> smooth = c1.with_params(cf1=0.033)  # the shoulder's Coulomb friction of DFKI's model 3.0
+        >>> smooth.params["cf1"], smooth.meta["what_if"]["cf1"]["identified"] == c1.params["cf1"]
+        (0.033, True)
+        """
+        if not changes:
+            raise ValueError("with_params needs at least one NAME=value change")
+        unknown = sorted(set(changes) - set(ROBOT_PARAM_NAMES))
+        if unknown:
+            raise ValueError(f"unknown plant parameters {unknown}; expected some of {list(ROBOT_PARAM_NAMES)}")
+        previous = dict(self.meta.get("what_if", {}))
+        what_if = {
+            name: {"value": float(value), "identified": previous.get(name, {}).get("identified", self.params[name])}
+            for name, value in changes.items()
+        }
+        return IdentifiedPlant(
+            params={**self.params, **changes},
+            stderr=self.stderr,
+            torque_offset=self.torque_offset,
+            structure=self.structure,
+            meta={**self.meta, "what_if": {**previous, **what_if}},
+        )
+
 
 def save_plant(plant: IdentifiedPlant, path: str | os.PathLike[str]) -> Path:
     """Write a plant file atomically.

@@ -71,3 +71,34 @@ def test_the_parameter_vector_refuses_unphysical_values_unless_a_protocol_asks()
     with pytest.raises(ValueError, match="cf1"):
         robot_params_vector(bad)
     assert robot_params_vector(bad, validate=False)[ROBOT_PARAM_NAMES.index("cf1")] == -0.2
+
+
+def test_what_if_plant_changes_only_the_named_friction_and_remembers_the_identified_value(tmp_path):
+    """with_params: the shoulder's Coulomb friction replaced shifts the shoulder torque by exactly the friction change."""
+    from pendulab.model.robot import COULOMB_SHARPNESS
+
+    c1 = load_plant("c1")
+    what_if = c1.with_params(cf1=0.033)
+    q, qd, qdd = [0.3, -0.2], [1.5, 0.0], [0.4, -0.1]  # shoulder turning, elbow at rest
+    tau = [robot_inverse_dynamics()(q, qd, qdd, robot_params_vector(p.params)).full().ravel() for p in (c1, what_if)]
+    shift = (0.033 - c1.params["cf1"]) * math.atan(COULOMB_SHARPNESS * 1.5)
+    assert tau[1][0] - tau[0][0] == pytest.approx(shift, rel=1e-12)  # rel: one subtraction of ~1 N.m torques
+    assert tau[1][1] == pytest.approx(tau[0][1], abs=1e-15)  # the elbow does not feel the shoulder's friction
+    # Chained changes keep the identified value, and the record survives the file.
+    twice = load_plant(save_plant(what_if.with_params(cf1=0.0, cf2=0.05), tmp_path / "w.json"))
+    assert twice.meta["what_if"] == {
+        "cf1": {"value": 0.0, "identified": c1.params["cf1"]},
+        "cf2": {"value": 0.05, "identified": c1.params["cf2"]},
+    }
+    assert {k: v for k, v in twice.params.items() if k not in ("cf1", "cf2")} == {
+        k: v for k, v in c1.params.items() if k not in ("cf1", "cf2")
+    }
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [({}, "at least one"), ({"zz": 1.0}, "unknown plant parameters"), ({"cf1": math.nan}, "finite"), ({"cf1": -0.1}, ">= 0")],
+)
+def test_what_if_plant_refuses_bad_changes(changes, message):
+    with pytest.raises(ValueError, match=message):
+        load_plant("c1").with_params(**changes)
