@@ -23,7 +23,9 @@ such). Each entry comes in up to three **variants** (``--variants``):
 Protocols (``--protocols``): ``v3`` (:func:`pendulab.evaluate.realai.v3.run_v3` as it is), ``v3-legacy`` (the same loop
 with the reset schedule the published simulation runs drew, ``schedule="published"``, and the entry clipped only by
 the plant's 6 N.m as upstream's simulator did, ``passive_limit=6``), ``v3-hardware``
-(:func:`~pendulab.evaluate.realai.v3_hardware.run_v3_hardware`, ``--allowance`` 0.5 N.m by default).
+(:func:`~pendulab.evaluate.realai.v3_hardware.run_v3_hardware`, ``--allowance`` 0.5 N.m by default; ``--plant FILE``
+a what-if robot), and ``upstream-sim``, a check rather than a pendulab protocol: the hardware-final acados entries
+through upstream's own wrapper and simulator only (:func:`upstream_simulation`, in the acados worker).
 
 How an entry is driven: upstream's protocols (simulation and hardware alike) wrap the entry in
 ``GlobalPolicyTestingControllerV2``, which calls the entry's **raw** ``get_control_output_(x, t)`` (no filter, no
@@ -156,9 +158,69 @@ ACADOS_SQP_CAP = 3  # SQP iterations per call of the acrobot acados entry (stand
 _REQ, _ANS = 6, 3  # float64 words: request [cmd, t, x1..x4] (cmd 0 call, 2 quit); answer [u1, u2, wall]
 
 
-def acados_worker(con_file: str) -> None:
+class _Timed:
+    """An upstream controller whose ``get_control_output_`` calls are timed (wall [s])."""
+
+    def __init__(self, controller: Any) -> None:
+        self.controller = controller
+        self.times: list[float] = []
+
+    def get_control_output_(self, x: Any, t: float | None = None) -> Any:
+        t0 = time.perf_counter()
+        u = self.controller.get_control_output_(x, t)
+        self.times.append(time.perf_counter() - t0)
+        return u
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.controller, name)
+
+
+def upstream_simulation(controller: Any, icra_dir: Path, dt: float, seed: int, t_final: float = 60.0) -> dict[str, Any]:
+    """An entry through upstream's own code only: the hardware final's wrapper in upstream's simulator.
+
+    ``GlobalPolicyTestingControllerV2`` with the hardware final's parameters (``experiments/icra_2025/parameters.py``:
+    10 PID resets of 1 s, limits 3.5 pi / 20 rad/s) around the entry, ``np.random.seed(seed)`` before it draws its
+    schedule, upstream's ``Simulator`` on the model-1.0 plant of that file (RK4 at the entry's ``dt``, torques clipped
+    to its [6, 6]), scored by upstream's ``get_uptime`` (height 0.9). Imports upstream and NumPy only (runs in either
+    venv); a check of pendulab's protocols against upstream's code, not a pendulab protocol.
+    """
+    with _in_dir(icra_dir):
+        from double_pendulum.analysis.leaderboard import get_number_of_swingups, get_uptime
+        from double_pendulum.controller.global_policy_testing_controller import GlobalPolicyTestingControllerV2
+        from double_pendulum.model.symbolic_plant import SymbolicDoublePendulum
+        from double_pendulum.simulation.simulation import Simulator
+        from parameters import goal, height, kd, ki, kp, method, mpar_nolim, n_disturbances, reset_length
+
+        timed = _Timed(controller)
+        np.random.seed(seed)
+        wrapper = GlobalPolicyTestingControllerV2(
+            timed, goal=goal, n_disturbances=n_disturbances, t_max=t_final, reset_length=reset_length, method=method,
+            height=height, mpar=mpar_nolim, kp=kp, ki=ki, kd=kd, pos_limit=3.5 * np.pi, vel_limit=20.0,
+            pid_pos_contribution_limit=[3.0, 3.0],
+        )  # fmt: skip
+        t0 = time.perf_counter()
+        T, X, U = Simulator(plant=SymbolicDoublePendulum(model_pars=mpar_nolim)).simulate(
+            t0=0.0, x0=[0.0] * 4, tf=t_final, dt=dt, controller=wrapper, integrator="runge_kutta"
+        )
+        T, X = np.asarray(T), np.asarray(X)
+        uptime = float(get_uptime(T, X, mpar=mpar_nolim, method="height", height=height))
+        times = np.asarray(timed.times)
+        return {
+            "score": uptime / t_final,
+            "uptime": uptime,
+            "n_swingups": int(get_number_of_swingups(T, X, mpar=mpar_nolim, method="height", height=height)),
+            "dt": dt,
+            "controller_time": {"median_s": float(np.median(times)), "max_s": float(times.max()), "calls": int(times.size)},
+            "wall_time_s": time.perf_counter() - t0,
+        }
+
+
+def acados_worker(con_file: str, simulate_seed: int | None = None) -> None:
     """``--acados-worker CON_FILE``: build upstream's AcadosMpc entry from its ``con_`` file (in the acados venv) and
-    answer ``get_control_output_`` requests on stdin/stdout (binary float64). Imports nothing of pendulab."""
+    answer ``get_control_output_`` requests on stdin/stdout (binary float64). Imports nothing of pendulab.
+
+    With ``simulate_seed`` (``--upstream-sim-seed``) it instead runs :func:`upstream_simulation` at the entry's own
+    ``dt`` and writes its record as one JSON line."""
     from acados_env import acados_env  # benchmarks/acados_env.py (this script's folder is on the path)
 
     acados_env()
@@ -206,6 +268,10 @@ def acados_worker(con_file: str) -> None:
     with _in_dir(path.parent):
         spec.loader.exec_module(mod)
     ctrl = mod.controller
+    if simulate_seed is not None:
+        rec = upstream_simulation(ctrl, path.parent, float(mod.dt), simulate_seed)
+        proto_out.write((json.dumps(rec) + "\n").encode())
+        return
     proto_out.write(b"READY\n")
     stdin = sys.stdin.buffer
     while True:
@@ -221,29 +287,42 @@ def acados_worker(con_file: str) -> None:
         proto_out.write(np.array([u[0], u[1], wall], dtype=np.float64).tobytes())
 
 
+def _acados_process(con_file: Path, log: Any, *extra: str) -> Any:
+    """The acados worker (``--acados-worker CON_FILE [extra]``) started in the acados venv, stderr to ``log``."""
+    import subprocess
+
+    py = ACADOS_VENV / "bin" / "python"
+    if not py.exists():
+        raise FileNotFoundError(f"no acados venv at {ACADOS_VENV} (bash benchmarks/setup_realai_env.sh)")
+    env = dict(os.environ)
+    libs = sorted(ACADOS_VENV.glob("lib/python3*/site-packages/acados/install/lib"))
+    if libs:  # the generated solver's library loads qpOASES/HPIPM/BLASFEO from here (dlopen: set before start)
+        env["LD_LIBRARY_PATH"] = os.pathsep.join([str(libs[0]), *filter(None, [env.get("LD_LIBRARY_PATH")])])
+    return subprocess.Popen(
+        [str(py), str(Path(__file__).resolve()), "--acados-worker", str(con_file), *extra],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=log,
+        env=env,
+    )
+
+
+def acados_upstream_simulation(con_file: Path, seed: int, log: Path) -> dict[str, Any]:
+    """:func:`upstream_simulation` of the acados entry ``con_file``, run by a worker in the acados venv."""
+    with open(log, "w") as fh:
+        proc = _acados_process(con_file, fh, "--upstream-sim-seed", str(seed))
+        out, _ = proc.communicate()
+    if proc.returncode != 0 or not out.strip():
+        raise RuntimeError(f"acados worker failed (exit {proc.returncode}; see {log})")
+    return json.loads(out.decode().strip().splitlines()[-1])
+
+
 class AcadosProxy:
     """Upstream's AcadosMpc entry in a worker process of the acados venv, with the entry's ``get_control_output_``."""
 
     def __init__(self, con_file: Path, log: Path) -> None:
-        import subprocess
-
-        py = ACADOS_VENV / "bin" / "python"
-        if not py.exists():
-            raise FileNotFoundError(f"no acados venv at {ACADOS_VENV} (bash benchmarks/setup_realai_env.sh)")
         self._log = open(log, "w")
-        env = dict(os.environ)
-        libs = sorted(ACADOS_VENV.glob("lib/python3*/site-packages/acados/install/lib"))
-        if libs:  # the generated solver's library loads qpOASES/HPIPM/BLASFEO from here (dlopen: set before start)
-            env["LD_LIBRARY_PATH"] = os.pathsep.join(
-                [str(libs[0])] + ([env["LD_LIBRARY_PATH"]] if env.get("LD_LIBRARY_PATH") else [])
-            )
-        self.proc = subprocess.Popen(
-            [str(py), str(Path(__file__).resolve()), "--acados-worker", str(con_file)],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=self._log,
-            env=env,
-        )
+        self.proc = _acados_process(con_file, self._log)
         line = self.proc.stdout.readline()
         if line.strip() != b"READY":
             self.close()
@@ -313,6 +392,39 @@ def run_case(
     from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
 
     t0 = time.perf_counter()
+    if protocol == "upstream-sim":
+        if entry != "acados_mpc" or variant != "hw":
+            raise RuntimeError(
+                "upstream-sim runs the hardware-final acados entries (AR-EAPO and MC-PILCO are checked against their "
+                "published runs instead: v3-legacy)"
+            )
+        con = entry_file(upstream, variant, entry, task)
+        if task == "acrobot":
+            os.environ.setdefault("REALAI_ACADOS_MAX_ITER", str(ACADOS_SQP_CAP))
+        cap = os.environ.get("REALAI_ACADOS_MAX_ITER") if task == "acrobot" else None
+        rec = acados_upstream_simulation(con, seed, Path(os.environ.get("REALAI_ACADOS_LOG", "/tmp")) / f"acados_sim_{task}.log")
+        rec.update(
+            case=case_id(variant, entry, task, protocol, seed, 0.0),
+            variant=variant,
+            entry=entry,
+            label=LABELS[entry],
+            task=task,
+            protocol=protocol,
+            seed=seed,
+            allowance=0.0,
+            upstream_file=str(con.relative_to(upstream)),
+            notes=[
+                "upstream's own code: GlobalPolicyTestingControllerV2 (hardware final's parameters) in upstream's Simulator "
+                "on the model-1.0 plant, RK4 at the entry's dt, np.random.seed(seed) before the wrapper, get_uptime",
+                *([f"full SQP capped at {cap} iterations per call (no timeout_max_time in acados 0.2.x)"] if cap else []),
+            ],
+            published_sim=PUBLISHED_SIM[task].get(entry),
+            published_hw_best=PUBLISHED_HW_BEST[task].get(entry),
+            published_hw_mean=PUBLISHED_HW_MEAN[task].get(entry),
+            status="ok",
+            recorded=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        )
+        return rec
     if entry == "acados_mpc":
         if variant != "hw":
             raise RuntimeError("only the hardware-final acados entry (experiments/icra_2025) is wired to the worker")
@@ -398,7 +510,10 @@ def planned_cases(args: argparse.Namespace) -> list[tuple[str, str, str, str, in
             for entry in args.entries:
                 protocols = [p for p in args.protocols if p != "v3-hardware"] if variant == "sim" else args.protocols
                 for protocol in protocols:
-                    if protocol == "v3-legacy":
+                    if protocol == "upstream-sim":  # upstream's own simulator: wired for the acados entries only
+                        if (variant, entry) == ("hw", "acados_mpc"):
+                            cases += [(variant, entry, task, protocol, s, 0.0) for s in args.hw_seeds]
+                    elif protocol == "v3-legacy":
                         cases += [(variant, entry, task, protocol, s, 0.0) for s in LEGACY_SEEDS[task]]
                     elif protocol == "v3":
                         seeds = list(dict.fromkeys(SEEDS_V3[task] + (args.extra_v3_seeds if variant == "hw" else [])))
@@ -539,7 +654,11 @@ def main() -> None:
     ap.add_argument("--entries", nargs="+", default=list(ENTRIES), choices=ENTRIES)
     ap.add_argument("--variants", nargs="+", default=["sim", "hw"], choices=["sim", "hw", "hw-adapter"])
     ap.add_argument(
-        "--protocols", nargs="+", default=["v3", "v3-legacy", "v3-hardware"], choices=["v3", "v3-legacy", "v3-hardware"]
+        "--protocols",
+        nargs="+",
+        default=["v3", "v3-legacy", "v3-hardware"],
+        choices=["v3", "v3-legacy", "v3-hardware", "upstream-sim"],
+        help="upstream-sim: the acados entries in upstream's own simulator and wrapper (a check of pendulab's protocols)",
     )
     ap.add_argument("--hw-seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--extra-v3-seeds", nargs="*", type=int, default=[], help="v3 seeds besides 333/777 (hw variant)")
@@ -553,9 +672,10 @@ def main() -> None:
         "needs --protocols v3-hardware and an --out of its own, so its cases never mix with the identified robot's",
     )
     ap.add_argument("--acados-worker", metavar="CON_FILE", help=argparse.SUPPRESS)
+    ap.add_argument("--upstream-sim-seed", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.acados_worker:
-        acados_worker(args.acados_worker)
+        acados_worker(args.acados_worker, args.upstream_sim_seed)
         return
     plant = None
     if args.plant is not None:
