@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import copy
 import importlib.util
 import json
 import os
@@ -154,6 +155,8 @@ def load_entry(upstream: Path, variant: str, entry: str, task: str) -> tuple[Any
 
 
 ACADOS_VENV = Path(os.environ.get("REALAI_ACADOS_VENV", "/work/venvs/realai-acados"))
+#: The checks in upstream's own code (see :func:`upstream_simulation`): on the model-1.0 plant, on the entry's own model.
+UPSTREAM_SIM = ("upstream-sim", "upstream-sim-own")
 ACADOS_SQP_CAP = 3  # SQP iterations per call of the acrobot acados entry (stands in for its 3 ms timeout)
 _REQ, _ANS = 6, 3  # float64 words: request [cmd, t, x1..x4] (cmd 0 call, 2 quit); answer [u1, u2, wall]
 
@@ -175,14 +178,17 @@ class _Timed:
         return getattr(self.controller, name)
 
 
-def upstream_simulation(controller: Any, icra_dir: Path, dt: float, seed: int, t_final: float = 60.0) -> dict[str, Any]:
+def upstream_simulation(
+    controller: Any, icra_dir: Path, dt: float, seed: int, t_final: float = 60.0, plant_pars: Any = None
+) -> dict[str, Any]:
     """An entry through upstream's own code only: the hardware final's wrapper in upstream's simulator.
 
     ``GlobalPolicyTestingControllerV2`` with the hardware final's parameters (``experiments/icra_2025/parameters.py``:
     10 PID resets of 1 s, limits 3.5 pi / 20 rad/s) around the entry, ``np.random.seed(seed)`` before it draws its
     schedule, upstream's ``Simulator`` on the model-1.0 plant of that file (RK4 at the entry's ``dt``, torques clipped
     to its [6, 6]), scored by upstream's ``get_uptime`` (height 0.9). Imports upstream and NumPy only (runs in either
-    venv); a check of pendulab's protocols against upstream's code, not a pendulab protocol.
+    venv); a check of pendulab's protocols against upstream's code, not a pendulab protocol. ``plant_pars`` (upstream
+    ``model_parameters``) replaces the model-1.0 plant, e.g. by the entry's own model.
     """
     with _in_dir(icra_dir):
         from double_pendulum.analysis.leaderboard import get_number_of_swingups, get_uptime
@@ -199,7 +205,8 @@ def upstream_simulation(controller: Any, icra_dir: Path, dt: float, seed: int, t
             pid_pos_contribution_limit=[3.0, 3.0],
         )  # fmt: skip
         t0 = time.perf_counter()
-        T, X, U = Simulator(plant=SymbolicDoublePendulum(model_pars=mpar_nolim)).simulate(
+        plant = SymbolicDoublePendulum(model_pars=mpar_nolim if plant_pars is None else plant_pars)
+        T, X, U = Simulator(plant=plant).simulate(
             t0=0.0, x0=[0.0] * 4, tf=t_final, dt=dt, controller=wrapper, integrator="runge_kutta"
         )
         T, X = np.asarray(T), np.asarray(X)
@@ -215,12 +222,13 @@ def upstream_simulation(controller: Any, icra_dir: Path, dt: float, seed: int, t
         }
 
 
-def acados_worker(con_file: str, simulate_seed: int | None = None) -> None:
+def acados_worker(con_file: str, simulate_seed: int | None = None, own_plant: bool = False) -> None:
     """``--acados-worker CON_FILE``: build upstream's AcadosMpc entry from its ``con_`` file (in the acados venv) and
     answer ``get_control_output_`` requests on stdin/stdout (binary float64). Imports nothing of pendulab.
 
     With ``simulate_seed`` (``--upstream-sim-seed``) it instead runs :func:`upstream_simulation` at the entry's own
-    ``dt`` and writes its record as one JSON line."""
+    ``dt`` and writes its record as one JSON line; with ``own_plant`` (``--upstream-sim-own``) on the entry's own model
+    (its ``con_`` file's ``mpar``: the links, friction and rotor inertia its MPC predicts with) instead of model 1.0."""
     from acados_env import acados_env  # benchmarks/acados_env.py (this script's folder is on the path)
 
     acados_env()
@@ -269,7 +277,11 @@ def acados_worker(con_file: str, simulate_seed: int | None = None) -> None:
         spec.loader.exec_module(mod)
     ctrl = mod.controller
     if simulate_seed is not None:
-        rec = upstream_simulation(ctrl, path.parent, float(mod.dt), simulate_seed)
+        own = None
+        if own_plant:
+            own = copy.deepcopy(mod.mpar)
+            own.Ir = float(np.ravel(own.Ir)[0])  # the con files set it as a list, which upstream's sympy plant refuses
+        rec = upstream_simulation(ctrl, path.parent, float(mod.dt), simulate_seed, plant_pars=own)
         proto_out.write((json.dumps(rec) + "\n").encode())
         return
     proto_out.write(b"READY\n")
@@ -307,10 +319,10 @@ def _acados_process(con_file: Path, log: Any, *extra: str) -> Any:
     )
 
 
-def acados_upstream_simulation(con_file: Path, seed: int, log: Path) -> dict[str, Any]:
+def acados_upstream_simulation(con_file: Path, seed: int, log: Path, own_plant: bool = False) -> dict[str, Any]:
     """:func:`upstream_simulation` of the acados entry ``con_file``, run by a worker in the acados venv."""
     with open(log, "w") as fh:
-        proc = _acados_process(con_file, fh, "--upstream-sim-seed", str(seed))
+        proc = _acados_process(con_file, fh, "--upstream-sim-seed", str(seed), *(["--upstream-sim-own"] if own_plant else []))
         out, _ = proc.communicate()
     if proc.returncode != 0 or not out.strip():
         raise RuntimeError(f"acados worker failed (exit {proc.returncode}; see {log})")
@@ -392,7 +404,7 @@ def run_case(
     from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
 
     t0 = time.perf_counter()
-    if protocol == "upstream-sim":
+    if protocol in UPSTREAM_SIM:
         if entry != "acados_mpc" or variant != "hw":
             raise RuntimeError(
                 "upstream-sim runs the hardware-final acados entries (AR-EAPO and MC-PILCO are checked against their "
@@ -402,7 +414,10 @@ def run_case(
         if task == "acrobot":
             os.environ.setdefault("REALAI_ACADOS_MAX_ITER", str(ACADOS_SQP_CAP))
         cap = os.environ.get("REALAI_ACADOS_MAX_ITER") if task == "acrobot" else None
-        rec = acados_upstream_simulation(con, seed, Path(os.environ.get("REALAI_ACADOS_LOG", "/tmp")) / f"acados_sim_{task}.log")
+        log = Path(os.environ.get("REALAI_ACADOS_LOG", "/tmp")) / f"acados_sim_{task}.log"
+        own = protocol == "upstream-sim-own"
+        rec = acados_upstream_simulation(con, seed, log, own_plant=own)
+        plant_note = "the entry's own model (its mpar)" if own else "the model-1.0 plant"
         rec.update(
             case=case_id(variant, entry, task, protocol, seed, 0.0),
             variant=variant,
@@ -415,7 +430,8 @@ def run_case(
             upstream_file=str(con.relative_to(upstream)),
             notes=[
                 "upstream's own code: GlobalPolicyTestingControllerV2 (hardware final's parameters) in upstream's Simulator "
-                "on the model-1.0 plant, RK4 at the entry's dt, np.random.seed(seed) before the wrapper, get_uptime",
+                f"on {plant_note}, "
+                "RK4 at the entry's dt, np.random.seed(seed) before the wrapper, get_uptime",
                 *([f"full SQP capped at {cap} iterations per call (no timeout_max_time in acados 0.2.x)"] if cap else []),
             ],
             published_sim=PUBLISHED_SIM[task].get(entry),
@@ -510,7 +526,7 @@ def planned_cases(args: argparse.Namespace) -> list[tuple[str, str, str, str, in
             for entry in args.entries:
                 protocols = [p for p in args.protocols if p != "v3-hardware"] if variant == "sim" else args.protocols
                 for protocol in protocols:
-                    if protocol == "upstream-sim":  # upstream's own simulator: wired for the acados entries only
+                    if protocol in UPSTREAM_SIM:  # upstream's own simulator: wired for the acados entries only
                         if (variant, entry) == ("hw", "acados_mpc"):
                             cases += [(variant, entry, task, protocol, s, 0.0) for s in args.hw_seeds]
                     elif protocol == "v3-legacy":
@@ -657,8 +673,9 @@ def main() -> None:
         "--protocols",
         nargs="+",
         default=["v3", "v3-legacy", "v3-hardware"],
-        choices=["v3", "v3-legacy", "v3-hardware", "upstream-sim"],
-        help="upstream-sim: the acados entries in upstream's own simulator and wrapper (a check of pendulab's protocols)",
+        choices=["v3", "v3-legacy", "v3-hardware", *UPSTREAM_SIM],
+        help="upstream-sim: the acados entries in upstream's own simulator and wrapper (a check of pendulab's protocols); "
+        "upstream-sim-own: the same on the entry's own model as the plant",
     )
     ap.add_argument("--hw-seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--extra-v3-seeds", nargs="*", type=int, default=[], help="v3 seeds besides 333/777 (hw variant)")
@@ -673,9 +690,10 @@ def main() -> None:
     )
     ap.add_argument("--acados-worker", metavar="CON_FILE", help=argparse.SUPPRESS)
     ap.add_argument("--upstream-sim-seed", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--upstream-sim-own", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.acados_worker:
-        acados_worker(args.acados_worker, args.upstream_sim_seed)
+        acados_worker(args.acados_worker, args.upstream_sim_seed, args.upstream_sim_own)
         return
     plant = None
     if args.plant is not None:
