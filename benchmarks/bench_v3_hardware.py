@@ -100,6 +100,57 @@ def _run(
     return rec
 
 
+def friction_figure(path: Path, controller: str = "mpc") -> Path:
+    """Score against the simulated robot's passive Coulomb friction, from the recorded cases (the ``--plant`` study).
+
+    One panel per task; per passive allowance the mean over the recorded seeds (line) and each seed (dots); the
+    identified value and the hardware winner's score marked. Cases of robots that differ from the identified C.1 in
+    more than the passive joint's ``cf`` are left out.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    c1 = load_plant("c1").params
+    points: dict[tuple[str, float], dict[float, list[float]]] = {}
+    for f in sorted(CASES.glob(f"*-{controller}-seed*.json")):
+        task = f.name.split("-")[0]
+        rec = json.loads(f.read_text())
+        params = (rec.get("plant") or {}).get("params") or c1
+        cf = "cf2" if task == "pendubot" else "cf1"
+        if any(params[k] != v for k, v in c1.items() if k != cf):
+            continue
+        allowance = float(f.name.split("-allowance")[1].split("-")[0])
+        points.setdefault((task, allowance), {}).setdefault(float(params[cf]), []).append(float(rec["score"]))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, task in zip(axes, ("pendubot", "acrobot"), strict=True):
+        joint = "elbow, cf2" if task == "pendubot" else "shoulder, cf1"
+        for (t, allowance), by_cf in sorted(points.items()):
+            if t != task:
+                continue
+            xs = sorted(by_cf)
+            label = (
+                "strict rule (allowance 0)"
+                if allowance == 0
+                else f"allowance {allowance:g} N m (compensating the identified friction)"
+            )
+            line = ax.plot(xs, [np.mean(by_cf[x]) for x in xs], "-o", label=label)[0]
+            for x in xs:
+                ax.plot([x] * len(by_cf[x]), by_cf[x], ".", color=line.get_color(), alpha=0.5)
+        ax.axvline(c1["cf2" if task == "pendubot" else "cf1"], color="k", ls=":", lw=1, label="identified C.1")
+        ax.axhline(PUBLISHED_HARDWARE[task]["acados_mpc"], color="tab:red", ls="--", lw=1, label="hardware winner (robot)")
+        ax.set_title(f"{task}: '{controller}' on v3-hardware")
+        ax.set_xlabel(f"passive joint's Coulomb friction ({joint}) [N m]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("score (uptime / 60 s) [-]")
+    axes[0].legend(loc="lower left", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=["pendubot", "acrobot"])
@@ -113,7 +164,11 @@ def main() -> None:
         "--velocity-limit", type=float, default=PLAN_VELOCITY_LIMIT_HW, help="plans' rate bound [rad/s] (0: unbounded)"
     )
     ap.add_argument("--plant", default=None, help="plant file of the simulated robot (default the identified C.1)")
+    ap.add_argument("--friction-figure", type=Path, help="only draw the recorded scores against the passive friction (PNG)")
     args = ap.parse_args()
+    if args.friction_figure is not None:
+        print(friction_figure(args.friction_figure, args.controllers[0] if len(args.controllers) == 1 else "mpc"))
+        return
     vmax = args.velocity_limit or None
     lines: list[str] = []
     plant = None if args.plant is None else load_plant(args.plant)
