@@ -103,9 +103,9 @@ def _run(
 def friction_figure(path: Path, controller: str = "mpc") -> Path:
     """Score against the simulated robot's passive Coulomb friction, from the recorded cases (the ``--plant`` study).
 
-    One panel per task; per passive allowance the mean over the recorded seeds (line) and each seed (dots); the
-    identified value and the hardware winner's score marked. Cases of robots that differ from the identified C.1 in
-    more than the passive joint's ``cf`` are left out.
+    One panel per task; per passive allowance the mean over the seeds recorded at every friction value (line) and each
+    of those seeds (dots); the identified value and the hardware winner's score marked. Cases of robots that differ
+    from the identified C.1 in more than the passive joint's ``cf`` are left out.
     """
     import matplotlib
 
@@ -113,7 +113,7 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
     import matplotlib.pyplot as plt
 
     c1 = load_plant("c1").params
-    points: dict[tuple[str, float], dict[float, list[float]]] = {}
+    points: dict[tuple[str, float], dict[float, dict[int, float]]] = {}
     for f in sorted(CASES.glob(f"*-{controller}-seed*.json")):
         task = f.name.split("-")[0]
         rec = json.loads(f.read_text())
@@ -122,29 +122,33 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
         if any(params[k] != v for k, v in c1.items() if k != cf):
             continue
         allowance = float(f.name.split("-allowance")[1].split("-")[0])
-        points.setdefault((task, allowance), {}).setdefault(float(params[cf]), []).append(float(rec["score"]))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+        seed = int(f.name.split("-seed")[1].split("-")[0])
+        points.setdefault((task, allowance), {}).setdefault(float(params[cf]), {})[seed] = float(rec["score"])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5), sharey=True)
     for ax, task in zip(axes, ("pendubot", "acrobot"), strict=True):
         joint = "elbow, cf2" if task == "pendubot" else "shoulder, cf1"
         for (t, allowance), by_cf in sorted(points.items()):
             if t != task:
                 continue
             xs = sorted(by_cf)
+            seeds = sorted(set.intersection(*(set(by_cf[x]) for x in xs)))  # the same seeds at every friction value
+            if not seeds:
+                continue
             label = (
                 "strict rule (allowance 0)"
                 if allowance == 0
                 else f"allowance {allowance:g} N m (compensating the identified friction)"
             )
-            line = ax.plot(xs, [np.mean(by_cf[x]) for x in xs], "-o", label=label)[0]
+            line = ax.plot(xs, [np.mean([by_cf[x][k] for k in seeds]) for x in xs], "-o", label=f"{label}, seeds {seeds}")[0]
             for x in xs:
-                ax.plot([x] * len(by_cf[x]), by_cf[x], ".", color=line.get_color(), alpha=0.5)
+                ax.plot([x] * len(seeds), [by_cf[x][k] for k in seeds], ".", color=line.get_color(), alpha=0.5)
         ax.axvline(c1["cf2" if task == "pendubot" else "cf1"], color="k", ls=":", lw=1, label="identified C.1")
         ax.axhline(PUBLISHED_HARDWARE[task]["acados_mpc"], color="tab:red", ls="--", lw=1, label="hardware winner (robot)")
         ax.set_title(f"{task}: '{controller}' on v3-hardware")
         ax.set_xlabel(f"passive joint's Coulomb friction ({joint}) [N m]")
         ax.grid(alpha=0.3)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), fontsize=7)  # below the panel: the data fill it
     axes[0].set_ylabel("score (uptime / 60 s) [-]")
-    axes[0].legend(loc="lower left", fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
