@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from pendulab._io import atomic_write_text
+from pendulab.evaluate.realai.plant import actuated_joint
 from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, PUBLISHED_HARDWARE, hardware_entry, run_v3_hardware
 from pendulab.identify.sensing import c1_sensing
 from pendulab.model.plant_file import IdentifiedPlant, load_plant
@@ -100,6 +101,11 @@ def _run(
     return rec
 
 
+def _passive_cf(task: str) -> str:
+    """The robot parameter of the passive joint's Coulomb friction in ``task`` ("cf1" acrobot, "cf2" pendubot)."""
+    return f"cf{2 - actuated_joint(task)}"
+
+
 def friction_figure(path: Path, controller: str = "mpc") -> Path:
     """Score against the simulated robot's passive Coulomb friction, from the recorded cases (the ``--plant`` study).
 
@@ -118,7 +124,7 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
         task = f.name.split("-")[0]
         rec = json.loads(f.read_text())
         params = (rec.get("plant") or {}).get("params") or c1
-        cf = "cf2" if task == "pendubot" else "cf1"
+        cf = _passive_cf(task)
         if any(params[k] != v for k, v in c1.items() if k != cf):
             continue
         allowance = float(f.name.split("-allowance")[1].split("-")[0])
@@ -126,7 +132,8 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
         points.setdefault((task, allowance), {}).setdefault(float(params[cf]), {})[seed] = float(rec["score"])
     fig, axes = plt.subplots(1, 2, figsize=(11, 5), sharey=True)
     for ax, task in zip(axes, ("pendubot", "acrobot"), strict=True):
-        joint = "elbow, cf2" if task == "pendubot" else "shoulder, cf1"
+        cf = _passive_cf(task)
+        joint = f"{('shoulder', 'elbow')[int(cf[-1]) - 1]}, {cf}"
         for (t, allowance), by_cf in sorted(points.items()):
             if t != task:
                 continue
@@ -142,7 +149,7 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
             line = ax.plot(xs, [np.mean([by_cf[x][k] for k in seeds]) for x in xs], "-o", label=f"{label}, seeds {seeds}")[0]
             for x in xs:
                 ax.plot([x] * len(seeds), [by_cf[x][k] for k in seeds], ".", color=line.get_color(), alpha=0.5)
-        ax.axvline(c1["cf2" if task == "pendubot" else "cf1"], color="k", ls=":", lw=1, label="identified C.1")
+        ax.axvline(c1[cf], color="k", ls=":", lw=1, label="identified C.1")
         ax.axhline(PUBLISHED_HARDWARE[task]["acados_mpc"], color="tab:red", ls="--", lw=1, label="hardware winner (robot)")
         ax.set_title(f"{task}: '{controller}' on v3-hardware")
         ax.set_xlabel(f"passive joint's Coulomb friction ({joint}) [N m]")
@@ -168,7 +175,11 @@ def main() -> None:
         "--velocity-limit", type=float, default=PLAN_VELOCITY_LIMIT_HW, help="plans' rate bound [rad/s] (0: unbounded)"
     )
     ap.add_argument("--plant", default=None, help="plant file of the simulated robot (default the identified C.1)")
-    ap.add_argument("--friction-figure", type=Path, help="only draw the recorded scores against the passive friction (PNG)")
+    ap.add_argument(
+        "--friction-figure",
+        type=Path,
+        help="only draw the recorded scores of one --controllers (default mpc) against the passive friction (PNG)",
+    )
     args = ap.parse_args()
     if args.friction_figure is not None:
         print(friction_figure(args.friction_figure, args.controllers[0] if len(args.controllers) == 1 else "mpc"))

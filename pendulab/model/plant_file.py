@@ -122,13 +122,14 @@ class IdentifiedPlant:
         unknown = sorted(set(changes) - set(ROBOT_PARAM_NAMES))
         if unknown:
             raise ValueError(f"unknown plant parameters {unknown}; expected some of {list(ROBOT_PARAM_NAMES)}")
+        params = check_robot_params({**self.params, **changes}, "plant params")  # validated before it is recorded
         previous = dict(self.meta.get("what_if", {}))
         what_if = {
-            name: {"value": float(value), "identified": previous.get(name, {}).get("identified", self.params[name])}
-            for name, value in changes.items()
+            name: {"value": params[name], "identified": previous.get(name, {}).get("identified", self.params[name])}
+            for name in changes
         }
         return IdentifiedPlant(
-            params={**self.params, **changes},
+            params=params,
             stderr=self.stderr,
             torque_offset=self.torque_offset,
             structure=self.structure,
