@@ -189,8 +189,8 @@ def band_entry_refine(
     u_max: float,
     sample_time: float = 0.002,
     velocity_limit: float | None = None,
-) -> dict[str, np.ndarray] | None:
-    """A library entry re-planned for band entry, with TVLQR gains, kept only if its closed loop enters the band sooner.
+) -> dict[str, np.ndarray]:
+    """A library entry re-planned for band entry, with TVLQR gains, where its closed loop enters the band sooner.
 
     Parameters
     ----------
@@ -211,28 +211,29 @@ def band_entry_refine(
 
     Returns
     -------
-    dict or None
-        The new entry (same fields, plus ``t_enter`` [s] of its closed loop), None when the solve fails or the
-        closed loop does not enter the band sooner than the entry's own.
+    dict
+        The re-planned entry when its closed loop enters the band sooner than ``entry``'s, else ``entry`` itself;
+        either with ``refined`` (bool) and ``t_enter``, the band-entry time of its closed loop [s] (``inf`` when it
+        never settles in the band), so that entries toward different goals can be ranked.
     """
     from .tracking import tvlqr_tracker
 
     j = INPUT_NAMES.index("tau1" if actuation == "pendubot" else "tau2")
     base = _closed_loop_entry(model, j, entry["x_ref"], entry["u_ref"], entry["K"], band, u_max)
+    kept = dict(entry, refined=np.array(False), t_enter=np.array(math.inf if base is None else base))
     res = band_entry_plan(
         model, actuation, entry["x_ref"], entry["u_ref"], sample_time, band=band, u_max=0.9 * u_max, velocity_limit=velocity_limit
     )
     if res is None:
-        return None
+        return kept
     t, x, u, _ = res
     try:
         tr = tvlqr_tracker(model, t, x, u, sample_time, u_max=u_max, actuation=actuation)
     except ValueError:
-        return None
+        return kept
     m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
     new = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, 0], "K": tr.K[:m, 0, :]}
     t_new = _closed_loop_entry(model, j, new["x_ref"], new["u_ref"], new["K"], band, u_max)
     if t_new is None or (base is not None and t_new >= base):
-        return None
-    new["t_enter"] = np.array(t_new)
-    return new
+        return kept
+    return dict(new, refined=np.array(True), t_enter=np.array(t_new))

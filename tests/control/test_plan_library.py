@@ -21,6 +21,7 @@ from pendulab.control.plan_library import (
     rest_starts,
 )
 from pendulab.control.realai.spec import HEIGHT_FRACTION
+from pendulab.control.replanning import MOVING_RATE, nearest_upright, upright_goals
 from pendulab.model.pycode import to_python
 from pendulab.native.cache import CacheRebuildWarning, digest_path, sealed_key
 
@@ -49,26 +50,35 @@ def test_nearest_picks_the_plan_whose_start_matches() -> None:
     assert lib.nearest(starts[1] + [2 * math.pi, -2 * math.pi, 0, 0])[:2] == (1, 0)
 
 
+def _closed_loop(ctrl, start: np.ndarray, duration: float) -> tuple[np.ndarray, np.ndarray]:
+    """End-effector heights [m] of the pendubot under ``ctrl`` from ``start`` (RK4 at the sample time), and the last state."""
+    fb = ctrl.fallback
+    f, p = to_python(fb.model.functions["rhs"]), [float(v) for v in fb.model.p]
+    prm = fb.model.params
+    ctrl.reset()
+    x, h, heights = np.array(start), fb.sample_time, []
+    for k in range(round(duration / h)):
+        u = [float(ctrl(k * h, x)[0]), 0.0]
+        k1 = f(x, u, p)
+        k2 = f(x + 0.5 * h * k1, u, p)
+        k3 = f(x + 0.5 * h * k2, u, p)
+        k4 = f(x + h * k3, u, p)
+        x = x + h * (k1 + 2.0 * (k2 + k3) + k4) / 6.0
+        heights.append(-prm.L1 * math.cos(x[0]) - prm.L2 * math.cos(x[1]))
+    return np.array(heights), x
+
+
 def test_tracking_a_library_plan_from_its_start_reaches_the_band(tiny) -> None:
     ctrl, _ = tiny
     lib = ctrl.library
     assert len(lib) == 2 and lib.n_failed == 0
     fb = ctrl.fallback
-    f, p = to_python(fb.model.functions["rhs"]), [float(v) for v in fb.model.p]
     prm = fb.model.params
     band = HEIGHT_FRACTION * (prm.L1 + prm.L2)
+    h = fb.sample_time
     for i, start in enumerate(lib.starts):
-        ctrl.reset()
-        x, h, heights = np.array(start), fb.sample_time, []
-        assert lib.nearest(x)[:2] == (i, 0)
-        for k in range(round((len(lib.x_ref[i]) * h + 1.0) / h)):
-            u = [float(ctrl(k * h, x)[0]), 0.0]
-            k1 = f(x, u, p)
-            k2 = f(x + 0.5 * h * k1, u, p)
-            k3 = f(x + 0.5 * h * k2, u, p)
-            k4 = f(x + h * k3, u, p)
-            x = x + h * (k1 + 2.0 * (k2 + k3) + k4) / 6.0
-            heights.append(-prm.L1 * math.cos(x[0]) - prm.L2 * math.cos(x[1]))
+        assert lib.nearest(start)[:2] == (i, 0)
+        heights, x = _closed_loop(ctrl, start, len(lib.x_ref[i]) * h + 1.0)
         assert max(heights) > band
         # Caught and held: the last second stays in the band, near rest (the catch LQR's equilibrium).
         assert min(heights[-round(1.0 / h) :]) > band
@@ -80,8 +90,9 @@ def test_cache_rebuilds_a_damaged_entry(tiny) -> None:
     lib = ctrl.library
     cache_dir = d / "pendubot"
     files = sorted(cache_dir.glob("plan-*.npz"))
-    # Per plan: its time-optimal entry and its band-entry entry; nothing else left behind (no temporary files).
-    assert len(files) == 4
+    # Per start: a time-optimal entry per goal (the hand-over's moving joints add goals ahead, the start at rest has
+    # one) and its band-entry entry; nothing else left behind (no temporary files).
+    assert len(files) == 2 + sum(len(upright_goals(s)) for s in lib.starts)
     damaged = max(files, key=lambda q: q.stat().st_mtime)  # the last band-entry entry written
     damaged.write_bytes(b"not a zip archive")
     with pytest.warns(CacheRebuildWarning, match=f"{damaged}.*does not match its SHA-256"):
@@ -107,7 +118,9 @@ def test_edited_or_swapped_entries_are_never_used(tiny, tmp_path) -> None:
     shutil.copytree(d, root)
     entries = sorted((root / "pendubot").glob("plan-*.npz"))
     band = [p for p in entries if '"band"' in sealed_key(p)]
-    base = [p for p in entries if p not in band]
+    # The plans toward the nearest branch: what a cached-only build falls back to (plans toward goals ahead are
+    # read only while a band-entry entry is built).
+    base = [p for p in entries if p not in band and '"goal_offset"' not in sealed_key(p)]
     assert len(band) == 2 and len(base) == 2
     _resave(band[0], lambda e: e["x_ref"].__setitem__((slice(None), 0), e["x_ref"][:, 0] + 0.5))  # reference + 0.5 rad
     _resave(band[1], lambda e: e.__setitem__("K", -e["K"]))  # TVLQR gains sign-flipped
@@ -119,7 +132,7 @@ def test_edited_or_swapped_entries_are_never_used(tiny, tmp_path) -> None:
     with pytest.warns(CacheRebuildWarning) as record, pytest.raises(ValueError, match="at least one solved plan"):
         library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=root, build=False)
     messages = [str(w.message) for w in record if issubclass(w.category, CacheRebuildWarning)]
-    assert sorted(next(w for w in m.split() if w.endswith(".npz")) for m in messages) == sorted(map(str, entries))
+    assert sorted(next(w for w in m.split() if w.endswith(".npz")) for m in messages) == sorted(map(str, band + base))
     assert sum("does not match its SHA-256" in m for m in messages) == 2
     assert sum("built for another entry" in m for m in messages) == 2
     # Built: solved again, the very plans of the intact library.
@@ -294,3 +307,33 @@ def test_the_unbounded_library_takes_its_task_tube(tiny, monkeypatch) -> None:
     monkeypatch.setitem(plan_library.LIBRARY_REPLAN_ERROR, "pendubot", 0.3)
     again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d, build=False)
     assert again.replan_error == 0.3
+
+
+def test_upright_goals_are_the_nearest_branch_then_those_ahead_of_the_motion() -> None:
+    assert upright_goals(np.array([2.0, 1.0, 0.0, 0.0])) == [(0, 0)]  # at rest: the nearest branch only
+    slow = 0.5 * MOVING_RATE
+    assert upright_goals(np.array([2.0, 1.0, -7.0, slow])) == [(0, 0), (-1, 0)]  # one joint moving, backwards
+    assert upright_goals(np.array([2.0, 1.0, 7.0, -12.0])) == [(0, 0), (0, -1), (1, 0), (1, -1)]
+
+
+def test_goals_ahead_enter_the_band_sooner_than_reversing_to_the_nearest_branch(tiny, tmp_path) -> None:
+    """A reset hands over moving fast: the default library plans ahead of the motion too and keeps the faster entry."""
+    ctrl, d = tiny
+    start = ctrl.library.starts[1]  # the reset hand-over from upright (the other start hangs at rest)
+    assert len(upright_goals(start)) > 1  # it moves, so there is a choice
+    root = tmp_path / "library"
+    shutil.copytree(d, root)  # the nearest-only library's band entries stay out of the shared fixture
+    near = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=root, goals_ahead=False)
+    prm = ctrl.fallback.model.params
+    band = HEIGHT_FRACTION * (prm.L1 + prm.L2)
+    entry = {}
+    for name, c in (("ahead", ctrl), ("nearest", near)):
+        heights, x = _closed_loop(c, start, 2.5)
+        assert min(heights[-250:]) > band  # caught and held: the last 0.5 s in the band
+        entry[name] = (np.argmax(heights > band) + 1) * ctrl.fallback.sample_time
+        branch = tuple(round((x[i] - nearest_upright(start)[i]) / (2 * math.pi)) for i in range(2))
+        assert (branch == (0, 0)) == (name == "nearest")  # the kept plan ends on a branch ahead of the motion
+    # The study that chose this (training-seed hand-overs) found 0.15-0.5 s sooner; 0.05 s is far above the 2 ms grid.
+    assert entry["ahead"] < entry["nearest"] - 0.05
+    with pytest.raises(ValueError, match="goals_ahead"):
+        library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=root, band=False, goals_ahead=True)
