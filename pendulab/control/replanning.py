@@ -243,8 +243,16 @@ def upright_goals(start: np.ndarray) -> list[tuple[int, int]]:
     list of (int, int)
         Offsets ``(d1, d2)`` in turns from the nearest branch (:func:`nearest_upright`), ``(0, 0)`` first; a joint
         moving faster than :data:`MOVING_RATE` adds the branch one turn ahead in its direction.
+
+    Raises
+    ------
+    ValueError
+        ``start`` not a finite state of shape (4,).
     """
-    ahead = [(0, int(math.copysign(1.0, float(w)))) if abs(float(w)) > MOVING_RATE else (0,) for w in start[2:4]]
+    x = np.asarray(start, dtype=float)
+    if x.shape != (4,) or not np.all(np.isfinite(x)):
+        raise ValueError(f"start must be a finite state of shape (4,), got {np.asarray(start).tolist()!r}")
+    ahead = [(0, int(math.copysign(1.0, w))) if abs(w) > MOVING_RATE else (0,) for w in x[2:4]]
     return sorted({(d1, d2) for d1 in ahead[0] for d2 in ahead[1]}, key=lambda d: (abs(d[0]) + abs(d[1]), d))
 
 
@@ -295,10 +303,17 @@ def plan_swingup(
     -------
     TVLQRTracker or None
         None when every attempt failed.
+
+    Raises
+    ------
+    ValueError
+        ``goal_offset`` not two integers.
     """
     from .swingup import SwingUpProblem, solve_transcription
     from .tracking import tvlqr
 
+    if len(goal_offset) != 2 or not all(isinstance(d, (int, np.integer)) for d in goal_offset):
+        raise ValueError(f"goal_offset must be two whole turns (d1, d2), got {goal_offset!r}")
     x0 = tuple(float(v) for v in start)
     near = nearest_upright(np.asarray(x0))
     goal = (near[0] + 2.0 * math.pi * goal_offset[0], near[1] + 2.0 * math.pi * goal_offset[1], 0.0, 0.0)

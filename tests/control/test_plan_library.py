@@ -21,7 +21,7 @@ from pendulab.control.plan_library import (
     rest_starts,
 )
 from pendulab.control.realai.spec import HEIGHT_FRACTION
-from pendulab.control.replanning import MOVING_RATE, nearest_upright, upright_goals
+from pendulab.control.replanning import MOVING_RATE, nearest_upright, plan_swingup, upright_goals
 from pendulab.model.pycode import to_python
 from pendulab.native.cache import CacheRebuildWarning, digest_path, sealed_key
 
@@ -314,6 +314,13 @@ def test_upright_goals_are_the_nearest_branch_then_those_ahead_of_the_motion() -
     slow = 0.5 * MOVING_RATE
     assert upright_goals(np.array([2.0, 1.0, -7.0, slow])) == [(0, 0), (-1, 0)]  # one joint moving, backwards
     assert upright_goals(np.array([2.0, 1.0, 7.0, -12.0])) == [(0, 0), (0, -1), (1, 0), (1, -1)]
+    for bad in (np.zeros(3), np.array([0.0, 0.0, np.nan, 1.0])):
+        with pytest.raises(ValueError, match="start"):
+            upright_goals(bad)
+    fb = global_controller("pendubot")
+    for bad in ((1,), (0.5, 0), (0, 0, 1)):
+        with pytest.raises(ValueError, match="goal_offset"):
+            plan_swingup(fb, "pendubot", np.zeros(4), horizon=1.0, n_intervals=10, min_time=False, goal_offset=bad)
 
 
 def test_goals_ahead_enter_the_band_sooner_than_reversing_to_the_nearest_branch(tiny, tmp_path) -> None:
