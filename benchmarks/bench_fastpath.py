@@ -25,6 +25,7 @@ and as the max over the reference grid (every 50 ms).
 from __future__ import annotations
 
 import argparse
+import copy
 import gc
 import os
 import platform
@@ -147,6 +148,30 @@ def simulate_run(model: pl.Model, method: str, tol: float, x0: np.ndarray = X0) 
     return run
 
 
+def floor_run(model: pl.Model, tol: float, grid: np.ndarray, x0: np.ndarray = X0) -> Callable[[], tuple[np.ndarray, int, None]]:
+    """pendulab's own compiled integrator and compiled outputs with no Python front end around them: the floor.
+
+    What ``simulate(method="taylor")`` would cost without its argument checks, grid, budget, result checks and
+    ``Trajectory``: the difference between the two rows is the front end, measured in the same run.
+    """
+    entry, pars = taylor_cache.prepared(model.kind, model.p, tuple(range(model.nu)), tol)
+    ta = copy.copy(entry.template)
+    evaluate = taylor_outputs.output_evaluator(model.kind)
+    if evaluate is None:
+        raise SystemExit(f"no compiled outputs for the {model.kind} model")
+    zero_u = np.zeros((len(grid), model.nu))
+
+    def run() -> tuple[np.ndarray, int, None]:
+        ta.time = 0.0
+        ta.state[:] = x0
+        ta.pars[:] = pars
+        res = ta.propagate_grid(grid, max_steps=0)
+        evaluate(res[-1], zero_u, model.p)
+        return res[-1], int(res[3]), None
+
+    return run
+
+
 def timed(fn: Callable[[], object], calls: int = 1) -> float:
     """Mean wall time [s] of ``calls`` calls in a row."""
     t0 = time.perf_counter()
@@ -219,6 +244,13 @@ def main(argv: list[str] | None = None) -> int:
         Run("taylor (simulate)", "rtol = atol = 1e-12", simulate_run(elastic, "taylor", 1e-12, x0_el), "tol 1e-12"),
         Run("taylor (simulate)", "rtol = atol = 1e-15", simulate_run(elastic, "taylor", 1e-15, x0_el), "tol 1e-15"),
     ]
+    # The floor of each Taylor row (pendulab's integrator and outputs, no front end): after the rows above compiled them.
+    for r in runs + runs_el:
+        r.fn()
+    floor = "integrator + outputs, no front end"
+    for tol in (1e-12, 1e-15):
+        runs.append(Run(floor, f"tol {tol:g}", floor_run(model, tol, grid), f"tol {tol:g}"))
+        runs_el.append(Run(floor, f"tol {tol:g}", floor_run(elastic, tol, grid, x0_el), f"tol {tol:g}"))
     # Where the time of a taylor simulate() goes besides the runner: the outputs on the grid (compiled, and
     # the NumPy evaluation every other method uses), and the input-check decorator around simulate if any.
     tr = pl.simulate(model, X0, T_FINAL, dt=DT, method="taylor", rtol=1e-15, atol=1e-15)
@@ -324,6 +356,27 @@ def render(
     t15, t12 = tay["rtol = atol = 1e-15"], tay["rtol = atol = 1e-12"]
     e15s, e12s = tay_el["rtol = atol = 1e-15"], tay_el["rtol = atol = 1e-12"]
     dop = next(r for r in runs if r.label.startswith("DOP853"))
+    kinds = (("rigid", runs), ("elastic", runs_el))
+    floors = {(kind, r.settings): r for kind, rs in kinds for r in rs if r.label.startswith("integrator")}
+    front = {
+        (kind, tol): (sim.median - floors[kind, f"tol {tol}"].median) * 1e3
+        for kind, tay_k in (("rigid", tay), ("elastic", tay_el))
+        for tol, sim in (("1e-12", tay_k["rtol = atol = 1e-12"]), ("1e-15", tay_k["rtol = atol = 1e-15"]))
+    }
+    front_text = (
+        "**The front end, measured.** The rows *integrator + outputs, no front end* run pendulab's own compiled "
+        "integrator and compiled outputs with no Python around them (`floor_run`): what `simulate` would cost without "
+        "its argument checks, grid, budgets, result checks and `Trajectory`. The front end is the difference: "
+        + ", ".join(f"{kind} {front[kind, tol]:.3f} ms at {tol}" for kind in ("rigid", "elastic") for tol in ("1e-12", "1e-15"))
+        + ". For the whole call to stay within 1.1× of the anchor it may spend 0.1× the anchor plus what the "
+        "integrator gains on it: "
+        + ", ".join(
+            f"{kind} {(1.1 * hh[f'tol {tol}'].median - floors[kind, f'tol {tol}'].median) * 1e3:.3f} ms at {tol}"
+            for kind, hh in (("rigid", hand), ("elastic", hand_el))
+            for tol in ("1e-12", "1e-15")
+        )
+        + "."
+    )
     runner15 = statistics.median(t15.integ)
     t_out = t_parts["compiled"]
     rest15 = max(t15.median - runner15 - t_out, 0.0)
@@ -430,6 +483,8 @@ with as many products, divisions and sine/cosine pairs as the anchor (`tests/int
 {header} final difference | steps |
 |---|---|---:|---:|---:|---:|---:|---:|
 {chr(10).join(rows_el)}
+
+{front_text}
 
 **First call** of `method="taylor"` in a process (translation of the CasADi graph + JIT compilation of the
 integrator and of the outputs + one run): {first_call["cold", 1e-12] * 1e3:.0f} ms at 1e-12,

@@ -93,9 +93,19 @@ def check_model(model: Any, name: str = "model") -> Any:
 _MODEL_CLASS = ("pendulab.model.model", "Model")
 
 
+#: Types found to be Model (sub)classes: the walk of the MRO is done once per type, not on every simulate call.
+_MODEL_TYPES: set[type] = set()
+
+
 def _is_model(obj: Any) -> bool:
     """True for an instance of ``pendulab.model.model.Model`` (or a subclass), checked without importing it."""
-    return any((c.__module__, c.__qualname__) == _MODEL_CLASS for c in type(obj).__mro__)
+    kind = type(obj)
+    if kind in _MODEL_TYPES:
+        return True
+    if any((c.__module__, c.__qualname__) == _MODEL_CLASS for c in kind.__mro__):
+        _MODEL_TYPES.add(kind)
+        return True
+    return False
 
 
 def is_interrupt(exc: BaseException) -> bool:
@@ -224,6 +234,8 @@ def check_spring_lengths(kind: str, x: Any, name: str = "x0") -> None:
 
     arr = np.asarray(x, dtype=float)
     r = arr[..., 2:4]
+    if arr.ndim == 1 and r[0] > 0.0 and r[1] > 0.0:  # one state (every simulate call): no temporary array
+        return
     bad = ~(r > 0.0)
     if not bad.any():
         return

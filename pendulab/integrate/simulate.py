@@ -189,12 +189,27 @@ def time_grid(t_final: float, dt: float) -> np.ndarray:
     return _uniform_grid(t_final, dt)
 
 
+#: The last grid built, read-only, by (t_final, dt): runs in a row mostly share their grid (a sweep of starts).
+_LAST_GRID: tuple[float, float, np.ndarray] = (0.0, 0.0, np.zeros(0))
+
+
 def _uniform_grid(t_final: float, dt: float) -> np.ndarray:
     """:func:`time_grid` of arguments already checked (simulate's hot path: no second check of its inputs)."""
+    global _LAST_GRID
     points = t_final / dt + 1.0
     within_budget("output points (t_final / dt + 1)", points, BUDGETS["output_points"].env, MAX_OUTPUT_POINTS)
+    last_t, last_dt, last = _LAST_GRID  # one tuple, swapped whole: safe to read from any thread
+    if t_final == last_t and dt == last_dt:
+        return last.copy()
     n = max(1, math.ceil(t_final / dt - 1e-9))
-    return np.linspace(0.0, t_final, n + 1)
+    # np.linspace(0, t_final, n + 1) to the bit (its arange times step, end set exactly) without its ~3 us of Python.
+    t = np.arange(n + 1, dtype=float)
+    t *= t_final / n
+    t[-1] = t_final
+    kept = t.copy()
+    kept.setflags(write=False)
+    _LAST_GRID = (t_final, dt, kept)
+    return t
 
 
 def input_schedule(model: Model, u: InputSpec, t: np.ndarray) -> np.ndarray | None:
@@ -422,23 +437,23 @@ def simulate(
             raise
         wall = time.perf_counter() - start
     X, U, stats = result.x, result.u, dict(result.stats)
-    if not np.all(np.isfinite(X)):
+    # A finite sum proves every state finite (one reduction); a non-finite one is rechecked element-wise (overflow).
+    if not (math.isfinite(X.sum()) or np.all(np.isfinite(X))):
         k = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
         raise SimulationError(
             spec.name, float(t_run[max(k - 1, 0)]), t_final, "the state became non-finite", failure_hint(model.kind)
         )
-    if model.kind == "elastic":
-        collapsed = X[:, 2:4] <= 0.0
-        if collapsed.any():
-            # A spring that reaches zero length puts a bob on its joint: the model's polar coordinates break down.
-            k, j = np.argwhere(collapsed)[0]
-            raise SimulationError(
-                spec.name,
-                float(t_run[max(k - 1, 0)]),
-                t_final,
-                f"spring length r{j + 1} reached {X[k, 2 + j]:.3g} m <= 0 (a bob passed through its joint)",
-                "stiffer springs (larger k) or a gentler start keep the springs extended",
-            )
+    # Two column minima (no temporary array); the offending row is searched only on failure.
+    if model.kind == "elastic" and not min(X[:, 2].min(), X[:, 3].min()) > 0.0:
+        # A spring that reaches zero length puts a bob on its joint: the model's polar coordinates break down.
+        k, j = np.argwhere(X[:, 2:4] <= 0.0)[0]
+        raise SimulationError(
+            spec.name,
+            float(t_run[max(k - 1, 0)]),
+            t_final,
+            f"spring length r{j + 1} reached {X[k, 2 + j]:.3g} m <= 0 (a bob passed through its joint)",
+            "stiffer springs (larger k) or a gentler start keep the springs extended",
+        )
     if isinstance(u, TimeInput):
         stats["input_hold"] = float(t_run[1] - t_run[0])
     if sub > 1:
@@ -448,8 +463,10 @@ def simulate(
         stats["input_work"], stats["dissipated"] = work[::sub], dissipated[::sub]
         X = X[::sub]
         U_full = u.sample(model, t)
+    elif u is None:  # no torque: the held schedule is zeros, and so is its last row
+        U_full = np.zeros((len(t), model.nu))
     else:
-        U_full = np.vstack([U, U[-1:]])
+        U_full = np.concatenate((U, U[-1:]))
     # A family with compiled code of its own may evaluate the outputs too (Taylor: a heyoka cfunc, ~10x NumPy).
     evaluate = spec.settings.get("outputs")
     Y = evaluate(model, X, U_full) if evaluate is not None else model.outputs(X, U_full)

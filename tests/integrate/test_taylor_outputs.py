@@ -107,3 +107,49 @@ def test_ctrl_c_in_a_taylor_run_is_an_interrupt_not_a_failure():
         pl.simulate(model, model.state(theta1=1.0), 1.0, method="taylor", u=feedback)
     assert len(calls) == 3  # stopped at once, not after the run
     assert signal.getsignal(signal.SIGINT) is before
+
+
+@pytest.mark.parametrize(("t_final", "dt"), [(10.0, 0.01), (1.0, 0.3), (3.7, 0.01), (1e-3, 1e-5), (123.456, 0.1)])
+def test_output_grid_is_linspace_to_the_bit_and_never_shared(t_final, dt):
+    """The hot path's grid (and the copy of the last one it keeps) is np.linspace's, and every run owns its own."""
+    model = pl.rigid()
+    n = max(1, int(np.ceil(t_final / dt - 1e-9)))
+    want = np.linspace(0.0, t_final, n + 1)
+    np.testing.assert_array_equal(pl.integrate.time_grid(t_final, dt), want)
+    if t_final > 10.0:
+        return  # the grid is the point; a long run adds nothing
+    first = pl.simulate(model, [1.0, 0.5, 0.0, 0.0], t_final, dt=dt, method="taylor")
+    first.t[:] = -1.0  # a caller may write into its trajectory...
+    first.x[:] = np.nan
+    again = pl.simulate(model, [1.0, 0.5, 0.0, 0.0], t_final, dt=dt, method="taylor")
+    np.testing.assert_array_equal(again.t, want)  # ...without reaching the next run's grid or states
+    assert np.all(np.isfinite(again.x)) and again.x.flags.writeable and again.t.flags.writeable
+    np.testing.assert_array_equal(pl.integrate.time_grid(t_final, dt), want)
+
+
+@pytest.mark.parametrize("kind", ["rigid", "elastic"])
+def test_single_state_checks_refuse_what_the_batch_checks_refuse(kind):
+    """check_start's one-state shortcuts (plain-Python finiteness, spring lengths, right-hand side) and the
+    batch path refuse the same states for the same reason; simulate refuses them before running."""
+    model = pl.make_model(kind)
+    rest = model.rest_state()
+    cases = []  # (state, words of the reason)
+    for j in range(model.nx):
+        for value in (np.nan, np.inf, -np.inf):
+            x = rest.copy()
+            x[j] = value
+            cases.append((x, "must be finite"))
+    if kind == "elastic":
+        for j, value in ((2, 0.0), (3, -0.1)):
+            x = rest.copy()
+            x[j] = value
+            cases.append((x, "spring lengths r1, r2 must be > 0 m"))
+    cases.append((model.state(omega1=1e200), "not finite at this state"))  # finite, but the dynamics overflow
+    for x, reason in cases:
+        with pytest.raises(ValueError, match=reason):
+            model.check_start(x)
+        with pytest.raises(ValueError, match=reason):
+            model.check_start(np.vstack([rest, x]))
+        with pytest.raises(ValueError, match=reason):
+            pl.simulate(model, x, 0.1, method="taylor")
+    np.testing.assert_array_equal(model.check_start(rest), rest)

@@ -27,7 +27,7 @@ class TaylorUnavailableError(MissingExtraError):
 
 
 def heyoka_module() -> Any:
-    """The heyoka module (imported on each call; cheap once imported).
+    """The heyoka module (imported on the first call).
 
     Returns
     -------
@@ -39,6 +39,9 @@ def heyoka_module() -> Any:
     TaylorUnavailableError
         heyoka is not importable; the message names ``method='taylor'`` and the extra to install.
     """
+    module = sys.modules.get("heyoka")
+    if module is not None:  # imported already (every run after the first): skip the import machinery
+        return module
     try:
         return importlib.import_module("heyoka")
     except ImportError as exc:
