@@ -188,6 +188,8 @@ class RunRequest:
         Method-specific options given by the user (without the budget options).
     budget : Budget
         Step and wall-time budget of the run.
+    unforced : bool
+        No torque was given: ``schedule`` is all zeros (a runner may specialise on it without scanning it).
 
     Examples
     --------
@@ -218,6 +220,7 @@ class RunRequest:
     max_step: float | None
     options: Mapping[str, Any] = field(default_factory=dict)
     budget: Budget = field(default_factory=Budget)
+    unforced: bool = False
 
     @property
     def t_final(self) -> float:

@@ -424,6 +424,7 @@ def simulate(
         max_step=max_step,
         options=opts,
         budget=budget,
+        unforced=u is None,
     )
     # A runner whose native code lets Ctrl-C through as KeyboardInterrupt needs no watch (~10 us of a ~0.5 ms run).
     watch = nullcontext() if spec.settings.get("passes_interrupts") else _interrupt_watch(budget)

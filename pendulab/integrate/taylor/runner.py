@@ -77,7 +77,7 @@ def run_taylor(req: RunRequest) -> RunResult:
     opts = _options(req)
     model, t, sched = req.model, req.t, req.schedule
     tol = check_tolerance_floor("rtol" if req.rtol <= req.atol else "atol", min(req.rtol, req.atol))
-    zero_u = _zero_inputs(sched, model.nu)
+    zero_u = tuple(range(model.nu)) if req.unforced else _zero_inputs(sched, model.nu)
     before = compile_count()
     entry, pars = prepared(model.kind, model.p, zero_u, tol, opts["compact_mode"], opts["high_accuracy"])
     # Torques specialised to zero may be absent from a system without coefficients; a run without any torque
