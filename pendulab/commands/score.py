@@ -80,7 +80,8 @@ def register(subparsers: Any) -> None:
         "robustness-v2 (the robustness leaderboard v2: 722 runs, journaled, --resume, --workers, --seed, --quick), "
         "v3 (the ICRA 2025 global protocol), v3-hardware (its hardware final: 10 PID resets of 1 s on the identified "
         f"C.1 robot with measured sensing and loop timing, {docs_page('realai_v3')}); with --leaderboard: that "
-        "protocol's cases and tables only (no own scorecards)",
+        "protocol's cases and tables only (no own scorecards); --out over a page with other sections replaces that "
+        "protocol's section and keeps the rest",
     )
     p.add_argument(
         "--quick",

@@ -11,10 +11,9 @@ formula (:func:`~.criteria.score_v2`, :func:`~.robustness_scores.robustness_scor
 * **robustness v2**: pages ``{pendubot,acrobot}_simulation_robustness_leaderboard_v2``; entries
   ``leaderboard/{task}/robustness_v2/con_<name>.py`` (commit 1e8544e). Upstream publishes the six category rates and
   the overall score only, no per-level successes.
-* **v3** (ICRA 2025 competition, simulation): the best entry of each task as issue 21 quotes the competition's
-  simulation results (``PUBLISHED_V3``); upstream's ``leaderboard/{task}/simulation_v3/`` (commit 1e8544e) holds the
-  entries' controller files but no scores, and the per-entry v3 table is not among the stored sources, so the other
-  entries are listed without a score.
+* **v3** (ICRA 2025 competition, simulation): every entry's one published run, score and swing-ups
+  (``PUBLISHED_V3_RUNS``: ``real_ai_gym_leaderboard``, ``leaderboards/icra2025/ICRA_2025_<task>_simulation_results.csv``);
+  the entries are upstream's ``leaderboard/{task}/simulation_v3/con_<name>.py`` (commit 1e8544e).
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ from dataclasses import dataclass
 
 from .criteria import CRITERIA
 from .robustness_grid import CATEGORIES, PUBLISHED_ROBUSTNESS
-from .v3_definition import PUBLISHED_V3
+from .v3_definition import PUBLISHED_V3_RUNS
 
 __all__ = [
     "PublishedRow",
@@ -54,7 +53,7 @@ class PublishedRow:
         The published score (None: not in the stored sources).
     values : mapping of str to float
         v2: the five criteria (:data:`~.criteria.CRITERIA`); robustness v2: the six category rates in [0, 1]
-        (:data:`~.robustness_grid.CATEGORIES`); v3: empty.
+        (:data:`~.robustness_grid.CATEGORIES`); v3: ``swingups`` and ``uptime_s`` [s] of the published run.
     source : str
         Where the row comes from.
     """
@@ -130,28 +129,28 @@ def _rv2(task: str) -> tuple[PublishedRow, ...]:
 #: Published robustness-v2 rows (the six category rates as fractions and the score), best first.
 PUBLISHED_ROBUSTNESS_ROWS: Mapping[str, tuple[PublishedRow, ...]] = {t: _rv2(t) for t in ("pendubot", "acrobot")}
 
-_V3_ENTRIES = {
-    "pendubot": ("vimppi", "ar_eapo", "acados_mpc", "mcpilco", "prx_pendubot_analytical"),
-    "acrobot": ("ar_eapo", "vimppi", "acados_mpc", "mcpilco", "prx_acrobot_analytical"),
+_V3_LABELS = {
+    "vimppi": "VIMPPI",
+    "ar_eapo": "AR-EAPO",
+    "acados_mpc": "AcadosMpc",
+    "mcpilco": "mcpilco",
+    "prx_pendubot_analytical": "prx_analytical",
+    "prx_acrobot_analytical": "prx_analytical",
 }
-_V3_LABELS = {"vimppi": "VIMPPI", "ar_eapo": "AR-EAPO", "acados_mpc": "acados MPC", "mcpilco": "mcpilco"}
 
 
 def _v3(task: str) -> tuple[PublishedRow, ...]:
-    rows = []
-    for name in _V3_ENTRIES[task]:
-        score = PUBLISHED_V3[task].get(name)
-        where = (
-            "ICRA 2025 simulation results, as issue 21 quotes them (best entry)"
-            if score is not None
-            else "score not in the stored sources"
-        )
-        src = f"{where}; controller leaderboard/{task}/simulation_v3/con_{name}.py @ {UPSTREAM_COMMIT[:7]}"
-        rows.append(PublishedRow(name, _V3_LABELS.get(name, name), score, {}, src))
-    return tuple(rows)
+    src = (
+        f"ICRA 2025 simulation results (real_ai_gym_leaderboard, ICRA_2025_{task}_simulation_results.csv); "
+        f"controllers leaderboard/{task}/simulation_v3/ @ {UPSTREAM_COMMIT[:7]}"
+    )
+    return tuple(
+        PublishedRow(name, _V3_LABELS.get(name, name), score, {"swingups": float(n), "uptime_s": up}, src)
+        for name, (score, n, up) in PUBLISHED_V3_RUNS[task].items()
+    )
 
 
-#: v3 entries: the best published score of each task, the other upstream entries without a score.
+#: v3 entries: every ICRA 2025 entry's published simulation run (score, swing-ups and uptime in ``values``).
 PUBLISHED_V3_ROWS: Mapping[str, tuple[PublishedRow, ...]] = {t: _v3(t) for t in ("pendubot", "acrobot")}
 
 #: ICRA 2025 hardware final, v3 score of each entry's best run on the real robot (issue 30; upstream
@@ -179,10 +178,12 @@ SOURCES: Mapping[str, str] = {
         f"@ {UPSTREAM_COMMIT[:7]}; docs/realai.md."
     ),
     "v3": (
-        "Published rows: the best v3 simulation score of each task (ICRA 2025 competition, as issue 21 quotes it); the "
-        "other entries are upstream's `leaderboard/{pendubot,acrobot}/simulation_v3/con_<name>.py` "
-        f"@ {UPSTREAM_COMMIT[:7]}, whose scores are not in the stored sources. Upstream runs one unseeded episode per "
-        "entry, so no per-seed scores are published. Protocol: `simulation_v3/sim_parameters.py`, "
+        "Published rows: every entry's run in the ICRA 2025 competition's simulation stage, score and swing-ups "
+        "(`real_ai_gym_leaderboard`, `leaderboards/icra2025/ICRA_2025_{pendubot,acrobot}_simulation_results.csv`); the "
+        "entries are upstream's `leaderboard/{pendubot,acrobot}/simulation_v3/con_<name>.py` "
+        f"@ {UPSTREAM_COMMIT[:7]}. Upstream runs one unseeded episode per entry, so no per-seed scores are published "
+        "(the hardware-final versions of four of these entries, run through pendulab's protocols: "
+        "benchmarks/results/upstream_entries.md). Protocol: `simulation_v3/sim_parameters.py`, "
         "`calculate_leaderboard_score.py`, `controller/global_policy_testing_controller.py`; docs/realai_v3.md."
     ),
 }

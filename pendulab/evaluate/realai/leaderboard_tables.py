@@ -17,7 +17,7 @@ from .leaderboard_published import (
 from .robustness_grid import CATEGORIES
 from .upstream_records import ENTRY_LABELS, UPSTREAM_RECORDS, EntryScores, spearman_rho
 
-__all__ = ["protocol_tables", "CATEGORY_HEADERS"]
+__all__ = ["protocol_sections", "protocol_tables", "section_heading", "CATEGORY_HEADERS"]
 
 #: Column headers of the robustness-v2 categories (upstream's page names).
 CATEGORY_HEADERS: Mapping[str, str] = {
@@ -124,7 +124,11 @@ def _v3_table(run: LeaderboardRun, task: str, protocol: str = "v3") -> list[str]
     for p in PUBLISHED_V3_ROWS[task] if protocol == "v3" else ():  # published rows: the nominal plant's
         cells = " | ".join("" for _ in seeds)
         score = "score not in the stored sources" if p.score is None else f"{p.score:.3f} (one unseeded run)"
-        rows.append((p.score if p.score is not None else -2.0, f"| published {p.label} (`{p.name}`) | {cells} | {score} | | | |"))
+        swing = f"{p.values['swingups']:.0f}" if "swingups" in p.values else ""
+        rows.append((
+            p.score if p.score is not None else -2.0,
+            f"| published {p.label} (`{p.name}`) | {cells} | {score} | {swing} | | |",
+        ))  # fmt: skip
     rows.sort(key=lambda r: -r[0])
     return ["| " + " | ".join(head) + " |", "|" + "---|" * len(head), *(r for _, r in rows)]
 
@@ -242,10 +246,10 @@ def _rho(entries: Sequence[EntryScores]) -> float:
     return spearman_rho([e.mean for e in entries], [e.published_hardware for e in entries])
 
 
-def protocol_tables(
+def protocol_sections(
     run: LeaderboardRun, upstream: Mapping[str, tuple[Sequence[EntryScores], Sequence[str]]] | None = None
-) -> list[str]:
-    """Markdown lines: one section per protocol, one table per task, pendulab's rows beside the published ones.
+) -> list[tuple[str, list[str]]]:
+    """Markdown sections: one per protocol, one table per task, pendulab's rows beside the published ones.
 
     Parameters
     ----------
@@ -257,10 +261,12 @@ def protocol_tables(
 
     Returns
     -------
-    list of str
-        Lines (no trailing newlines). Cases that failed or were not run show their reason in the row.
+    list of (str, list of str)
+        (section key, lines) in page order. The key is a protocol name of
+        :data:`~.leaderboard.PROTOCOLS`, or ``"identified"`` for the section of both identified protocols; the lines
+        start with the section's ``## `` heading (no trailing newlines). Cases that failed or were not run show their
+        reason in the row.
     """
-    lines: list[str] = []
     makers: dict[str, Any] = {
         "v2": _v2_table, "robustness-v2": _robustness_table, "v3": _v3_table, "identified": _identified_table,
         "v3-hardware": lambda r, t: _v3_table(r, t, "v3-hardware"),
@@ -269,10 +275,11 @@ def protocol_tables(
         protocols: tuple[str, ...] = ("v2", "robustness-v2", "v3", "identified", "v3-hardware")
     else:
         protocols = ("v2", "robustness-v2", "v3", "v3-hardware")
+    sections: list[tuple[str, list[str]]] = []
     for protocol in protocols:
         if protocol != "identified" and not run.controllers(protocol):
             continue
-        lines += [f"## {_TITLES[protocol]}", "", _explain(run, protocol), ""]
+        lines = [section_heading(protocol), "", _explain(run, protocol), ""]
         for task in TASKS:
             members = IDENTIFIED if protocol == "identified" else (protocol,)
             if not any(c.task == task and c.protocol in members for c in run.cases):
@@ -282,4 +289,23 @@ def protocol_tables(
                 lines += [*_upstream_table(task, *upstream[task], run.settings.passive_allowance), ""]
         if protocol in SOURCES:
             lines += [SOURCES[protocol], ""]
-    return lines
+        sections.append((protocol, lines))
+    return sections
+
+
+def section_heading(key: str) -> str:
+    """The ``## `` heading of a section of :func:`protocol_sections` (key: a protocol, or ``"identified"``).
+
+    Raises
+    ------
+    KeyError
+        An unknown key.
+    """
+    return f"## {_TITLES[key]}"
+
+
+def protocol_tables(
+    run: LeaderboardRun, upstream: Mapping[str, tuple[Sequence[EntryScores], Sequence[str]]] | None = None
+) -> list[str]:
+    """The lines of every section of :func:`protocol_sections`, in page order (same parameters)."""
+    return [line for _key, lines in protocol_sections(run, upstream) for line in lines]
