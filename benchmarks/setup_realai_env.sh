@@ -10,8 +10,8 @@
 #      (a snapshot may lack a few large files: system-identification records and old SAC histories, none
 #      of which the ICRA 2025 entries load);
 #   2. makes a Python 3.11 venv (default /work/venvs/realai) with only what the ICRA 2025 entries whose
-#      weights ship upstream need: AR-EAPO (torch CPU, stable-baselines3 2.3.2, gymnasium, numba) and
-#      MC-PILCO (numpy, dill), plus upstream's model/filter modules (scipy, sympy, pyyaml, pandas,
+#      weights ship upstream need: AR-EAPO (torch CPU, stable-baselines3 2.3.2, gymnasium, numba),
+#      MC-PILCO (numpy, dill) and VIMPPI (jax[cpu]), plus upstream's model/filter modules (scipy, sympy, pyyaml, pandas,
 #      matplotlib); upstream's setup.py pulls much more (drake, opencv, motor drivers, jax[cuda12]), so it
 #      is installed with --no-deps;
 #   3. installs pendulab itself editable into the same venv (so one process runs both);
@@ -25,7 +25,7 @@
 #     bash benchmarks/setup_realai_env.sh [VENV_DIR] [UPSTREAM_WORKTREE]
 #     SNAPSHOT=/path/to/repo.git PYTHON=python3.11 ACADOS_VENV=/work/venvs/realai-acados bash benchmarks/setup_realai_env.sh
 #
-# Not covered: VIMPPI (JAX on a GPU; see benchmarks/results/upstream_entries.md for why it does not run here).
+# VIMPPI (written for JAX on a GPU) runs on JAX's CPU build, ~45 ms a call: not real time, ~10 min a 60 s episode.
 set -euo pipefail
 
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -65,6 +65,8 @@ if [ -n "$CPU_TORCH" ] && ! "$VENV/bin/python" -c "import torch" >/dev/null 2>&1
 fi
 "${PIP[@]}" "torch" "stable-baselines3==2.3.2" "gymnasium" "numba" "dill" "pyyaml" "pandas" "scipy" "sympy" \
     "matplotlib" "tqdm" "cloudpickle"
+# VIMPPI: JAX's CPU build (upstream lists jax[cuda12]; no GPU here). 0.10.2 is what the recorded runs used.
+"${PIP[@]}" "jax[cpu]==0.10.2"
 "${PIP[@]}" --no-deps -e "$UPSTREAM/src/python"
 
 # 3. pendulab (editable, with its own dependencies)
@@ -81,9 +83,10 @@ if [ "${SKIP_ACADOS:-0}" != "1" ]; then
 fi
 
 "$VENV/bin/python" - <<'EOF'
-import torch, stable_baselines3, numba, double_pendulum, pendulab
+import torch, stable_baselines3, numba, jax, double_pendulum, pendulab
 from double_pendulum.controller.AR_EAPO import NumbaJITController, AR_EAPOController  # noqa: F401
 from double_pendulum.controller.mcpilco import mcpilco_controller  # noqa: F401
+from double_pendulum.controller.vimppi.controller import MPPIController  # noqa: F401
 print("setup_realai_env: torch", torch.__version__, "| sb3", stable_baselines3.__version__, "| numba", numba.__version__,
-      "| double_pendulum", double_pendulum.__file__, "| pendulab", pendulab.__file__)
+      "| jax", jax.__version__, "| double_pendulum", double_pendulum.__file__, "| pendulab", pendulab.__file__)
 EOF
