@@ -294,7 +294,17 @@ def protocol_sections(
 
 
 def section_heading(key: str) -> str:
-    """The ``## `` heading of a section of :func:`protocol_sections` (key: a protocol, or ``"identified"``).
+    """The ``## `` heading of a section of :func:`protocol_sections`.
+
+    Parameters
+    ----------
+    key : str
+        A protocol of :data:`~.leaderboard.PROTOCOLS` that has a section of its own, or ``"identified"``.
+
+    Returns
+    -------
+    str
+        The heading line, ``"## "`` and the section's title.
 
     Raises
     ------
@@ -307,5 +317,18 @@ def section_heading(key: str) -> str:
 def protocol_tables(
     run: LeaderboardRun, upstream: Mapping[str, tuple[Sequence[EntryScores], Sequence[str]]] | None = None
 ) -> list[str]:
-    """The lines of every section of :func:`protocol_sections`, in page order (same parameters)."""
+    """The lines of every section of :func:`protocol_sections`, in page order.
+
+    Parameters
+    ----------
+    run : LeaderboardRun
+        The cases (:func:`~.leaderboard.run_protocols`).
+    upstream : mapping, optional
+        As :func:`protocol_sections`.
+
+    Returns
+    -------
+    list of str
+        The sections' lines, concatenated (no trailing newlines).
+    """
     return [line for _key, lines in protocol_sections(run, upstream) for line in lines]
