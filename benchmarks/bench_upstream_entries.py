@@ -64,14 +64,10 @@ if TYPE_CHECKING:
 REPO = Path(__file__).resolve().parents[1]
 UPSTREAM_DEFAULT = Path(os.environ.get("REALAI_UPSTREAM", "/work/upstream_realai"))
 
-#: Published ICRA 2025 scores (dfki-ric-underactuated-lab/real_ai_gym_leaderboard, leaderboards/icra2025/
-#: ICRA_2025_<task>_{simulation,real_system}_results.csv): simulation (seed 333 pendubot, 777 acrobot) and hardware
-#: average of the runs. The hardware best runs and the entries' names are pendulab's own (PUBLISHED_HARDWARE,
-#: ENTRY_LABELS), imported where used: the acados worker runs this file in a venv of its own and needs neither.
-PUBLISHED_SIM = {
-    "pendubot": {"vimppi": 0.799, "ar_eapo": 0.759, "acados_mpc": 0.726, "mcpilco": 0.509},
-    "acrobot": {"ar_eapo": 0.658, "vimppi": 0.648, "acados_mpc": 0.630, "mcpilco": 0.307},
-}
+#: Published ICRA 2025 hardware scores, average of the runs (dfki-ric-underactuated-lab/real_ai_gym_leaderboard,
+#: leaderboards/icra2025/ICRA_2025_<task>_real_system_results.csv). The simulation scores, the hardware best runs and
+#: the entries' names are pendulab's own (PUBLISHED_V3, PUBLISHED_HARDWARE, ENTRY_LABELS), imported where used: the
+#: acados worker runs this file in a venv of its own and needs none of them.
 PUBLISHED_HW_MEAN = {
     "pendubot": {"acados_mpc": 0.716, "ar_eapo": 0.696, "mcpilco": 0.542, "vimppi": 0.363},
     "acrobot": {"acados_mpc": 0.755, "ar_eapo": 0.616, "mcpilco": 0.566, "vimppi": 0.364},
@@ -138,6 +134,8 @@ def load_entry(
     path = entry_file(upstream, variant, entry, task)
     if not path.exists():
         raise FileNotFoundError(f"no {path}")
+    if entry != "vimppi" and (latency or period is not None):
+        raise ValueError("a latency or period applies to the held entries only (vimppi)")
     if entry == "vimppi":
         _jax_on_one_cpu_thread()
     name = f"_upstream_{variant}_{entry}_{task}_{time.monotonic_ns()}"
@@ -163,8 +161,6 @@ def load_entry(
         ctrl = HeldEntry(ctrl, held, latency)
         if latency:
             meta["notes"].append(f"what-if: each output takes effect {latency * 1e3:g} ms after its state")
-    elif latency or period is not None:
-        raise ValueError("a latency or period applies to the held entries only (vimppi)")
     if entry == "mcpilco" and variant in ("hw", "hw-adapter"):
         meta["policy_file"] = Path(getattr(mod, "policy_par_path", "")).name
     return ctrl, meta
@@ -476,6 +472,7 @@ def run_case(
     from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
     from pendulab.evaluate.realai.v3 import run_v3
     from pendulab.evaluate.realai.v3_definition import PLANT_LIMIT
+    from pendulab.evaluate.realai.v3_definition import PUBLISHED_V3 as PUBLISHED_SIM
     from pendulab.evaluate.realai.v3_hardware import run_v3_hardware
 
     t0 = time.perf_counter()
@@ -638,6 +635,7 @@ def report(out: Path) -> str:
     from pendulab.evaluate.realai.leaderboard_published import PUBLISHED_HARDWARE as PUBLISHED_HW_BEST
     from pendulab.evaluate.realai.upstream_records import ENTRY_LABELS as LABELS
     from pendulab.evaluate.realai.upstream_records import spearman_rho
+    from pendulab.evaluate.realai.v3_definition import PUBLISHED_V3 as PUBLISHED_SIM
 
     recs = [r for r in load_records(out) if r.get("status") == "ok"]
     lines: list[str] = []
