@@ -10,8 +10,8 @@ time until the height first exceeds 0.9 (L1 + L2) (0.45 m, C.1's 0.2 + 0.3 m lin
 (~0.05 s), 7.3 px per radian.
 
 ``--sim ENTRY`` runs the same measures on pendulab's ``v3-hardware`` protocol (the identified C.1 robot, measured
-sensing and loop timing, allowance 0.5 N m): ``mpc`` is pendulab's (in pendulab's environment), ``ar_eapo`` and
-``mcpilco`` the hardware-final submissions (run with the realai venv's python, as ``bench_upstream_entries.py``).
+sensing and loop timing, allowance 0.5 N m): ``mpc`` and ``mpc_library`` are pendulab's (in pendulab's environment),
+``ar_eapo`` and ``mcpilco`` the hardware-final submissions (run with the realai venv's python, as ``bench_upstream_entries.py``).
 Each finished (source, entry, task) case is kept under ``--out`` as JSON; ``--report`` prints the table and draws
 the figure. Not part of CI (it needs the fetched snapshots)::
 
@@ -112,7 +112,7 @@ def sim_cases(entries: list[str], seeds: list[int], out: Path, robot: Path | Non
 
     ``robot``: a what-if plant file (``save_plant``) simulated instead of the identified C.1 (pendulab's ``mpc``
     still designs on the identified C.1)."""
-    from pendulab.evaluate.realai.v3_hardware import FrictionCompensated, run_v3_hardware
+    from pendulab.evaluate.realai.v3_hardware import hardware_entry, run_v3_hardware
     from pendulab.identify import load_plant
 
     plant = load_plant("c1")
@@ -126,10 +126,8 @@ def sim_cases(entries: list[str], seeds: list[int], out: Path, robot: Path | Non
                 continue
             rows, scores = [], []
             for seed in seeds:
-                if entry == "mpc":
-                    from pendulab.control.realai.mpc import goal_mpc
-
-                    ctrl: Any = FrictionCompensated(goal_mpc(task, plant), plant)
+                if entry in ("mpc", "mpc_library"):  # as the protocol runs them: designed on the robot, compensated
+                    ctrl: Any = hardware_entry(task, entry, 0.5, plant)[1]
                 else:
                     sys.path.insert(0, str(Path(__file__).resolve().parent))
                     from bench_upstream_entries import load_entry
@@ -197,7 +195,7 @@ def figure(out: Path, path: Path) -> Path:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, task in zip(axes, TASKS, strict=True):
         labels, pos = [], 0
-        for entry in ("acados_mpc", "ar_eapo", "mcpilco", "mpc"):
+        for entry in ("acados_mpc", "ar_eapo", "mcpilco", "mpc", "mpc_library"):
             for src, colour in (("robot", "tab:red"), ("pendulab v3-hardware", "tab:blue")):
                 rec = next((r for r in recs if r["task"] == task and r["entry"] == entry and r["source"] == src), None)
                 if rec is None:
@@ -230,7 +228,9 @@ def figure(out: Path, path: Path) -> Path:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--real", action="store_true", help="read the hardware final's time-series figures")
-    ap.add_argument("--sim", nargs="+", default=[], choices=("mpc", "ar_eapo", "mcpilco"), help="entries to simulate")
+    ap.add_argument(
+        "--sim", nargs="+", default=[], choices=("mpc", "mpc_library", "ar_eapo", "mcpilco"), help="entries to simulate"
+    )
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="v3-hardware seeds (default 0 1 2)")
     ap.add_argument("--plant", type=Path, help="--sim on this what-if robot (a save_plant file) instead of the identified C.1")
     ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS, help="--sim tasks (default both)")

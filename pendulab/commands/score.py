@@ -118,7 +118,8 @@ def register(subparsers: Any) -> None:
 #: checks them against ``TASK_CONTROLLERS`` and the RealAIGym ``CONTROLLERS``).
 _SCORECARD_CONTROLLERS: tuple[str, ...] = ("lqr", "tvlqr", "swingup", "nmpc", "robust")
 _REALAI_CONTROLLERS: tuple[str, ...] = (
-    "best", "tvlqr", "lqr", "swingup", "nmpc", "rti", "mpc", "robust", "global", "replan", "replan_delayed", "library",
+    "best", "tvlqr", "lqr", "swingup", "nmpc", "rti", "mpc", "mpc_library", "robust", "global", "replan",
+    "replan_delayed", "library",
 )  # fmt: skip
 
 #: RealAIGym protocols of ``--protocol`` (``v2`` is ``--realai``).

@@ -279,9 +279,47 @@ class RTIController:
 
     def reset(self) -> None:
         """Forget the warm start and the statistics before a new run."""
-        self._k_prev, self._warm = -1, False
+        self.reset_warm_start()
         self.solve_times = []
         self.failures = self.qp_unsolved = 0
+
+    def reset_warm_start(self) -> None:
+        """Start the next call cold (from a rollout of the reference torques), keeping the statistics."""
+        self._k_prev, self._warm = -1, False
+
+    def set_reference(self, x_ref: np.ndarray, u_ref: np.ndarray, goal: np.ndarray | None = None) -> None:
+        """Track another reference from the next call on; that call's time 0 is the reference's first sample.
+
+        Parameters
+        ----------
+        x_ref : array_like, shape (K, nx)
+            States on the sample grid [rad, rad/s].
+        u_ref : array_like, shape (K, m) or (K - 1, m)
+            Driven torques on the sample grid [N.m].
+        goal : array_like, shape (nx,), optional
+            Held after the reference; default the current :attr:`goal`.
+
+        Raises
+        ------
+        ValueError
+            Shapes that do not match, non-finite values, or an empty reference.
+        """
+        x_ref = self.model.check_state(np.asarray(x_ref, dtype=float), "x_ref")
+        m = len(self.input_names)
+        u_ref = np.asarray(u_ref, dtype=float)
+        if x_ref.ndim != 2 or len(x_ref) == 0:
+            raise ValueError(f"x_ref must have shape (K, {self.model.nx}) with K >= 1, got {x_ref.shape}")
+        if u_ref.ndim != 2 or u_ref.shape[1] != m or len(u_ref) not in (len(x_ref), len(x_ref) - 1):
+            raise ValueError(f"u_ref must have shape ({len(x_ref)}, {m}) or ({len(x_ref) - 1}, {m}), got {u_ref.shape}")
+        if not np.all(np.isfinite(u_ref)):
+            raise ValueError("u_ref must be finite")
+        if goal is not None:
+            goal = self.model.check_state(np.asarray(goal, dtype=float), "goal")
+            if goal.ndim != 1:
+                raise ValueError(f"goal must be one state of shape ({self.model.nx},), got {goal.shape}")
+            self.goal = goal
+        self.x_ref, self.u_ref = x_ref, u_ref
+        self.reset_warm_start()
 
     def window(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Reference at the shooting nodes of the window starting at sample ``k`` (the goal after the reference).

@@ -23,7 +23,7 @@ measured on the simulated hardware protocol (``benchmarks/results/v3_hardware.md
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ...model.model import rigid
 from ..nmpc.rti import RTIController, rti_controller
@@ -32,7 +32,7 @@ from .spec import TORQUE_LIMIT, check_task, leaderboard_model
 if TYPE_CHECKING:
     from ...model.plant_file import IdentifiedPlant
 
-__all__ = ["goal_mpc", "MPC_GRID", "RATE_LIMITS", "ANGLE_LIMITS", "TORQUE_WEIGHTS"]
+__all__ = ["goal_mpc", "mpc_options", "MPC_GRID", "RATE_LIMITS", "ANGLE_LIMITS", "TORQUE_WEIGHTS"]
 
 #: Shooting intervals [s]: 13 of 4 ms then 7 of 64 ms (0.5 s), the winner's non-uniform grid.
 MPC_GRID: tuple[float, ...] = (0.004,) * 13 + (0.064,) * 7
@@ -42,6 +42,39 @@ RATE_LIMITS: dict[str, float] = {"pendubot": 16.0, "acrobot": 14.0}
 ANGLE_LIMITS: dict[str, float] = {"pendubot": 2.0 * math.pi, "acrobot": math.pi}
 #: Weight of the driven torque per task [1/(N.m)^2 per second].
 TORQUE_WEIGHTS: dict[str, float] = {"pendubot": 500.0, "acrobot": 400.0}
+
+
+def mpc_options(task: str) -> dict[str, Any]:
+    """The keyword arguments of :func:`~pendulab.control.nmpc.rti.rti_controller` that make a task's goal MPC.
+
+    Parameters
+    ----------
+    task : {"pendubot", "acrobot"}
+        Leaderboard task.
+
+    Returns
+    -------
+    dict
+        Actuation, torque bound, grid, weights, rate bound and winding limit (a fresh dict).
+
+    Raises
+    ------
+    ValueError
+        Unknown task.
+    """
+    task = check_task(task)
+    return {
+        "actuation": task,
+        "u_max": TORQUE_LIMIT,
+        "intervals": MPC_GRID,
+        "q_angle": 2000.0,
+        "q_rate": 200.0,
+        "r": TORQUE_WEIGHTS[task],
+        "terminal_weights": (2e5, 2e5, 2e4, 2e4),
+        "cost_per_second": True,
+        "rate_limit": RATE_LIMITS[task],
+        "angle_limit": ANGLE_LIMITS[task],
+    }
 
 
 def goal_mpc(task: str, plant: IdentifiedPlant | None = None) -> RTIController:
@@ -72,16 +105,4 @@ def goal_mpc(task: str, plant: IdentifiedPlant | None = None) -> RTIController:
         model = leaderboard_model(task)
     else:
         model = rigid(**{**plant.rigid_kwargs(), "b1": 0.0, "b2": 0.0, "cf1": 0.0, "cf2": 0.0})
-    return rti_controller(
-        model,
-        actuation=task,
-        u_max=TORQUE_LIMIT,
-        intervals=MPC_GRID,
-        q_angle=2000.0,
-        q_rate=200.0,
-        r=TORQUE_WEIGHTS[task],
-        terminal_weights=(2e5, 2e5, 2e4, 2e4),
-        cost_per_second=True,
-        rate_limit=RATE_LIMITS[task],
-        angle_limit=ANGLE_LIMITS[task],
-    )
+    return rti_controller(model, **mpc_options(task))

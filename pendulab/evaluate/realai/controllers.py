@@ -57,6 +57,12 @@ def _mpc(task: str, plant: Any = None) -> SampledController:
     return goal_mpc(task, plant)
 
 
+def _mpc_library(task: str, velocity_limit: float | None = None, plant: Any = None) -> SampledController:
+    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT, guided_mpc  # builds the bounded library first
+
+    return guided_mpc(task, plant, velocity_limit=GUIDED_VELOCITY_LIMIT if velocity_limit is None else velocity_limit)
+
+
 def _replan_delayed(task: str, velocity_limit: float | None = None) -> SampledController:
     from ...control.replanning import replanning_controller
 
@@ -78,6 +84,7 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
     "nmpc": _task_controller("nmpc"),
     "rti": _rti,
     "mpc": _mpc,
+    "mpc_library": _mpc_library,
     "robust": _task_controller("robust"),
     "global": _global,
     "replan": _replan,
@@ -88,11 +95,11 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
 
 #: Names whose factory plans swing-ups and takes ``velocity_limit`` (a bound on both link rates of every plan
 #: [rad/s]); the others (state feedback, pumping, fixed trajectories) have no plan to bound.
-RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library"})
+RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library", "mpc_library"})
 
 #: Names whose factory takes ``plant`` (the identified robot a protocol simulates) and designs on it; the others
 #: design on pendulab's leaderboard model whatever the plant.
-PLANT_DESIGNED: frozenset[str] = frozenset({"mpc"})
+PLANT_DESIGNED: frozenset[str] = frozenset({"mpc", "mpc_library"})
 
 
 def _is_controller(obj: Any) -> bool:
@@ -143,11 +150,12 @@ def resolve_controller(
     """
     name = controller_name(controller)
     if isinstance(controller, str):
+        extra: dict[str, Any] = {}
         if velocity_limit is not None and controller in RATE_BOUNDED:
-            return name, CONTROLLERS[controller](task, velocity_limit=velocity_limit)  # type: ignore[call-arg]
+            extra["velocity_limit"] = velocity_limit
         if plant is not None and controller in PLANT_DESIGNED:
-            return name, CONTROLLERS[controller](task, plant=plant)  # type: ignore[call-arg]
-        return name, CONTROLLERS[controller](task)
+            extra["plant"] = plant
+        return name, CONTROLLERS[controller](task, **extra)
     if _is_controller(controller):
         return name, controller  # type: ignore[return-value]
     if is_realai_controller(controller):

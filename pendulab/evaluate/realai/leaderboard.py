@@ -65,14 +65,15 @@ TASKS: tuple[str, ...] = ("pendubot", "acrobot")
 #: Controllers scored by default on each protocol (names of :data:`~.controllers.CONTROLLERS`): on v2 every default
 #: (one cheap run each, and the compiled 500 Hz ``rti``); robustness v2 the trackers with and without the estimator;
 #: v3 the controllers that can start from any state (``global``, ``replan``, the real-time plan ``library``: its first
-#: use solves and caches the library, minutes per task; the goal-regulating RTI ``mpc``) beside the v2 best.
+#: use solves and caches the library, minutes per task; the goal-regulating RTI ``mpc``) beside the v2 best; the
+#: hardware protocol also the goal RTI led out of the hanging well by the rate-bounded library (``mpc_library``).
 DEFAULT_CONTROLLERS: Mapping[str, tuple[str, ...]] = {
     "v2": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "robustness-v2": ("best", "tvlqr", "robust"),
     "v3": ("best", "global", "replan", "library", "mpc"),
     "v2-identified": ("best", "tvlqr", "robust", "rti", "global", "replan"),
     "v3-identified": ("best", "global", "replan", "library", "mpc"),
-    "v3-hardware": ("best", "global", "replan", "library", "mpc"),
+    "v3-hardware": ("best", "global", "replan", "library", "mpc", "mpc_library"),
 }
 #: Journal directory (relative to the current directory).
 DEFAULT_ROOT = Path("pendulab-out") / "leaderboard"
@@ -419,18 +420,28 @@ def _reporter(progress: Callable[[str, int, int], None] | None, label: str) -> C
     return report
 
 
-def _build_library(task: str, hardware: bool, progress: Callable[[str, int, int], None] | None) -> str:
-    """Solve (or read from its cache) the plan library a v3 case of ``library`` will use, reporting each start.
+def _build_library(task: str, bound: float | None, progress: Callable[[str, int, int], None] | None) -> str:
+    """Solve (or read from its cache) the plan library a v3 case of ``library`` or ``mpc_library`` will use (its
+    plans' rate ``bound`` [rad/s], None: unbounded), reporting each start.
 
     Returns the library's :meth:`~pendulab.control.plan_library.PlanLibrary.digest`: the case's journals name it, so
     a resumed leaderboard never reads back the scores of another library (one grown or re-planned since) as its own.
     """
     from ...control.plan_library import library_controller
-    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
 
-    bound = PLAN_VELOCITY_LIMIT_HW if hardware else None  # as hardware_entry plans on the hardware protocol
     ctrl = library_controller(task, progress=_reporter(progress, f"plan library for {task}"), velocity_limit=bound)
     return ctrl.library.digest()
+
+
+def _library_bound(name: str, hardware: bool) -> float | None:
+    """The plan rate bound [rad/s] controller ``name`` plays with, as :func:`~.v3_hardware.hardware_entry` and the
+    factories of :data:`~.controllers.CONTROLLERS` give it."""
+    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
+    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
+
+    if hardware:
+        return PLAN_VELOCITY_LIMIT_HW
+    return GUIDED_VELOCITY_LIMIT if name == "mpc_library" else None
 
 
 def _run_case(
@@ -477,8 +488,9 @@ def _run_case(
     else:
         seeds = []
         hardware = case.protocol in HARDWARE
-        if name == "library":  # minutes of planning at first use: a bar of its own; the journals name the library
-            on = {**on, "library_sha256": _build_library(task, hardware, progress)}
+        if name in ("library", "mpc_library"):  # minutes of planning at first use: a bar of its own; the journals
+            # name the library they played
+            on = {**on, "library_sha256": _build_library(task, _library_bound(name, hardware), progress)}
         for seed in settings.v3_seeds:
             path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
             keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
