@@ -135,3 +135,47 @@ def test_v3_hardware_passive_allowance_is_passed_recorded_and_refused_elsewhere(
     assert plain["passive_allowance"] == 0.0 and plain["simulation"]["entry_torque_limit"] == [6.0, 0.0]
     assert plain["entry"]["friction_compensated"] is False
     assert "max measured joint rate" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("controller", "protocol", "bound"),
+    [
+        ("library", "v3", None),
+        ("library", "v3-hardware", 16.0),
+        ("mpc_library", "v3", 16.0),
+        ("mpc_library", "v3-hardware", 16.0),
+    ],
+)
+def test_plan_library_players_build_their_library_first_with_the_bound_they_play(
+    capsys, monkeypatch, tmp_path, controller, protocol, bound
+):
+    # Every controller that plays the cached plan library gets it built (minutes at first use) before the run, with
+    # the rate bound it will play with, so the run itself never plans silently.
+    import pendulab.control.plan_library as pl_lib
+    import pendulab.evaluate.realai.v3 as v3
+    import pendulab.evaluate.realai.v3_hardware as hw
+
+    monkeypatch.chdir(tmp_path)
+    built = []
+
+    def fake_library(task, *, progress=None, velocity_limit=None, **_):
+        built.append((task, velocity_limit))
+        progress(1, 1)
+
+    def stop(task, controller, **kw):
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(pl_lib, "library_controller", fake_library)
+    monkeypatch.setattr(hw, "v3_hardware_score", stop)
+    monkeypatch.setattr(v3, "v3_score", stop)
+    argv = ["score", "--protocol", protocol, "--controller", controller, "--task", "acrobot", "--no-progress"]
+    assert main(argv) == 2
+    assert built == [("acrobot", bound)]
+    assert "stop here" in capsys.readouterr().err
+
+
+def test_library_bound_refuses_a_controller_without_a_library():
+    from pendulab.evaluate.realai.controllers import library_bound
+
+    with pytest.raises(ValueError, match="plays no plan library"):
+        library_bound("mpc", True)

@@ -417,17 +417,18 @@ def _run_v3(args: argparse.Namespace, plant: Any) -> int:
         args.out or Path("pendulab-out") / "score" / f"{protocol}-{args.controller}-{task}{allowance}{_plant_suffix(plant)}"
     )
     try:
+        from ..evaluate.realai.controllers import LIBRARY_PLAYERS, library_bound
         from ..evaluate.realai.v3 import v3_score
-        from ..evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, v3_hardware_score
+        from ..evaluate.realai.v3_hardware import v3_hardware_score
     except ImportError as exc:
         raise CLIError(f"--protocol {protocol} is not available in this installation ({exc})") from None
     # The hardware protocol's plant is the identified C.1 robot unless --plant names another.
     run = v3_hardware_score if hardware else v3_score
-    if args.controller == "library":  # the plan library is solved once and cached: build it with its own bar
+    if args.controller in LIBRARY_PLAYERS:  # the plan library is solved once and cached: build it with its own bar
         from ..control.plan_library import DEFAULT_LIBRARY_DIR, library_controller
 
-        # On the hardware protocol the plans are rate-bounded (v3_hardware_score's default), cached apart.
-        bound = PLAN_VELOCITY_LIMIT_HW if hardware else None
+        # The bound the controller will play with (the hardware protocol's, rate-bounded plans cached apart).
+        bound = library_bound(args.controller, hardware)
         plans = ProgressBar(f"plan library for {task} (IPOPT; cached in ./{DEFAULT_LIBRARY_DIR})", not args.no_progress)
         try:
             library_controller(task, progress=plans, velocity_limit=bound)

@@ -210,14 +210,19 @@ def test_cli_leaderboard_options_refused_before_anything_runs(argv, message, tmp
     assert not (tmp_path / "pendulab-out").exists()
 
 
-def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tmp_path, monkeypatch):
+@pytest.mark.parametrize("name", ["library", "mpc_library"])
+def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tmp_path, monkeypatch, name):
     # The library's first use solves hundreds of plans (minutes): the leaderboard reports them as they finish,
-    # bounded at the hardware protocol's rate on v3-hardware and unbounded on v3, and builds once per case.
+    # bounded at the hardware protocol's rate on v3-hardware (unbounded on v3 for ``library``; ``mpc_library``
+    # always plays the bounded one), and builds once per case, for every controller that plays it.
     from types import SimpleNamespace
 
     import pendulab.control.plan_library as pl_lib
     import pendulab.evaluate.realai.leaderboard as lb
+    from pendulab.control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
     from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW
+
+    v3_bound = None if name == "library" else GUIDED_VELOCITY_LIMIT
 
     builds = []
 
@@ -240,12 +245,12 @@ def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tm
     monkeypatch.setattr(lb, "_read", journal_keys)
     seen = []
     run = run_protocols(
-        ["library"], tasks=["pendubot"], protocols=("v3", "v3-hardware"), quick=True, root=tmp_path, resume=True,
+        [name], tasks=["pendubot"], protocols=("v3", "v3-hardware"), quick=True, root=tmp_path, resume=True,
         progress=lambda label, done, total: seen.append((label, done, total)),
     )  # fmt: skip
-    assert builds == [("pendubot", None), ("pendubot", PLAN_VELOCITY_LIMIT_HW)]
+    assert builds == [("pendubot", v3_bound), ("pendubot", PLAN_VELOCITY_LIMIT_HW)]
     # Each case's journal names the library it plays: another library is never read back as this one's.
-    assert [k["library_sha256"] for k in read_keys] == ["plans-None", f"plans-{PLAN_VELOCITY_LIMIT_HW}"]
+    assert [k["library_sha256"] for k in read_keys] == [f"plans-{v3_bound}", f"plans-{PLAN_VELOCITY_LIMIT_HW}"]
     label = "plan library for pendubot"
     assert [s for s in seen if s[0] == label] == [(label, k, 3) for k in (1, 2, 3)] * 2
     assert all(c.status == "failed" and "episode not run" in c.reason for c in run.cases)

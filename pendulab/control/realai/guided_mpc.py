@@ -118,7 +118,17 @@ class GuidedMPC:
         self.solve_times = []
 
     def low(self, x: np.ndarray) -> bool:
-        """Whether the state's energy is below :attr:`low_energy` of the way from hanging to upright at rest."""
+        """Whether the state's energy is below :attr:`low_energy` of the way from hanging to upright at rest.
+
+        Parameters
+        ----------
+        x : ndarray, shape (4,)
+            State (absolute angles) [rad, rad/s].
+
+        Returns
+        -------
+        bool
+        """
         e = float(self.goal.model.energy(x))
         return e - self._e_down < self.low_energy * (self._e_up - self._e_down)
 

@@ -18,7 +18,10 @@ from ...control.realai.adapter import REALAI_METHODS, check_realai_controller, f
 from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
-__all__ = ["CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "REPLAN_DELAY", "controller_name", "resolve_controller"]
+__all__ = [
+    "CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "LIBRARY_PLAYERS", "REPLAN_DELAY", "controller_name", "library_bound",
+    "resolve_controller",
+]  # fmt: skip
 
 #: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
 REPLAN_DELAY: float = 0.5
@@ -100,6 +103,41 @@ RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library",
 #: Names whose factory takes ``plant`` (the identified robot a protocol simulates) and designs on it; the others
 #: design on pendulab's leaderboard model whatever the plant.
 PLANT_DESIGNED: frozenset[str] = frozenset({"mpc", "mpc_library"})
+
+
+#: Names whose controller plays the cached plan library: it is built (minutes of IPOPT at first use, with a progress
+#: bar of its own) before their first run, and their results name it (:meth:`PlanLibrary.digest`).
+LIBRARY_PLAYERS: frozenset[str] = frozenset({"library", "mpc_library"})
+
+
+def library_bound(name: str, hardware: bool) -> float | None:
+    """The rate bound [rad/s] of the plans controller ``name`` plays (None: unbounded), as it is built by
+    :func:`resolve_controller` on a protocol (``hardware``: the v3-hardware protocol's bound is passed).
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`LIBRARY_PLAYERS`.
+    hardware : bool
+        The hardware protocol (which bounds the plans of every name in :data:`RATE_BOUNDED`).
+
+    Returns
+    -------
+    float or None
+
+    Raises
+    ------
+    ValueError
+        ``name`` plays no plan library.
+    """
+    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
+    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
+
+    if name not in LIBRARY_PLAYERS:
+        raise ValueError(f"controller {name!r} plays no plan library; those that do: {sorted(LIBRARY_PLAYERS)}")
+    if hardware:
+        return PLAN_VELOCITY_LIMIT_HW
+    return GUIDED_VELOCITY_LIMIT if name == "mpc_library" else None
 
 
 def _is_controller(obj: Any) -> bool:

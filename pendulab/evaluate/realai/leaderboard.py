@@ -34,7 +34,7 @@ from typing import Any
 from ..._inputs import checked
 from ..._io import check_writable
 from ..._journal import trusted_records
-from .controllers import CONTROLLERS
+from .controllers import CONTROLLERS, LIBRARY_PLAYERS, library_bound
 from .leaderboard_runs import CASE_KIND, _read, _run_robustness, _run_v2, _run_v3, _summary_check, _write
 
 __all__ = [
@@ -433,17 +433,6 @@ def _build_library(task: str, bound: float | None, progress: Callable[[str, int,
     return ctrl.library.digest()
 
 
-def _library_bound(name: str, hardware: bool) -> float | None:
-    """The plan rate bound [rad/s] controller ``name`` plays with, as :func:`~.v3_hardware.hardware_entry` and the
-    factories of :data:`~.controllers.CONTROLLERS` give it."""
-    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
-    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
-
-    if hardware:
-        return PLAN_VELOCITY_LIMIT_HW
-    return GUIDED_VELOCITY_LIMIT if name == "mpc_library" else None
-
-
 def _run_case(
     case: Case, settings: ProtocolSettings, jroot: Path, resume: bool, workers: int,
     progress: Callable[[str, int, int], None] | None, run_new: bool = True,
@@ -488,9 +477,8 @@ def _run_case(
     else:
         seeds = []
         hardware = case.protocol in HARDWARE
-        if name in ("library", "mpc_library"):  # minutes of planning at first use: a bar of its own; the journals
-            # name the library they played
-            on = {**on, "library_sha256": _build_library(task, _library_bound(name, hardware), progress)}
+        if name in LIBRARY_PLAYERS:  # minutes of planning at first use: a bar of its own; the journals name the library
+            on = {**on, "library_sha256": _build_library(task, library_bound(name, hardware), progress)}
         for seed in settings.v3_seeds:
             path = jroot / case.protocol / f"{task}-{name}-seed{seed}.json"
             keys = {"protocol": case.protocol, "task": task, "controller": name, "seed": seed, "n_steps": settings.v3_steps, **on}
