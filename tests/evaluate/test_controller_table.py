@@ -17,5 +17,8 @@ def test_every_protocol_refuses_an_unknown_name_listing_the_one_table(protocol):
 
 def test_names_are_the_table():
     assert CONTROLLER_NAMES == tuple(CONTROLLERS)
-    names = {"best", "tvlqr", "lqr", "swingup", "nmpc", "robust", "global", "replan", "replan_delayed", "library", "rti", "mpc", "mpc_library"}
+    names = {
+        "best", "tvlqr", "lqr", "swingup", "nmpc", "robust", "global", "replan", "replan_delayed", "library", "rti", "mpc",
+        "mpc_library",
+    }  # fmt: skip
     assert names == set(CONTROLLERS)
