@@ -19,8 +19,8 @@ from ...control.realai.design import best_controller
 from ...control.realai.spec import leaderboard_task
 
 __all__ = [
-    "CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "LIBRARY_PLAYERS", "REPLAN_DELAY", "controller_name", "library_bound",
-    "resolve_controller",
+    "CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "LIBRARY_PLAYERS", "PLAN_VELOCITY_LIMIT_HW", "REPLAN_DELAY",
+    "controller_name", "library_bound", "resolve_controller",
 ]  # fmt: skip
 
 #: Prediction horizon of ``replan_delayed`` [s]: a background solver has this long (measured solves: 0.1-2 s).
@@ -105,6 +105,10 @@ RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library",
 PLANT_DESIGNED: frozenset[str] = frozenset({"mpc", "mpc_library"})
 
 
+#: Bound on both link rates of the plans of :data:`RATE_BOUNDED` on the v3-hardware protocol [rad/s]
+#: (:mod:`.v3_hardware`): below its 20 rad/s limit reset, as the hardware winner's MPC (``vmax = 16``).
+PLAN_VELOCITY_LIMIT_HW: float = 16.0
+
 #: Names whose controller plays the cached plan library: it is built (minutes of IPOPT at first use, with a progress
 #: bar of its own) before their first run, and their results name it (:meth:`PlanLibrary.digest`).
 LIBRARY_PLAYERS: frozenset[str] = frozenset({"library", "mpc_library"})
@@ -131,7 +135,6 @@ def library_bound(name: str, hardware: bool) -> float | None:
         ``name`` plays no plan library.
     """
     from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
-    from .v3_hardware import PLAN_VELOCITY_LIMIT_HW
 
     if name not in LIBRARY_PLAYERS:
         raise ValueError(f"controller {name!r} plays no plan library; those that do: {sorted(LIBRARY_PLAYERS)}")

@@ -64,7 +64,7 @@ from ...model.model import INPUT_NAMES
 from ...model.plant_file import IdentifiedPlant, load_plant
 from ...model.pycode import to_python
 from ...model.robot import COULOMB_SHARPNESS
-from .controllers import RATE_BOUNDED, resolve_controller
+from .controllers import PLAN_VELOCITY_LIMIT_HW, RATE_BOUNDED, resolve_controller
 from .leaderboard_published import PUBLISHED_HARDWARE
 from .plant import plant_label, protocol_model
 from .v3 import _entry_limits, _entry_torque, _gravity_compensation, protocol_entry, v3_score
@@ -108,9 +108,6 @@ SAFETY_POS_LIMIT: float = 4.0 * math.pi
 SAFETY_VEL_LIMIT: float = 25.0
 #: The passive joint's allowance under the hardware rules (motor friction compensation) [N.m].
 PASSIVE_ALLOWANCE: float = 0.5
-#: Bound on both link rates of the plans of pendulab's planning controllers on this protocol [rad/s]
-#: (:data:`~.controllers.RATE_BOUNDED`): below the 20 rad/s limit reset, as the hardware winner's MPC (``vmax = 16``).
-PLAN_VELOCITY_LIMIT_HW: float = 16.0
 #: Longest RK4 sub-step inside a loop interval [s].
 SUBSTEP: float = 0.001
 
