@@ -373,6 +373,25 @@ class PlanLibrary:
             [np.cos(x[..., 0]), np.sin(x[..., 0]), np.cos(x[..., 1]), np.sin(x[..., 1]), c * x[..., 2], c * x[..., 3]], axis=-1
         )
 
+    def tube_error(self, e: np.ndarray, scaled: bool = True) -> float:
+        """Squared size of a tracking error as the plans' tubes measure it: angles plus the rates weighted by
+        :attr:`velocity_scale` as in the lookup metric (``scaled``), or unweighted.
+
+        Parameters
+        ----------
+        e : ndarray, shape (4,)
+            State error with its angles wrapped (:func:`~pendulab.control.lqr.wrap_state_error`) [rad, rad/s].
+        scaled : bool
+            Weight the rates by :attr:`velocity_scale`.
+
+        Returns
+        -------
+        float
+            ``e1^2 + e2^2 + c^2 (e3^2 + e4^2)`` [rad^2], ``c`` the scale or 1 [s].
+        """
+        c = self.velocity_scale if scaled else 1.0
+        return float(e[0] ** 2 + e[1] ** 2 + c * c * (e[2] ** 2 + e[3] ** 2))
+
     def nearest(self, x: np.ndarray, within: float | None = None) -> tuple[int, int, float]:
         """The knot nearest to a state, over every plan.
 
@@ -606,8 +625,7 @@ class LibrarySwingUp:
                 self._plan = None  # ended outside the catch
             else:
                 e = wrap_state_error(x - lib.x_ref[i][k], fb.model.state_names)
-                c = lib.velocity_scale if self.scaled_tube else 1.0
-                if float(e[0] ** 2 + e[1] ** 2 + c * c * (e[2] ** 2 + e[3] ** 2)) > self.replan_error:
+                if lib.tube_error(e, self.scaled_tube) > self.replan_error:
                     self._plan = None
         if self._plan is None:
             i, k, d = lib.nearest(x, within=self.accept)
@@ -735,7 +753,7 @@ def library_controller(
         Solve missing plans (False: use the cached ones only).
     velocity_limit : float, optional
         Bound on both link rates of every plan [rad/s] (the hardware protocol resets the robot above 20 rad/s,
-        :data:`~pendulab.evaluate.realai.v3_hardware.PLAN_VELOCITY_LIMIT_HW`); None: unbounded. Part of every
+        :data:`~pendulab.control.realai.spec.PLAN_VELOCITY_LIMIT_HW`); None: unbounded. Part of every
         entry's key: bounded plans are cached apart from unbounded ones and from those of another bound.
     rest_grid : int, optional
         Also plan from rest at ``rest_grid`` x ``rest_grid`` configurations (:func:`rest_starts`, the hardware

@@ -68,6 +68,19 @@ def _closed_loop(ctrl, start: np.ndarray, duration: float) -> tuple[np.ndarray, 
     return np.array(heights), x
 
 
+def test_tube_error_weighs_the_rates_as_the_lookup_does() -> None:
+    lib = _synthetic(np.zeros((1, 4)))
+    e = np.array([0.3, -0.4, 2.0, 1.0])
+    c = lib.velocity_scale
+    # the lookup metric's rate weight: the same state distance whether the tube or the tree measures it
+    assert lib.tube_error(e) == pytest.approx(0.25 + c * c * 5.0, rel=1e-15)  # float rounding only
+    assert lib.tube_error(e, scaled=False) == pytest.approx(0.25 + 5.0, rel=1e-15)
+    # for small angle errors the chord of the lookup features equals the wrapped angle (to second order)
+    small = np.array([1e-4, -2e-4, 2.0, 1.0])
+    d = float(np.linalg.norm(lib.features(small) - lib.features(np.zeros(4))))
+    assert lib.tube_error(small) == pytest.approx(d * d, rel=1e-6)  # chord vs arc: relative O(angle^2)
+
+
 def test_tracking_a_library_plan_from_its_start_reaches_the_band(tiny) -> None:
     ctrl, _ = tiny
     lib = ctrl.library

@@ -219,10 +219,9 @@ def test_plan_library_is_built_with_its_own_progress_before_the_first_episode(tm
 
     import pendulab.control.plan_library as pl_lib
     import pendulab.evaluate.realai.leaderboard as lb
-    from pendulab.control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
     from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW
 
-    v3_bound = None if name == "library" else GUIDED_VELOCITY_LIMIT
+    v3_bound = None if name == "library" else PLAN_VELOCITY_LIMIT_HW
 
     builds = []
 

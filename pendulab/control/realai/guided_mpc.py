@@ -22,23 +22,22 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..._checks import positive_float
+from ..lqr import wrap_state_error
 from ..nmpc.rti import RTIController, rti_controller
 from .mpc import goal_mpc, mpc_options
-from .spec import check_task
+from .spec import PLAN_VELOCITY_LIMIT_HW, check_task
 
 if TYPE_CHECKING:
     from ...model.plant_file import IdentifiedPlant
     from ..plan_library import PlanLibrary
 
-__all__ = ["GuidedMPC", "guided_mpc", "GUIDED_LOW_ENERGY", "GUIDED_TUBE", "GUIDED_VELOCITY_LIMIT"]
+__all__ = ["GuidedMPC", "guided_mpc", "GUIDED_LOW_ENERGY", "GUIDED_TUBE"]
 
 #: Below this fraction of the energy between hanging and upright at rest, a plan leads [-].
 GUIDED_LOW_ENERGY = 0.10
 #: A plan is left when the squared tracking error in the library's lookup metric (wrapped angles [rad^2] plus
 #: ``velocity_scale^2`` times the rates' [(rad/s)^2]) exceeds this.
 GUIDED_TUBE = 6.0
-#: Rate bound of the library's plans [rad/s] (the hardware protocol's, below its 20 rad/s limit reset).
-GUIDED_VELOCITY_LIMIT = 16.0
 
 
 class GuidedMPC:
@@ -178,10 +177,7 @@ class GuidedMPC:
         k = k0 + int(round((t - t0) / self.sample_time))
         if k >= len(ref) - 1:
             return False
-        e = x - ref[k]
-        wrapped = (e[:2] + math.pi) % (2.0 * math.pi) - math.pi
-        c = self.library.velocity_scale
-        return float(wrapped @ wrapped + c * c * (e[2:] @ e[2:])) <= self.tube
+        return self.library.tube_error(wrap_state_error(x - ref[k], self.goal.model.state_names)) <= self.tube
 
     def _take_plan(self, t: float, x: np.ndarray) -> None:
         i, k, _ = self.library.nearest(x, within=self.accept)
@@ -198,7 +194,7 @@ class GuidedMPC:
 
 
 def guided_mpc(
-    task: str, plant: IdentifiedPlant | None = None, *, velocity_limit: float = GUIDED_VELOCITY_LIMIT, build: bool = True
+    task: str, plant: IdentifiedPlant | None = None, *, velocity_limit: float = PLAN_VELOCITY_LIMIT_HW, build: bool = True
 ) -> GuidedMPC:
     """The goal MPC of a leaderboard task guided by its rate-bounded plan library (see the module docstring).
 

@@ -22,6 +22,7 @@ __all__ = [
     "T_FINAL",
     "N_STEPS",
     "TORQUE_LIMIT",
+    "PLAN_VELOCITY_LIMIT_HW",
     "TASKS",
     "NORMS",
     "HEIGHT_FRACTION",
@@ -38,6 +39,9 @@ T_FINAL: float = 10.0
 N_STEPS: int = int(T_FINAL / 0.02) * int(0.02 / DT)
 #: Torque limit of the actuated joint [N.m].
 TORQUE_LIMIT: float = 6.0
+#: Bound on both link rates of the plans pendulab's planning controllers play on the ICRA 2025 hardware protocol
+#: [rad/s]: below its 20 rad/s limit reset, as the hardware winner's MPC (``vmax = 16``).
+PLAN_VELOCITY_LIMIT_HW: float = 16.0
 #: Leaderboard tasks and the joint each drives (index into (tau1, tau2)).
 TASKS: dict[str, int] = {"pendubot": 0, "acrobot": 1}
 #: Normalisations n_i of the v2 score (simulation leaderboard): s, J, N^2 m^2 s, N.m, rad^2/s.

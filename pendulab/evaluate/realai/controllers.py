@@ -16,7 +16,7 @@ from ...control.controllers import controller_for_task
 from ...control.feedback import SampledController
 from ...control.realai.adapter import REALAI_METHODS, check_realai_controller, from_realai, is_realai_controller
 from ...control.realai.design import best_controller
-from ...control.realai.spec import leaderboard_task
+from ...control.realai.spec import PLAN_VELOCITY_LIMIT_HW, leaderboard_task
 
 __all__ = [
     "CONTROLLERS", "RATE_BOUNDED", "PLANT_DESIGNED", "LIBRARY_PLAYERS", "PLAN_VELOCITY_LIMIT_HW", "REPLAN_DELAY",
@@ -61,9 +61,9 @@ def _mpc(task: str, plant: Any = None) -> SampledController:
 
 
 def _mpc_library(task: str, velocity_limit: float | None = None, plant: Any = None) -> SampledController:
-    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT, guided_mpc  # builds the bounded library first
+    from ...control.realai.guided_mpc import guided_mpc  # builds the bounded library first
 
-    return guided_mpc(task, plant, velocity_limit=GUIDED_VELOCITY_LIMIT if velocity_limit is None else velocity_limit)
+    return guided_mpc(task, plant, velocity_limit=PLAN_VELOCITY_LIMIT_HW if velocity_limit is None else velocity_limit)
 
 
 def _replan_delayed(task: str, velocity_limit: float | None = None) -> SampledController:
@@ -105,10 +105,6 @@ RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library",
 PLANT_DESIGNED: frozenset[str] = frozenset({"mpc", "mpc_library"})
 
 
-#: Bound on both link rates of the plans of :data:`RATE_BOUNDED` on the v3-hardware protocol [rad/s]
-#: (:mod:`.v3_hardware`): below its 20 rad/s limit reset, as the hardware winner's MPC (``vmax = 16``).
-PLAN_VELOCITY_LIMIT_HW: float = 16.0
-
 #: Names whose controller plays the cached plan library: it is built (minutes of IPOPT at first use, with a progress
 #: bar of its own) before their first run, and their results name it (:meth:`PlanLibrary.digest`).
 LIBRARY_PLAYERS: frozenset[str] = frozenset({"library", "mpc_library"})
@@ -134,13 +130,10 @@ def library_bound(name: str, hardware: bool) -> float | None:
     ValueError
         ``name`` plays no plan library.
     """
-    from ...control.realai.guided_mpc import GUIDED_VELOCITY_LIMIT
-
     if name not in LIBRARY_PLAYERS:
         raise ValueError(f"controller {name!r} plays no plan library; those that do: {sorted(LIBRARY_PLAYERS)}")
-    if hardware:
-        return PLAN_VELOCITY_LIMIT_HW
-    return GUIDED_VELOCITY_LIMIT if name == "mpc_library" else None
+    # mpc_library plays the rate-bounded library on every protocol (guided_mpc's default)
+    return PLAN_VELOCITY_LIMIT_HW if hardware or name == "mpc_library" else None
 
 
 def _is_controller(obj: Any) -> bool:
