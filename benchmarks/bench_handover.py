@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 
+from pendulab._journal import read_case, write_case
+
 LEADERBOARD_REPO = Path("/work/.mirror/dfki-ric-underactuated-lab+real_ai_gym_leaderboard/repo")
 UPSTREAM = Path("/work/upstream_realai")
 OUT = Path("pendulab-out/handover")
@@ -121,7 +123,7 @@ def sim_cases(entries: list[str], seeds: list[int], out: Path, robot: Path | Non
     for entry in entries:
         for task in tasks:
             path = out / f"sim_{entry}_{task}{'' if robot is None else '_' + robot.stem}.json"
-            if path.exists():
+            if read_case(path) is not None:  # recorded by this very code (another's is run again)
                 print(f"{path} recorded; skipped", flush=True)
                 continue
             rows, scores = [], []
@@ -138,7 +140,7 @@ def sim_cases(entries: list[str], seeds: list[int], out: Path, robot: Path | Non
                 scores.append(run.score)
                 print(f"{source} {entry} {task} seed {seed}: score {run.score:.3f}", flush=True)
             record = {"source": source, "entry": entry, "task": task, "seeds": seeds, "scores": scores, "cases": rows}
-            _write(path, record)
+            write_case(path, record)
 
 
 def _sim_handovers(run: Any) -> list[tuple[float, float]]:
@@ -160,7 +162,9 @@ def _write(path: Path, record: dict[str, Any]) -> None:
 
 
 def _records(out: Path) -> list[dict[str, Any]]:
-    return [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+    """The recorded figures' hand-overs, and the simulated ones run by this very code (:func:`read_case`)."""
+    recs = [read_case(p) if p.name.startswith("sim_") else json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+    return [r for r in recs if r is not None]
 
 
 def report(out: Path) -> str:

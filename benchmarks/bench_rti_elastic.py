@@ -21,7 +21,6 @@ Each finished (task, controller, round) case is kept in ``./pendulab-out/bench_r
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -31,7 +30,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from pendulab._io import atomic_write_text
+from pendulab._journal import read_case, write_case
 from pendulab.control.nmpc import nmpc_for_task
 from pendulab.control.nmpc.rti import rti_for_task
 from pendulab.control.swingup.check import height_success
@@ -91,14 +90,13 @@ def main() -> int:
         for name, rnd, kind in tqdm(jobs, desc="elastic RTI / NMPC runs"):
             label = f"{kind}-h{RTI_HORIZON}" if kind == "rti" else kind
             path = CASES / f"{name}-{label}-round{rnd}.json"
-            if path.exists():
-                rec = json.loads(path.read_text())
-            else:
+            rec = read_case(path)  # None when not run yet, or run by other code
+            if rec is None:
                 task = load_task(name)
                 if name not in fmus:
                     fmus[name] = export(task.model, Path(tmp) / f"{name}.fmu", 2)
                 rec = run_once(task, fmus[name], kind)
-                atomic_write_text(path, json.dumps(rec) + "\n")
+                write_case(path, rec)
             results.setdefault((name, kind), []).append(rec)
     load1 = os.getloadavg()
     lines = [

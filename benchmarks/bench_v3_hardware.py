@@ -7,8 +7,8 @@ score per seed, the mean, swing-ups, limit resets and safety stops, the largest 
 time (median / max over all calls; the loop's period is 2 ms) and the wall time. With the 0.5 N.m allowance
 pendulab's controllers run wrapped in :class:`~pendulab.evaluate.realai.v3_hardware.FrictionCompensated` (the
 identified C.1 friction, compensated on both joints from the measured rates), as the hardware teams used the
-allowance. The planning controllers (``RATE_BOUNDED``: ``library``, ``replan``) plan with their link rates bounded
-by ``--velocity-limit`` (default ``PLAN_VELOCITY_LIMIT_HW``, 16 rad/s; 0: unbounded), as ``v3_hardware_score``
+allowance. The planning controllers (``RATE_BOUNDED``: ``library``, ``replan``, ``mpc_library``) plan with their joint
+rates bounded by ``--velocity-limit`` (default ``PLAN_VELOCITY_LIMIT_HW``, 18 rad/s; 0: unbounded), as ``v3_hardware_score``
 does (both through :func:`~pendulab.evaluate.realai.v3_hardware.hardware_entry`, as ``pendulab score``). Each
 finished case is kept in ``./pendulab-out/bench_v3_hardware/`` and a re-run reuses it. ``--sensing`` prints the
 measured sensing and timing table (``docs/realai_v3.md``). With ``--md`` the rows
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pendulab._io import atomic_write_text
+from pendulab._journal import read_case, write_case
 from pendulab.evaluate.realai.plant import actuated_joint
 from pendulab.evaluate.realai.v3_hardware import PLAN_VELOCITY_LIMIT_HW, PUBLISHED_HARDWARE, hardware_entry, run_v3_hardware
 from pendulab.identify.sensing import c1_sensing
@@ -77,8 +77,8 @@ def _run(
     task: str, name: str, seed: int, allowance: float, velocity_limit: float | None, plant: IdentifiedPlant | None = None
 ) -> dict[str, object]:
     path = CASES / f"{task}-{name}-seed{seed}-allowance{allowance:g}-vmax{velocity_limit or 0:g}{plant_tag(plant)}.json"
-    if path.exists():
-        rec = json.loads(path.read_text())
+    rec = read_case(path)  # None when not run yet, or run by other code
+    if rec is not None:
         rec["calls"] = np.asarray(rec["calls"], dtype=float)
         return rec
     # The controller as designed for the identified C.1; the simulated robot may be another (--plant).
@@ -94,8 +94,7 @@ def _run(
         "wall": res.wall_time,
         "plant": None if plant is None else {"params": plant.params, "what_if": plant.meta.get("what_if")},
     }
-    CASES.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(path, json.dumps(rec) + "\n")
+    write_case(path, rec)
     print(f"  {task} {name} seed {seed} allowance {allowance:g}: {res.score:.3f}", flush=True)
     rec["calls"] = np.asarray(rec["calls"], dtype=float)
     return rec
@@ -122,7 +121,9 @@ def friction_figure(path: Path, controller: str = "mpc") -> Path:
     points: dict[tuple[str, float], dict[float, dict[int, float]]] = {}
     for f in sorted(CASES.glob(f"*-{controller}-seed*.json")):
         task = f.name.split("-")[0]
-        rec = json.loads(f.read_text())
+        rec = read_case(f)
+        if rec is None:  # run by other code
+            continue
         params = (rec.get("plant") or {}).get("params") or c1
         cf = _passive_cf(task)
         if any(params[k] != v for k, v in c1.items() if k != cf):

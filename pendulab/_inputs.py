@@ -360,7 +360,7 @@ _DECLARED: tuple[Input, ...] = (
     _i("starts", "initial guesses tried by a multi-start optimization", 1, 1000),
     _i("tracking_starts", "randomized starts the plan is also tracked from (0: none)", 0, 1000),
     _i("gif_fps", "frames per second of an animation", 1, 120),
-    _r("velocity_limit", "bound on both link rates in a plan or prediction", "rad/s", 0.0, 1e4, open_low=True),
+    _r("velocity_limit", "bound on the joint rates omega1, omega2 - omega1 of a plan", "rad/s", 0.0, 1e4, open_low=True),
     _r(
         "angle_limit",
         "largest joint angle a controller steers to (a farther goal moves whole turns nearer)",

@@ -47,7 +47,7 @@ from ._version import source_version
 
 __all__ = [
     "FORMAT", "FORMAT_VERSION", "Journal", "JournalError", "JournalWarning", "canonical_json", "digest", "finite",
-    "header", "header_problem", "notify", "trusted_records",
+    "header", "header_problem", "notify", "read_case", "trusted_records", "write_case",
 ]  # fmt: skip
 
 #: The ``format`` marker of every journal file.
@@ -476,3 +476,54 @@ def finite(d: Mapping[str, Any]) -> dict[str, Any]:
         A copy.
     """
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+
+
+def write_case(path: str | Path, record: Mapping[str, Any]) -> Path:
+    """Keep one finished case of a long study (a benchmark's run), stamped with the code that produced it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The case's JSON file (written atomically; its folder is made).
+    record : mapping
+        JSON-serializable results of the case.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    RuntimeError
+        The folder cannot be written.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps({**record, "code_version": source_version()}) + "\n")
+    return path
+
+
+def read_case(path: str | Path) -> dict[str, Any] | None:
+    """A case :func:`write_case` kept, or None when there is none, it is unreadable, or *other code* produced it.
+
+    A study resumed after an edit to pendulab (a controller constant, a planner's bound) must run its cases again,
+    never report the old code's results as the new code's: the stamp is :func:`~pendulab._version.source_version`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The case's JSON file.
+
+    Returns
+    -------
+    dict or None
+        The record (with its ``code_version`` stamp).
+    """
+    try:
+        rec = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(rec, dict) or rec.get("code_version") != source_version():
+        return None
+    return rec

@@ -7,6 +7,7 @@ import json
 import pytest
 
 from pendulab.cli import main
+from pendulab.control.realai.spec import PLAN_VELOCITY_LIMIT_HW
 
 
 def test_score_writes_json_markdown_png(tmp_path, capsys):
@@ -141,9 +142,9 @@ def test_v3_hardware_passive_allowance_is_passed_recorded_and_refused_elsewhere(
     ("controller", "protocol", "bound"),
     [
         ("library", "v3", None),
-        ("library", "v3-hardware", 16.0),
-        ("mpc_library", "v3", 16.0),
-        ("mpc_library", "v3-hardware", 16.0),
+        ("library", "v3-hardware", PLAN_VELOCITY_LIMIT_HW),
+        ("mpc_library", "v3", PLAN_VELOCITY_LIMIT_HW),
+        ("mpc_library", "v3-hardware", PLAN_VELOCITY_LIMIT_HW),
     ],
 )
 def test_plan_library_players_build_their_library_first_with_the_bound_they_play(

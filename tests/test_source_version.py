@@ -66,3 +66,19 @@ def test_the_running_package_is_stamped_with_its_release_and_its_source(tmp_path
     assert edited != spec.read_text()  # the constant is there to edit
     spec.write_text(edited)
     assert source_digest(copy) != source_digest(package)
+
+
+def test_a_study_case_of_other_code_reads_as_not_run(tmp_path, monkeypatch):
+    # A benchmark resumed after an edit must run its cases again, never report the old code's results as this code's.
+    import pendulab._journal as journal
+
+    path = journal.write_case(tmp_path / "cases" / "acrobot-seed0.json", {"score": 0.61, "calls": [0.3, 0.4]})
+    assert journal.read_case(path) == {"score": 0.61, "calls": [0.3, 0.4], "code_version": source_version()}
+    monkeypatch.setattr(journal, "source_version", lambda: pendulab.__version__ + "+src.0123456789abcdef")
+    assert journal.read_case(path) is None  # same release, other source
+    monkeypatch.undo()
+    path.write_text('{"score": 0.61')  # a torn write
+    assert journal.read_case(path) is None
+    assert journal.read_case(tmp_path / "missing.json") is None
+    path.write_text('{"score": 0.61}')  # a case kept before cases were stamped
+    assert journal.read_case(path) is None

@@ -461,8 +461,9 @@ def build_library(
     band_cache : PlanCache, optional
         Where the band-entry entries are stored (the time-optimal plans they start from stay in ``cache``).
     velocity_limit : float, optional
-        Bound on both link rates of every plan and band-entry re-plan [rad/s]; None: unbounded. It must be part
-        of the caches' designs (:func:`library_controller` puts it there), so bounded and unbounded plans never mix.
+        Bound on both joint rates of every plan and band-entry re-plan [rad/s]; the library admits only plans that
+        keep it (:func:`~pendulab.control.band_plan.within_joint_limit`); None: unbounded. It must be part of the
+        caches' designs (:func:`library_controller` puts it there), so bounded and unbounded plans never mix.
     goals_ahead : bool
         Also plan toward the upright branches ahead of the start's motion
         (:func:`~pendulab.control.replanning.upright_goals`; each cached beside ``cache`` under the design plus its
@@ -489,7 +490,7 @@ def build_library(
     CacheRebuildWarning
         A cached entry was damaged, edited or swapped for another's: solved again (or, with ``solve=False``, discarded).
     """
-    from .band_plan import band_entry_refine
+    from .band_plan import band_entry_refine, within_joint_limit
     from .replanning import plan_swingup, upright_goals
 
     if (band is None) != (band_cache is None):
@@ -534,7 +535,7 @@ def build_library(
                 entry = cache.load(s)
         else:
             entry = cache.get(s, lambda s=s: solve_plan(s)) if solve else cache.load(s)
-        if entry is not None and bool(entry["ok"]):
+        if entry is not None and bool(entry["ok"]) and within_joint_limit(entry["x_ref"], velocity_limit):
             kept.append(s)
             xs.append(entry["x_ref"])
             us.append(entry["u_ref"])
@@ -646,10 +647,15 @@ LIBRARY_BRANCHES: dict[str, tuple[tuple[int, int], ...]] = {"pendubot": DEFAULT_
 #: solves were first run (170 s; 70 of 92 plans improved): v3 on the training seeds 10-15, 0.449 -> 0.550, every seed
 #: better (``benchmarks/results/v3.md`` has the scored seeds).
 LIBRARY_BAND: dict[str, bool] = {"pendubot": True, "acrobot": True}
-#: The same for a rate-bounded library (the hardware protocol's, ``velocity_limit`` given). The acrobot's band-entry
-#: re-plans within 16 rad/s lose there: v3-hardware training seeds 10-13, allowance 0.5 N m, 0.202 without against
-#: 0.109 with (2026-11-28); the pendubot's bounded library has always re-planned for band entry.
-LIBRARY_BAND_BOUNDED: dict[str, bool] = {"pendubot": True, "acrobot": False}
+#: The same for a rate-bounded library (the hardware protocol's, ``velocity_limit`` given). Such a library admits only
+#: plans whose *joint* rates keep the bound (:func:`~pendulab.control.band_plan.within_joint_limit`): the robot resets
+#: above 20 rad/s of either joint. Until 2026-11-29 the plans bounded the *link* rates: of the acrobot's 67 plans
+#: bounded to 16 rad/s that way, 65 turned the elbow joint faster than 20 rad/s (median peak 27), the pendubot's 49 of
+#: 135. Now every planner bounds the joint rates. The acrobot's link-bounded re-plans had lost (0.109 against 0.202 on
+#: its v3-hardware training seeds 10-13: they were the plans that ran fastest past the reset); re-planned with the
+#: joints bounded, ``mpc_library`` scored 0.649 on its training seeds 30-45 against 0.639 with the plain plans, so both
+#: tasks re-plan (``benchmarks/results/v3_hardware.md``, "The plans' rate bound is on the robot's joints").
+LIBRARY_BAND_BOUNDED: dict[str, bool] = {"pendubot": True, "acrobot": True}
 #: Tracking-error tube (``LibrarySwingUp.replan_error``) of the unbounded (v3 simulation) library, per task: leave a plan
 #: and look up the nearest one again when the scaled squared error exceeds it. Decided on the v3 validation seeds
 #: 70-99 (2026-11-29, shipped growth): acrobot 0.568 at 1.0, 0.587 at 0.5, 0.601-0.604 at 0.15-0.35, 0.592-0.595 at
@@ -752,9 +758,9 @@ def library_controller(
     build : bool
         Solve missing plans (False: use the cached ones only).
     velocity_limit : float, optional
-        Bound on both link rates of every plan [rad/s] (the hardware protocol resets the robot above 20 rad/s,
-        :data:`~pendulab.control.realai.spec.PLAN_VELOCITY_LIMIT_HW`); None: unbounded. Part of every
-        entry's key: bounded plans are cached apart from unbounded ones and from those of another bound.
+        Bound on both joint rates of every plan [rad/s] (the hardware protocol resets the robot above 20 rad/s,
+        :data:`~pendulab.control.realai.spec.PLAN_VELOCITY_LIMIT_HW`; :func:`build_library`); None: unbounded.
+        Part of every entry's key: bounded plans are cached apart from unbounded ones and from those of another bound.
     rest_grid : int, optional
         Also plan from rest at ``rest_grid`` x ``rest_grid`` configurations (:func:`rest_starts`, the hardware
         protocol's hand-overs; 0: none); default :data:`LIBRARY_REST_GRID` with a ``velocity_limit``, else 0.
@@ -793,7 +799,8 @@ def library_controller(
         "u_max": fb.u_max,
     }
     if velocity_limit is not None:  # only then: the unbounded library's keys (and its cache) stay as they were
-        design["velocity_limit"] = float(velocity_limit)
+        # "joints": the bound is on the joint rates (plans bounded on the link rates were cached before 2026-11-29)
+        design.update(velocity_limit=float(velocity_limit), rate_bound="joints")
     root = Path(DEFAULT_LIBRARY_DIR if directory is None else directory)
     cache = PlanCache(root / task, design)
     starts = library_starts(fb.model, n, LIBRARY_BRANCHES[task] if branches is None else branches)

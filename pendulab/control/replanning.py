@@ -10,6 +10,7 @@ import numpy as np
 
 from .._inputs import checked
 from ..model.model import INPUT_NAMES
+from ..model.robot import joint_rates
 from .global_swingup import GlobalSwingUp, global_controller
 from .lqr import wrap_state_error
 
@@ -69,7 +70,7 @@ class ReplanningSwingUp:
     max_solve_time : float
         Safety wall-time budget of one solve [s] (only a stuck solve should hit it: results then depend on load).
     velocity_limit : float or None
-        Bound on both link rates of every plan [rad/s] (:func:`plan_swingup`); None: unbounded. The
+        Bound on both joint rates of every plan [rad/s] (:func:`plan_swingup`); None: unbounded. The
         hardware protocol resets the robot at 20 rad/s (:mod:`pendulab.evaluate.realai.v3_hardware`).
     plan_times : list of float
         Wall time of each solve [s] (diagnostics).
@@ -294,8 +295,8 @@ def plan_swingup(
     max_solve_time : float
         Wall-time safety budget per solve [s].
     velocity_limit : float, optional
-        Bound on both link rates over the plan [rad/s] (``SwingUpProblem.velocity_limit``); raised to the start's
-        rates when they exceed it (the start must stay feasible). None: unbounded.
+        Bound on both joint rates over the plan [rad/s] (``SwingUpProblem.velocity_limit``); raised to the start's
+        joint rates when they exceed it (the start must stay feasible). None: unbounded.
     goal_offset : (int, int)
         The goal's branch in turns from the nearest upright (:func:`upright_goals`); (0, 0): the nearest.
 
@@ -317,7 +318,7 @@ def plan_swingup(
     x0 = tuple(float(v) for v in start)
     near = nearest_upright(np.asarray(x0))
     goal = (near[0] + 2.0 * math.pi * goal_offset[0], near[1] + 2.0 * math.pi * goal_offset[1], 0.0, 0.0)
-    vmax = None if velocity_limit is None else max(float(velocity_limit), abs(x0[2]), abs(x0[3]))
+    vmax = None if velocity_limit is None else max(float(velocity_limit), float(np.max(np.abs(joint_rates(x0)))))
     attempts: list[dict[str, object]] = []
     if min_time:  # time-optimal first (bang-bang within 90 % of the limit), free horizon up to ``horizon``
         attempts.append(dict(horizon=0.8 * horizon, free_horizon=True, horizon_bounds=(0.3, horizon), objective="time"))

@@ -35,6 +35,7 @@ from .lagrange import LagrangeSystem
 from .params import RigidParams
 
 __all__ = [
+    "joint_rates",
     "ROBOT_PARAM_NAMES",
     "ROBOT_PARAM_UNITS",
     "COULOMB_SHARPNESS",
@@ -252,3 +253,26 @@ def robot_params_vector(params: Mapping[str, float], *, validate: bool = True) -
     if validate:
         return np.array(list(check_robot_params(params).values()))
     return np.array([float(params[n]) for n in ROBOT_PARAM_NAMES])
+
+
+def joint_rates(x: np.ndarray) -> np.ndarray:
+    """The joint rates ``(omega1, omega2 - omega1)`` of pendulab states (absolute angles): what a robot's limits bound.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., nx)
+        States, the link rates ``omega1, omega2`` at ``nx // 2`` (rigid: nx = 4; elastic: nx = 8) [rad/s].
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Shoulder and elbow joint rates [rad/s].
+
+    Examples
+    --------
+    >>> joint_rates([0.0, 0.0, 3.0, -2.0]).tolist()  # links turning apart: the elbow joint at -5 rad/s
+    [3.0, -5.0]
+    """
+    x = np.asarray(x, dtype=float)
+    nq = x.shape[-1] // 2
+    return np.stack([x[..., nq], x[..., nq + 1] - x[..., nq]], axis=-1)

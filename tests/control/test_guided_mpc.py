@@ -10,6 +10,7 @@ from pendulab.control.nmpc.rti import rti_controller
 from pendulab.control.plan_library import PlanLibrary
 from pendulab.control.realai.guided_mpc import GuidedMPC
 from pendulab.control.realai.mpc import goal_mpc, mpc_options
+from pendulab.control.realai.spec import PLAN_VELOCITY_LIMIT_HW
 from pendulab.control.replanning import REPLAN_DEFAULTS, plan_swingup
 from pendulab.evaluate.realai.controllers import resolve_controller
 from pendulab.evaluate.realai.v3_definition import reset_schedule
@@ -27,7 +28,9 @@ def rest_library() -> PlanLibrary:
     """One rate-bounded acrobot plan from hanging at rest, stored as the library stores its plans."""
     fb = global_controller("acrobot")
     horizon, n_int, min_time = REPLAN_DEFAULTS["acrobot"]
-    tr = plan_swingup(fb, "acrobot", np.zeros(4), horizon=horizon, n_intervals=n_int, min_time=min_time, velocity_limit=16.0)
+    tr = plan_swingup(
+        fb, "acrobot", np.zeros(4), horizon=horizon, n_intervals=n_int, min_time=min_time, velocity_limit=PLAN_VELOCITY_LIMIT_HW
+    )
     assert tr is not None
     return PlanLibrary(np.zeros((1, 4)), [tr.x_ref], [tr.u_ref[:, 1]], [tr.K[:, 1, :]])
 

@@ -49,6 +49,15 @@ def test_tiny_torque_limit_is_reported_not_raised(pendubot):
     assert np.abs(traj.x[-1, 0] - np.pi) > 0.5  # it falls: nothing is caught with 0.01 N.m
 
 
+@pytest.mark.parametrize(("rates", "over"), [((-4.0, 7.0), True), ((2.0, 5.0), False)])
+def test_soft_rate_bound_is_on_the_joint_rates(pendubot, rates, over):
+    # Links at -4 and 7 rad/s keep a 10 rad/s bound on each link but turn the elbow joint at 11 rad/s: the start
+    # needs slack (the robot's limits are on its joints, as the RTI's); links at 2 and 5 (elbow joint 3) do not.
+    ctrl = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=10, velocity_limit=10.0)
+    ctrl(0.0, upright_state(pendubot) + np.array([0.0, 0.0, *rates]))
+    assert (ctrl.stats()["infeasible"] == 1) is over
+
+
 def test_failed_solve_falls_back_without_raising(pendubot):
     # One interior-point iteration cannot converge from a cold start: counted as a failure, loop continues.
     ctrl = nmpc_controller(pendubot, actuation="pendubot", u_max=6.0, horizon=10, solver="ipopt", max_iter=1)

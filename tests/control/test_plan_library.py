@@ -23,6 +23,7 @@ from pendulab.control.plan_library import (
 from pendulab.control.realai.spec import HEIGHT_FRACTION
 from pendulab.control.replanning import MOVING_RATE, nearest_upright, plan_swingup, upright_goals
 from pendulab.model.pycode import to_python
+from pendulab.model.robot import joint_rates
 from pendulab.native.cache import CacheRebuildWarning, digest_path, sealed_key
 
 
@@ -193,21 +194,56 @@ def test_bad_input_raises(tmp_path) -> None:
 def test_velocity_limit_bounds_every_plan_and_is_cached_apart(tiny) -> None:
     ctrl, d = tiny
     limit = 12.0  # rad/s: below what the unbounded plans reach, so the bound must act
-    free = max(float(np.abs(x[:, 2:]).max()) for x in ctrl.library.x_ref)
+    free = max(float(np.abs(joint_rates(x)).max()) for x in ctrl.library.x_ref)
     assert free > limit + 1.0
     before = {p.name for p in (d / "pendubot").glob("plan-*.npz")}
     kw = {"n_grid": 1, "branches": ((0, 0),), "directory": d, "velocity_limit": limit, "rest_grid": 0}
     bounded = library_controller("pendubot", **kw)
     assert len(bounded.library) == len(ctrl.library) and bounded.library.n_failed == 0
-    # The 2 ms reference is re-sampled from the collocation polynomials: the bound holds at their points only,
-    # so the samples between them may pass it slightly (0.5 rad/s).
-    assert max(float(np.abs(x[:, 2:]).max()) for x in bounded.library.x_ref) < limit + 0.5
+    # The bound is on the joint rates (the robot's limits). The 2 ms reference is re-sampled from the collocation
+    # polynomials: the bound holds at their points only, so the samples between them may pass it slightly (0.5 rad/s).
+    assert max(float(np.abs(joint_rates(x)).max()) for x in bounded.library.x_ref) < limit + 0.5
     after = {p.name for p in (d / "pendubot").glob("plan-*.npz")}
     assert before < after  # bounded plans got entries of their own, the unbounded ones are still there
     again = library_controller("pendubot", n_grid=1, branches=((0, 0),), directory=d, build=False)
-    assert max(float(np.abs(x[:, 2:]).max()) for x in again.library.x_ref) > limit + 1.0  # unbounded plans again
+    assert max(float(np.abs(joint_rates(x)).max()) for x in again.library.x_ref) > limit + 1.0  # unbounded again
     with pytest.raises(ValueError, match=r"velocity_limit = 0.0: out of range"):
         library_controller("pendubot", n_grid=1, directory=d, velocity_limit=0.0)
+
+
+def test_a_bounded_library_admits_no_plan_over_its_joint_bound(tmp_path) -> None:
+    # Links at 10 and 28 rad/s keep a 16 rad/s bound on each *link*, but turn the elbow joint at 18 rad/s: the
+    # robot's limit (a plan cached under another meaning of the bound must not slip in).
+    fb = global_controller("pendubot")
+    start = np.zeros(4)
+    cache = PlanCache(tmp_path, {"task": "pendubot", "velocity_limit": 16.0})
+    ramp = np.linspace(0.0, 1.0, 50)
+    x = np.column_stack([ramp, 2.0 * ramp, 10.0 * ramp, 28.0 * ramp])
+    cache.save(start, {"ok": np.array(True), "x_ref": x, "u_ref": np.zeros(49), "K": np.zeros((49, 4))})
+    kw = {"horizon": 1.2, "n_intervals": 40, "solve": False}
+    with pytest.raises(ValueError, match="at least one solved plan"):
+        build_library(fb, "pendubot", start[None], cache, velocity_limit=16.0, **kw)
+    assert len(build_library(fb, "pendubot", start[None], cache, velocity_limit=18.5, **kw)) == 1
+    assert len(build_library(fb, "pendubot", start[None], cache, **kw)) == 1  # unbounded: any plan
+
+
+def test_band_entry_replans_keep_the_joint_bound() -> None:
+    # From hanging at rest the acrobot's band entry is fastest with the elbow joint far above 16 rad/s (the
+    # link-bounded plans of 2026-11-28 peaked at 27): the re-plan must hold both joints within the bound.
+    from pendulab.control.band_plan import band_entry_refine
+
+    fb = global_controller("acrobot")
+    limit = 16.0
+    tr = plan_swingup(fb, "acrobot", np.zeros(4), horizon=2.0, n_intervals=30, min_time=True, velocity_limit=limit)
+    m = min(len(tr.K), len(tr.u_ref), len(tr.x_ref) - 1)
+    entry = {"ok": np.array(True), "x_ref": tr.x_ref[: m + 1], "u_ref": tr.u_ref[:m, 1], "K": tr.K[:m, 1, :]}
+    prm = fb.model.params
+    band = HEIGHT_FRACTION * (prm.L1 + prm.L2)
+    found = band_entry_refine(fb.model, "acrobot", entry, band=band, u_max=fb.u_max, velocity_limit=limit)
+    assert bool(found["refined"])  # measured: the closed loop enters the band at 0.72 s against 0.98 s
+    for plan in (entry, found):  # the time-optimal plan and its re-plan: 2 ms samples between knots (3 %)
+        assert np.abs(joint_rates(plan["x_ref"])).max() <= 1.03 * limit
+    assert float(found["t_enter"]) < 0.85
 
 
 def test_rest_starts_are_the_grid_configurations_at_rest() -> None:

@@ -181,7 +181,7 @@ def test_score_bounds_the_plans_of_planning_controllers_and_compensates_friction
     monkeypatch.setattr(hw, "run_v3_hardware", run)
     res = hw.v3_hardware_score("pendubot", "replan", seed=1)
     assert seen["velocity_limit"] == hw.PLAN_VELOCITY_LIMIT_HW and res.velocity_limit == hw.PLAN_VELOCITY_LIMIT_HW
-    assert res.to_dict()["entry"] == {"velocity_limit": 16.0, "friction_compensated": False}
+    assert res.to_dict()["entry"] == {"velocity_limit": hw.PLAN_VELOCITY_LIMIT_HW, "friction_compensated": False}
     assert isinstance(seen["entry"], _Both)  # no allowance: nothing to compensate with
     res = hw.v3_hardware_score("pendubot", "replan", seed=1, velocity_limit=None, passive_allowance=0.5)
     assert seen["velocity_limit"] is None and res.velocity_limit is None and res.friction_compensated

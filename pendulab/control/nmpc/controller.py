@@ -105,7 +105,7 @@ class NMPCOptions:
     r : float or None
         Weight of each driven torque [1/(N.m)^2]; default ``1 / u_max^2``.
     velocity_limit : float or None
-        Soft bound on abs(omega1), abs(omega2) [rad/s] (slack-penalized).
+        Soft bound on both joint rates, abs(omega1) and abs(omega2 - omega1) [rad/s] (slack-penalized).
     slack_weight : float
         Weight on the slack of the soft bounds.
     slack_tol : float

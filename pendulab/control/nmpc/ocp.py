@@ -187,7 +187,7 @@ def build_ocp(
     u_max : float
         Hard torque bound [N.m].
     velocity_limit : float or None
-        Soft bound on the link rates [rad/s].
+        Soft bound on both joint rates ``omega1``, ``omega2 - omega1`` [rad/s] (as the RTI's ``rate_limit``).
     slack_weight : float
         Weight of the slacks (linear ``w s`` plus quadratic ``10 w s^2``).
     solver : {"sqp", "ipopt", "fatrop"}
@@ -258,7 +258,7 @@ def build_ocp(
         ubg += [0.0] * nxa
         if ns:
             cost += slack_weight * (ca.sum1(s) + 10.0 * ca.sumsqr(s))
-            w_k = xs[k][omega]
+            w_k = ca.vertcat(xs[k][omega[0]], xs[k][omega[1]] - xs[k][omega[0]])  # joint rates: the robot's limits
             g += [w_k - s, w_k + s]
             lbg += [-inf, -inf, -velocity_limit, -velocity_limit]
             ubg += [velocity_limit, velocity_limit, inf, inf]

@@ -6,7 +6,7 @@ chatters the elbow at full torque (+-6 N m, +-18 rad/s) for seconds with no ener
 (``benchmarks/results/v3_hardware.md``, "Plan-guided MPC for the acrobot"). :class:`GuidedMPC` keeps the goal MPC
 everywhere else and, while the robot's energy is below a fraction of the way from hanging to upright
 (:data:`GUIDED_LOW_ENERGY`), hands the same compiled real-time iteration the nearest plan of the rate-bounded library
-(:func:`~pendulab.control.plan_library.library_controller` with the hardware protocol's 16 rad/s bound) as its
+(:func:`~pendulab.control.plan_library.library_controller` with the hardware protocol's joint-rate bound) as its
 reference: the MPC tracks the plan with its own prediction, torque and rate bounds, and the goal MPC takes over when
 the plan ends or the robot leaves its tube (:data:`GUIDED_TUBE`). Both settings were chosen on training seeds 30-45
 (acrobot, allowance 0.5 N m) and checked on validation seeds 70-85; the scored seeds were run once, after. On the

@@ -49,7 +49,9 @@ class SwingUpProblem:
     torque_limit : float
         Bound abs(tau) <= torque_limit on each actuated joint [N.m].
     velocity_limit : float or None
-        Optional bound abs(omega_i) <= velocity_limit on both link rates [rad/s].
+        Optional bound on both *joint* rates, abs(omega1) and abs(omega2 - omega1) <= velocity_limit [rad/s]
+        (a robot's limits are on its joints: RealAIGym's hardware resets above 20 rad/s of either); the shoulder's
+        is a state bound (:meth:`state_bounds`), the elbow's a constraint of the transcription.
     stretch_limits : (float, float) or None
         Elastic model only: bounds (min, max) on the spring stretch r - L [m]
         (min < 0 < max). None: the springs are unbounded.
@@ -232,14 +234,15 @@ class SwingUpProblem:
         Returns
         -------
         lb, ub : ndarray, shape (nx,)
-            +-``velocity_limit`` [rad/s] on omega1, omega2 when set; for the
+            +-``velocity_limit`` [rad/s] on omega1 when set (the elbow joint rate
+            omega2 - omega1 is a constraint of the transcription); for the
             elastic model spring lengths in ``L + stretch_limits`` [m] (lower
             bound at least 1e-3 L); +-inf elsewhere.
         """
         nx, nq = self.model.nx, self.model.nq
         lb, ub = np.full(nx, -np.inf), np.full(nx, np.inf)
         if self.velocity_limit is not None:
-            lb[nq : nq + 2], ub[nq : nq + 2] = -self.velocity_limit, self.velocity_limit
+            lb[nq], ub[nq] = -self.velocity_limit, self.velocity_limit
         if self.model.kind == "elastic":
             pr = self.model.params
             rest = np.array([pr.L1, pr.L2])

@@ -72,6 +72,9 @@ class Transcription:
         Wall time spent building the NLP [s].
     callback : IterationCallback or None
         The NLP's IPOPT ``iteration_callback`` (:mod:`.iterations`), kept alive with the solver.
+    joint_rows : int
+        Constraint rows after the equalities bounding the elbow joint rate ``omega2 - omega1`` of every state column
+        (0 without a ``velocity_limit``; :meth:`SwingUpProblem.state_bounds` boxes ``omega1``).
     """
 
     method: str
@@ -86,6 +89,7 @@ class Transcription:
     nw: int
     build_time: float
     callback: Any = None
+    joint_rows: int = 0
 
     @property
     def n_coll(self) -> int:
@@ -177,7 +181,8 @@ class Transcription:
         lbx, ubx : ndarray, shape (nw,)
             Decision-variable bounds.
         lbg, ubg : ndarray
-            Zeros: all constraints (defects, continuity) are equalities.
+            Zeros for the equalities (defects, continuity), then +-``velocity_limit`` on the elbow joint rate of
+            each state column (:attr:`joint_rows`).
         """
         nx, N = self.nx, self.N
         slb, sub = problem.state_bounds()
@@ -188,7 +193,9 @@ class Transcription:
         lbx = self.join(XL, np.tile(slb, (self.n_coll, 1)), np.tile(torque_lb, (N, 1)), problem.horizon_bounds[0])
         ubx = self.join(XU, np.tile(sub, (self.n_coll, 1)), np.tile(torque_ub, (N, 1)), problem.horizon_bounds[1])
         ng = nx * N * (self.degree + 1) if self.method in COLLOCATION else nx * N
-        return lbx, ubx, np.zeros(ng), np.zeros(ng)
+        vmax = np.inf if problem.velocity_limit is None else problem.velocity_limit
+        lbg = np.concatenate([np.zeros(ng), np.full(self.joint_rows, -vmax)])
+        return lbx, ubx, lbg, -lbg
 
     def fractions(self, mesh: Any = None) -> np.ndarray:
         """Checked interval fractions of a mesh.
@@ -273,17 +280,18 @@ class Transcription:
         Returns
         -------
         dict
-            ``w`` (solution, shape (nw,)), ``f`` (objective), ``g``
-            (constraint values) and ``stats`` (the solver's ``stats()``).
+            ``w`` (solution, shape (nw,)), ``f`` (objective), ``g`` (each constraint's
+            violation: its distance outside its bounds, 0 when kept) and ``stats`` (the solver's ``stats()``).
         """
         lbx, ubx, lbg, ubg = self.bounds(problem, torque_lb, torque_ub)
         # IPOPT needs a start within the bounds it treats as hard (fixed start and goal).
         w0 = np.clip(w0, lbx, ubx)
         out = self.solver(x0=w0, p=self.parameters(problem, mesh), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        g = np.asarray(out["g"]).ravel()
         return {
             "w": np.asarray(out["x"]).ravel(),
             "f": float(out["f"]),
-            "g": np.asarray(out["g"]).ravel(),
+            "g": np.maximum(np.maximum(lbg - g, g - ubg), 0.0),
             "stats": self.solver.stats(),
         }
 
@@ -348,12 +356,13 @@ def get_transcription(
         problem.free_horizon,
         problem.objective,
         extra,
+        problem.velocity_limit is not None,
     )
 
 
 @lru_cache(maxsize=64)
 def _build(
-    kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple
+    kind: str, method: str, N: int, degree: int, integrator: str, free: bool, objective: str, extra: tuple, joint_bound: bool
 ) -> Transcription:
     notify_build(f"{method} N={N}" + (f" degree {degree}" if method in COLLOCATION else "") + f", {kind} model")
     t_start = time.perf_counter()
@@ -384,6 +393,12 @@ def _build(
         x_end = Fmap(X[:, :N], U, h, pm)
         g = ca.vec(X[:, 1:] - x_end)
         w_parts = [ca.vec(X), ca.vec(U)]
+    joint_rows = 0
+    if joint_bound:  # the elbow joint's rate of every state column (the shoulder's is omega1 itself: a box)
+        cols = ca.horzcat(X, Xc) if method in COLLOCATION else X
+        nq = nx // 2
+        g = ca.vertcat(g, (cols[nq + 1, :] - cols[nq, :]).T)
+        joint_rows = cols.size2()
     if free:
         w_parts.append(T)
     effort = ca.dot(h.T, ca.sum1(U**2).T)
@@ -403,7 +418,19 @@ def _build(
     opts["iteration_callback"] = callback
     solver = ca.nlpsol(f"swingup_{method}_{kind}_{N}", "ipopt", nlp, opts)
     return Transcription(
-        method, N, degree, integrator, free, objective, kind, solver, nx, nw, time.perf_counter() - t_start, callback
+        method,
+        N,
+        degree,
+        integrator,
+        free,
+        objective,
+        kind,
+        solver,
+        nx,
+        nw,
+        time.perf_counter() - t_start,
+        callback,
+        joint_rows,
     )
 
 

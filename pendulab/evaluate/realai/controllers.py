@@ -96,7 +96,7 @@ CONTROLLERS: dict[str, Callable[[str], SampledController]] = {
 }
 
 
-#: Names whose factory plans swing-ups and takes ``velocity_limit`` (a bound on both link rates of every plan
+#: Names whose factory plans swing-ups and takes ``velocity_limit`` (a bound on both joint rates of every plan
 #: [rad/s]); the others (state feedback, pumping, fixed trajectories) have no plan to bound.
 RATE_BOUNDED: frozenset[str] = frozenset({"replan", "replan_delayed", "library", "mpc_library"})
 
@@ -161,7 +161,7 @@ def resolve_controller(
         controller (``init``, ``get_control_output(x, t)``, ``reset``: upstream's ``AbstractController``), run
         through :func:`~pendulab.control.realai.adapter.from_realai` at 2 ms on the task's driven joint.
     velocity_limit : float, optional
-        Bound on both link rates of every plan [rad/s], given to the names of :data:`RATE_BOUNDED` (the others,
+        Bound on both joint rates of every plan [rad/s], given to the names of :data:`RATE_BOUNDED` (the others,
         objects and factories are built as they are); None: unbounded.
     plant : IdentifiedPlant, optional
         The robot the protocol simulates, given to the names of :data:`PLANT_DESIGNED` (they design on it).

@@ -34,7 +34,7 @@ from typing import Any
 from ..._inputs import checked
 from ..._io import check_writable
 from ..._journal import trusted_records
-from .controllers import CONTROLLERS, LIBRARY_PLAYERS, library_bound
+from .controllers import CONTROLLERS, LIBRARY_PLAYERS, PLAN_VELOCITY_LIMIT_HW, library_bound
 from .leaderboard_runs import CASE_KIND, _read, _run_robustness, _run_v2, _run_v3, _summary_check, _write
 
 __all__ = [
@@ -96,9 +96,9 @@ class ProtocolSettings:
     passive_allowance : float
         v3-hardware: torque the entry may put on the passive joint [N.m] (0, or up to the rules' 0.5).
     hardware_plans : str
-        v3-hardware: how the entries are designed (``hardware_entry`` of :mod:`.v3_hardware`: plans bounded to
-        16 rad/s, friction compensation with an allowance). Part of the settings so that a journal of episodes
-        designed otherwise is not resumed as these.
+        v3-hardware: how the entries are designed (``hardware_entry`` of :mod:`.v3_hardware`: plans with their
+        joint rates bounded to :data:`~.controllers.PLAN_VELOCITY_LIMIT_HW`, friction compensation with an
+        allowance). Part of the settings so that a journal of episodes designed otherwise is not resumed as these.
     """
 
     name: str
@@ -106,7 +106,7 @@ class ProtocolSettings:
     v3_seeds: tuple[int, ...]
     v3_steps: int
     passive_allowance: float = 0.0
-    hardware_plans: str = "bounded 16 rad/s, friction-compensated"
+    hardware_plans: str = f"joint rates bounded {PLAN_VELOCITY_LIMIT_HW:g} rad/s, friction-compensated"
 
     @property
     def comparable(self) -> bool:

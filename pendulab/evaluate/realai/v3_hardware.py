@@ -134,7 +134,7 @@ class V3HardwareResult(V3Result):
     passive_allowance : float
         The passive joint's torque limit of this run [N.m].
     velocity_limit : float or None
-        Bound on the link rates of the controller's plans [rad/s] (None: unbounded, or a controller without plans).
+        Bound on the joint rates of the controller's plans [rad/s] (None: unbounded, or a controller without plans).
     friction_compensated : bool
         The controller ran wrapped in :class:`FrictionCompensated` (what the passive allowance is used for).
     sensing : dict
@@ -500,7 +500,7 @@ def hardware_entry(
     plant : IdentifiedPlant, optional
         The simulated robot (default the identified C.1).
     velocity_limit : float or None
-        Bound on both link rates of the plans [rad/s].
+        Bound on both joint rates of the plans [rad/s].
     friction_compensation : bool
         Wrap a named controller in :class:`FrictionCompensated` when the allowance is positive.
 
@@ -544,7 +544,7 @@ def v3_hardware_score(
     passive_allowance : float
         Torque the entry may put on the passive joint [N.m], in [0, 0.5].
     velocity_limit : float or None
-        Bound on both link rates of the plans of a named planning controller (:data:`~.controllers.RATE_BOUNDED`:
+        Bound on both joint rates of the plans of a named planning controller (:data:`~.controllers.RATE_BOUNDED`:
         ``library``, ``replan``, ``replan_delayed``) [rad/s]; default :data:`PLAN_VELOCITY_LIMIT_HW`, below the
         protocol's 20 rad/s limit reset. None: the simulation protocols' unbounded plans. The plan library caches
         bounded plans apart (the bound is part of every entry's key).
