@@ -111,3 +111,14 @@ def test_elastic_solve_starts_from_rigid_counterpart():
     assert stretch.min() >= smin - 1e-7 and stretch.max() <= smax + 1e-7
     # Springs visibly matter: dynamic stretch well beyond the static compression at the goal.
     assert np.ptp(stretch[:, 0]) > 0.01
+
+
+def test_joint_rates_read_the_link_rates_of_either_model():
+    # Rigid (theta1, theta2, omega1, omega2) and elastic (theta1, theta2, r1, r2, omega1, omega2, v1, v2) states:
+    # the spring lengths and their rates are not joint rates.
+    rigid_x = np.array([0.1, 0.2, 3.0, -2.0])
+    elastic_x = np.array([0.1, 0.2, 0.3, 0.4, 3.0, -2.0, 7.0, 9.0])
+    for x in (rigid_x, elastic_x, np.stack([elastic_x, 2.0 * elastic_x])):
+        w = joint_rates(x)
+        np.testing.assert_array_equal(w.reshape(-1, 2)[0], [3.0, -5.0])
+    assert pl.make_model("elastic").state_names[4:6] == ("omega1", "omega2")  # where joint_rates reads them
